@@ -1,0 +1,47 @@
+# capmap: capacity maps of a manipulator with a locked joint.
+#   snakemake --cores 2 all                       (default config/config.yaml)
+#   snakemake --cores 2 all --configfile my.yaml  (a complete config: replaces the default)
+import sys
+
+from snakemake.utils import min_version
+
+min_version("8.0")
+
+
+# the default config only when no --configfile is given: a config file is complete on its own
+# (a deep merge over the default would leak keys such as directions.step_deg into other kinds)
+if not workflow.overwrite_configfiles:
+
+    configfile: "config/config.yaml"
+
+
+from capmap.config import canonical, check_run_config, stage_slices
+from capmap.errors import CapmapError
+
+# validate once, before any job: schema, robot file, locked joint, limits
+try:
+    RUN = check_run_config(config)
+except CapmapError as exc:
+    sys.exit(f"capmap: {exc}")
+SLICES = stage_slices(config)
+SHARDS = RUN.shards
+
+
+def slice_json(stage):
+    """Canonical JSON of the config slice a stage depends on (rule params: exact reruns)."""
+    return canonical(SLICES[stage]["upstream"])
+
+
+include: "workflow/rules/model.smk"
+include: "workflow/rules/sample.smk"
+include: "workflow/rules/capacity.smk"
+include: "workflow/rules/voxels.smk"
+include: "workflow/rules/catalogue.smk"
+
+
+rule all:
+    input:
+        "results/voxels/voxels.parquet",
+        "results/summary/capacity_summary.csv",
+        "results/catalogue.parquet",
+    default_target: True

@@ -1,0 +1,194 @@
+"""Run configuration: validated once against a JSON schema, then frozen dataclasses.
+
+Stage slices (:func:`stage_slices`) are the parts of the config each pipeline stage
+depends on; their canonical JSON goes into the Snakemake rule's ``params`` (so a change
+reruns exactly the affected stages) and into each output's provenance.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from capmap.errors import CapmapError
+from capmap.validation import load_yaml, validate
+
+
+@dataclass(frozen=True)
+class LockConfig:
+    joint: int  # 1-based
+    angle_deg: float
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    orientation_rpy_deg: tuple[float, float, float]
+    v_max_mps: float
+    a_max_mps2: float
+    payload_kg: float
+    start_m: tuple[float, float, float]
+    goal_m: tuple[float, float, float]
+    q_ini_deg: tuple[float, ...]
+
+    @property
+    def rotation(self) -> np.ndarray:
+        return self.rotation_from_rpy(self.orientation_rpy_deg)
+
+    @staticmethod
+    def rotation_from_rpy(rpy_deg) -> np.ndarray:
+        """R = Rz(yaw) Ry(pitch) Rx(roll) (3, 3) from [roll, pitch, yaw] deg."""
+        r, p, y = np.deg2rad(rpy_deg)
+        cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+        return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                         [-sp, cp * sr, cp * cr]])
+
+
+@dataclass(frozen=True)
+class LimitsConfig:
+    joint_torque_nm: float | tuple[float, ...]
+    base_force_n: float | tuple[float, ...]
+    base_moment_nm: float | tuple[float, ...]
+
+    def resolve(self, n_joints: int):
+        """:class:`capmap.capacity.Limits` for an arm with n_joints joints (length checks here)."""
+        from capmap.capacity import Limits
+
+        def vec(value, n, key):
+            v = np.atleast_1d(np.asarray(value, dtype=float))
+            if len(v) == 1:
+                return np.full(n, v[0])
+            if len(v) != n:
+                raise CapmapError(f"limits.{key} has {len(v)} values; give one or {n}")
+            return v
+
+        return Limits(vec(self.joint_torque_nm, n_joints, "joint_torque_nm"), vec(self.base_force_n, 3, "base_force_n"),
+                      vec(self.base_moment_nm, 3, "base_moment_nm"))
+
+
+@dataclass(frozen=True)
+class SamplingConfig:
+    mode: str
+    n_points: int
+    seed: int
+    jitter_per_voxel: int = 1
+
+
+@dataclass(frozen=True)
+class DirectionsConfig:
+    kind: str
+    step_deg: float | None = None
+    n: int | None = None
+
+    def build(self):
+        from capmap import directions
+
+        return directions.paper_grid(self.step_deg) if self.kind == "paper_grid" else directions.sphere(self.n)
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    robot: str
+    lock: LockConfig
+    task: TaskConfig
+    limits: LimitsConfig
+    sampling: SamplingConfig
+    directions: DirectionsConfig
+    voxel_edge_m: float
+    shards: int
+
+
+def _tuple(v):
+    return tuple(v) if isinstance(v, list) else v
+
+
+def parse_config(doc: object, source: str = "config") -> RunConfig:
+    """Validate a run-config mapping and turn it into a :class:`RunConfig`."""
+    if not isinstance(doc, dict):
+        raise CapmapError(f"{source}: the config must be a mapping of keys, got {type(doc).__name__}")
+    validate(doc, "config", source)
+    d = doc["directions"]
+    if d["kind"] == "paper_grid" and "step_deg" not in d:
+        raise CapmapError(f"{source}: directions.step_deg is required for kind paper_grid")
+    if d["kind"] == "sphere" and "n" not in d:
+        raise CapmapError(f"{source}: directions.n is required for kind sphere")
+    extra = {"paper_grid": "n", "sphere": "step_deg"}[d["kind"]]
+    if extra in d:
+        raise CapmapError(f"{source}: directions.{extra} does not apply to kind {d['kind']}")
+    task = {k: _tuple(v) for k, v in doc["task"].items()}
+    limits = {k: _tuple(v) for k, v in doc["limits"].items()}
+    return RunConfig(
+        robot=doc["robot"],
+        lock=LockConfig(**doc["lock"]),
+        task=TaskConfig(**task),
+        limits=LimitsConfig(**limits),
+        sampling=SamplingConfig(**doc["sampling"]),
+        directions=DirectionsConfig(**d),
+        voxel_edge_m=float(doc["voxels"]["edge_m"]),
+        shards=int(doc["shards"]),
+    )
+
+
+def load_config(path: str | Path) -> RunConfig:
+    return parse_config(load_yaml(path), str(path))
+
+
+def canonical(obj) -> str:
+    """Canonical JSON (sorted keys, no spaces): equal configs give equal strings."""
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"))
+
+
+def config_hash(obj) -> str:
+    return hashlib.sha256(canonical(obj).encode()).hexdigest()[:16]
+
+
+def stage_slices(doc: dict) -> dict[str, dict]:
+    """Per-stage config slices: ``own`` keys (rule params) and ``upstream`` (provenance).
+
+    model:    robot
+    sample:   lock, sampling (+ voxels for voxel_fill, whose grid it fills)
+    capacity: task orientation/speed/acceleration, limits, directions
+    voxels:   voxels
+    plan:     task payload/start/goal
+    verify:   task payload/start/goal/q_ini
+    """
+    task = doc["task"]
+    own = {
+        "model": {"robot": doc["robot"]},
+        "sample": {"lock": doc["lock"], "sampling": doc["sampling"],
+                   **({"voxels": doc["voxels"]} if doc["sampling"]["mode"] == "voxel_fill" else {})},
+        "capacity": {"task": {k: task[k] for k in ("orientation_rpy_deg", "v_max_mps", "a_max_mps2")},
+                     "limits": doc["limits"], "directions": doc["directions"]},
+        "voxels": {"voxels": doc["voxels"]},
+        "plan": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m")}},
+        "verify": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m", "q_ini_deg")}},
+    }
+    order = ["model", "sample", "capacity", "voxels", "plan", "verify"]
+    out, acc = {}, {}
+    for stage in order:
+        acc = {**acc, stage: own[stage]}
+        out[stage] = {"own": own[stage], "upstream": dict(acc)}
+    return out
+
+
+def check_run_config(doc: dict, source: str = "config") -> RunConfig:
+    """Everything that can be checked before any job: schema, robot file, lock, limits, directions."""
+    from capmap.locking import lock
+    from capmap.robot import load
+
+    run = parse_config(doc, source)
+    robot = load(run.robot)
+    arm = lock(robot, run.lock.joint, np.deg2rad(run.lock.angle_deg))
+    run.limits.resolve(robot.n_joints).vector(arm)
+    run.directions.build()
+    if len(run.task.q_ini_deg) != robot.n_joints:
+        raise CapmapError(f"{source}: task.q_ini_deg has {len(run.task.q_ini_deg)} values but {robot.name} has "
+                          f"{robot.n_joints} joints")
+    if abs(run.task.q_ini_deg[run.lock.joint - 1] - run.lock.angle_deg) > 1e-9:
+        raise CapmapError(f"{source}: task.q_ini_deg[{run.lock.joint - 1}] = {run.task.q_ini_deg[run.lock.joint - 1]:g} "
+                          f"must equal lock.angle_deg = {run.lock.angle_deg:g} (joint {run.lock.joint} is locked)")
+    return run

@@ -1,0 +1,19 @@
+DATASETS = [
+    "results/model/joints.parquet",
+    "results/sample/points.parquet",
+    *expand("results/capacity/shard_{k}_of_{n}.parquet", k=range(SHARDS), n=SHARDS),
+    "results/voxels/voxels.parquet",
+    "results/voxels/points.parquet",
+]
+
+
+rule catalogue:
+    """List every dataset: name, path, stage, rows, columns with units, sha256, config hash."""
+    input:
+        DATASETS,
+    output:
+        report("results/catalogue.parquet", category="Catalogue"),
+    log:
+        "results/logs/catalogue.log",
+    script:
+        "../scripts/catalogue.py"

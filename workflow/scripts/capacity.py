@@ -1,0 +1,4 @@
+from capmap.pipeline import run, stage_capacity
+
+run(stage_capacity, points=snakemake.input.points, out=snakemake.output[0], slice_json=snakemake.params.slice,
+    shard=int(snakemake.wildcards.k), shards=int(snakemake.wildcards.n), log=snakemake.log[0])
