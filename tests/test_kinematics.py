@@ -1,7 +1,7 @@
 import numpy as np
 import pinocchio as pin
 
-from capmap.kinematics import Chain, pose_error, rotation_log
+from capmap.kinematics import pose_error, rotation_log
 
 
 def test_chain_jacobian_matches_finite_differences(scenario_arm):

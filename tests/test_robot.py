@@ -69,7 +69,7 @@ def _urdf_of_spec(tmp_path):
 
 
 def test_urdf_robot_matches_dh_robot(tmp_path):
-    urdf = _urdf_of_spec(tmp_path)
+    _urdf_of_spec(tmp_path)  # writes tmp_path/ssrms.urdf
     (tmp_path / "r.yaml").write_text(yaml.safe_dump({"name": "ssrms_urdf", "urdf": {"path": "ssrms.urdf", "ee_frame": "tool"}}))
     ru = load(tmp_path / "r.yaml")
     rd = load(SSRMS_YAML)

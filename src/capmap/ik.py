@@ -119,7 +119,6 @@ def _closed_form(chain: Chain, T_target: np.ndarray) -> tuple[np.ndarray, np.nda
     """Raw branches (N, 8, 6) and their validity (N, 8) for a ``closed_form_shape`` chain."""
     X = chain.X
     N = len(T_target)
-    ez = np.array([0.0, 0, 1])
     # -- constants of the chain
     p5, d5 = X[5][:3, 3], X[5][:3, 2]
     s_star = -(p5[:2] @ d5[:2]) / (d5[:2] @ d5[:2])  # axis 5 meets axis 4 at (0, 0, s*) in frame 5

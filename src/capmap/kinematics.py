@@ -91,16 +91,22 @@ class Chain:
         """Chain of the inverse transform: T(theta)^-1 = chain'(-theta[::-1])."""
         return Chain(inverse_transform(self.X[::-1]))
 
-    def fk(self, theta: np.ndarray) -> np.ndarray:
-        """Poses (N, 4, 4) for joint angles theta (N, n) rad."""
-        theta = np.atleast_2d(theta)
+    def _frames(self, theta: np.ndarray):
+        """Yield the frame before each joint's rotation (..., 4, 4), then the tip pose."""
         T = np.broadcast_to(self.X[0], theta.shape[:-1] + (4, 4)).copy()
         for k in range(self.n):
+            yield T
+            T = T.copy()  # the yielded frame stays intact
             c, s = np.cos(theta[..., k])[..., None], np.sin(theta[..., k])[..., None]
-            c0, c1 = T[..., :, 0].copy(), T[..., :, 1]
-            T[..., :, 0] = c * c0 + s * c1
+            c0, c1 = T[..., :, 0].copy(), T[..., :, 1].copy()
+            T[..., :, 0] = c * c0 + s * c1  # T @ Rz(theta_k) mixes only columns 0 and 1
             T[..., :, 1] = c * c1 - s * c0
             T = T @ self.X[k + 1]
+        yield T
+
+    def fk(self, theta: np.ndarray) -> np.ndarray:
+        """Poses (N, 4, 4) for joint angles theta (N, n) rad."""
+        *_, T = self._frames(np.atleast_2d(theta))
         return T
 
     def jacobian(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -108,21 +114,10 @@ class Chain:
 
         Returns (pose (N, 4, 4), J (N, 6, n)) with rows [linear velocity; angular velocity].
         """
-        theta = np.atleast_2d(theta)
-        T = np.broadcast_to(self.X[0], theta.shape[:-1] + (4, 4)).copy()
-        axes, origins = [], []
-        for k in range(self.n):
-            axes.append(T[..., :3, 2].copy())
-            origins.append(T[..., :3, 3].copy())
-            c, s = np.cos(theta[..., k])[..., None], np.sin(theta[..., k])[..., None]
-            c0, c1 = T[..., :, 0].copy(), T[..., :, 1]
-            T[..., :, 0] = c * c0 + s * c1
-            T[..., :, 1] = c * c1 - s * c0
-            T = T @ self.X[k + 1]
-        z = np.stack(axes, axis=-1)  # (N, 3, n)
-        o = np.stack(origins, axis=-1)
-        p = T[..., :3, 3][..., None]
-        Jv = np.cross(z, p - o, axis=-2)
+        *joints, T = self._frames(np.atleast_2d(theta))
+        z = np.stack([F[..., :3, 2] for F in joints], axis=-1)  # (N, 3, n) joint axes
+        o = np.stack([F[..., :3, 3] for F in joints], axis=-1)  # points on them
+        Jv = np.cross(z, T[..., :3, 3][..., None] - o, axis=-2)
         return T, np.concatenate([Jv, z], axis=-2)
 
 
