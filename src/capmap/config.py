@@ -41,11 +41,9 @@ class TaskConfig:
     @staticmethod
     def rotation_from_rpy(rpy_deg) -> np.ndarray:
         """R = Rz(yaw) Ry(pitch) Rx(roll) (3, 3) from [roll, pitch, yaw] deg."""
-        r, p, y = np.deg2rad(rpy_deg)
-        cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-        return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                         [-sp, cp * sr, cp * cr]])
+        import pinocchio as pin
+
+        return pin.rpy.rpyToMatrix(*np.deg2rad(np.asarray(rpy_deg, dtype=float)))
 
 
 @dataclass(frozen=True)
@@ -147,7 +145,9 @@ def config_hash(obj) -> str:
 
 
 def stage_slices(doc: dict) -> dict[str, dict]:
-    """Per-stage config slices: ``own`` keys (rule params) and ``upstream`` (provenance).
+    """Per-stage config slices: ``own`` (the keys a stage reads itself) and ``upstream`` (its
+    own plus every earlier stage's: what its output depends on). ``upstream`` is what the
+    Snakefile puts in the rule's params and what provenance records.
 
     model:    robot
     sample:   lock, sampling (+ voxels for voxel_fill, whose grid it fills)
