@@ -15,7 +15,7 @@ if not workflow.overwrite_configfiles:
     configfile: "config/config.yaml"
 
 
-from capmap.config import canonical, check_run_config, stage_slices
+from capmap.config import canonical, check_run_config, payload_label, stage_slices
 from capmap.errors import CapmapError
 
 # validate once, before any job: schema, robot file, locked joint, limits
@@ -25,17 +25,24 @@ except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
 SLICES = stage_slices(config)
 SHARDS = RUN.shards
+PAYLOADS = [payload_label(m) for m in RUN.task.payload_kg]  # wildcard values, e.g. "1500"
+PAYLOAD_RE = "|".join(p.replace(".", r"\.") for p in PAYLOADS)
 
 
-def slice_json(stage):
-    """Canonical JSON of the config slice a stage depends on (rule params: exact reruns)."""
-    return canonical(SLICES[stage]["upstream"])
+def slice_json(stage, payload=None):
+    """Canonical JSON of the config slice a stage depends on (rule params: exact reruns).
+    plan/verify jobs handle one payload each and depend on that payload only."""
+    if payload is None:
+        return canonical(SLICES[stage]["upstream"])
+    return canonical(stage_slices(config, float(payload))[stage]["upstream"])
 
 
 include: "workflow/rules/model.smk"
 include: "workflow/rules/sample.smk"
 include: "workflow/rules/capacity.smk"
 include: "workflow/rules/voxels.smk"
+include: "workflow/rules/plan.smk"
+include: "workflow/rules/verify.smk"
 include: "workflow/rules/catalogue.smk"
 
 
@@ -43,5 +50,8 @@ rule all:
     input:
         "results/voxels/voxels.parquet",
         "results/summary/capacity_summary.csv",
+        expand("results/verify/payload_{payload}kg/{name}.png", payload=PAYLOADS,
+               name=["workspace", "torques", "base_force", "base_moment"]),
+        "results/verify/summary.csv",
         "results/catalogue.parquet",
     default_target: True

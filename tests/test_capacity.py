@@ -1,16 +1,23 @@
 import numpy as np
 import pytest
+from conftest import SSRMS_YAML, TASK_R, X_DES, newton_euler
 from scipy.optimize import linprog
 
-from capmap.capacity import (Limits, Motion, capacity_from_affine, capacity_over_directions, coefficients,
-                             point_capacity, state_capacity)
+from capmap.capacity import (
+    Limits,
+    Motion,
+    capacity_from_affine,
+    capacity_over_directions,
+    coefficients,
+    point_capacity,
+    state_capacity,
+)
 from capmap.directions import paper_grid, sphere
 from capmap.dynamics import ArmDynamics
 from capmap.errors import CapmapError
 from capmap.ik import solve
 from capmap.locking import lock
 from capmap.robot import load
-from conftest import SSRMS_YAML, TASK_R, X_DES, newton_euler
 
 LIMITS = Limits.uniform(7, 700, 200, 500)
 # on the ground the 5 m links' own weight needs ~10^4 N m: scale the limits so states are non-trivial

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 import yaml
+from conftest import ROOT, TASK_R
 
 from capmap.config import load_config, parse_config, stage_slices
 from capmap.errors import CapmapError
-from conftest import ROOT, TASK_R
 
 
 def _doc():

@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
+from conftest import SSRMS_YAML, newton_euler
 
 from capmap.dynamics import ArmDynamics, output_names
 from capmap.locking import lock
 from capmap.robot import load
-from conftest import SSRMS_YAML, newton_euler
 
 
 @pytest.fixture(scope="module", params=["space", "ground"])

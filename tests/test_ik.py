@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
+from conftest import Q_INI_DEG, TASK_R, X_DES, X_INI
 
 from capmap.ik import RESIDUAL_TOL, method_for, solve, wrap_to_range
 from capmap.locking import lock
-from conftest import Q_INI_DEG, TASK_R, X_DES, X_INI
 
 
 def _pin_residual(robot, arm, q_act, position, R):
@@ -99,6 +99,7 @@ def test_numeric_fallback_finds_exact_solutions(ssrms):
 def test_solutions_respect_joint_ranges(tmp_path):
     import yaml
     from conftest import SSRMS_YAML
+
     from capmap.robot import load
 
     doc = yaml.safe_load(SSRMS_YAML.read_text())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -11,8 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-
-from conftest import ROOT
+from conftest import ROOT, TASK_R, X_DES, X_INI
 
 TINY = ROOT / "tests" / "data" / "tiny.yaml"
 
@@ -24,7 +24,7 @@ def _config(tmp: Path, **changes) -> Path:
         node = doc
         *head, last = dotted.split(".")
         for h in head:
-            node = node[h]
+            node = node.setdefault(h, {})
         node[last] = value
     path = tmp / f"config_{abs(hash(repr(sorted(changes.items()))))}.yaml"
     path.write_text(yaml.safe_dump(doc))
@@ -47,6 +47,20 @@ def _planned_jobs(workdir: Path, config: Path) -> dict[str, int]:
         assert "Nothing to be done" in out, out[-2000:]
         return {}
     return {line.split()[0]: int(line.split()[1]) for line in m.group(1).strip().splitlines()}
+
+
+def _q_ini_locked(joint: int, angle_deg: float) -> list[float]:
+    """An exact start configuration with ``joint`` locked at angle_deg (the branch nearest the scenario's)."""
+    from capmap import ik
+    from capmap.locking import lock
+    from capmap.robot import load
+
+    arm = lock(load(ROOT / "config/robots/ssrms7.yaml"), joint, np.deg2rad(angle_deg))
+    sol = ik.solve(arm, X_INI[None], TASK_R)
+    q = sol.q[0, : sol.n_solutions[0]]
+    ref = np.deg2rad(np.delete([100, 124, 98, 130, 146, 174, 57.0], joint - 1))
+    best = np.rad2deg(q[np.argmin(np.abs(q - ref).max(axis=1))]).tolist()
+    return best[: joint - 1] + [float(angle_deg)] + best[joint - 1:]
 
 
 @pytest.fixture(scope="module")
@@ -102,8 +116,9 @@ def test_voxel_capacity_is_min_of_points_inside(run_dir):
 def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
     cat = pd.read_parquet(tmp / "results/catalogue.parquet")
-    assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "voxels"}  # two 'points'
-    assert len(cat) == 6
+    assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "voxels", "waypoints",
+                             "timeseries", "segments"}  # two 'points'
+    assert len(cat) == 9
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256
@@ -116,17 +131,26 @@ def test_catalogue_lists_every_dataset(run_dir):
 def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     tmp, cfg = run_dir
     assert _planned_jobs(tmp, cfg) == {}
-    downstream_of_capacity = {"capacity", "voxels", "summary", "catalogue", "all"}
+    after_payload = {"plan", "verify", "verify_plots", "verify_summary", "catalogue", "all"}
+    downstream_of_capacity = {"capacity", "voxels", "summary"} | after_payload
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"limits.joint_torque_nm": 650}))
     assert set(jobs) == downstream_of_capacity and jobs["capacity"] == 2
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"limits.base_moment_nm": 450}))
     assert set(jobs) == downstream_of_capacity
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.angle_deg": 95, "task.q_ini_deg": [95, 124, 98, 130, 146, 174, 57]}))
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.angle_deg": 95, "task.q_ini_deg": _q_ini_locked(1, 95)}))
     assert set(jobs) == {"sample"} | downstream_of_capacity
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.joint": 7, "lock.angle_deg": 57}))
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.joint": 7, "lock.angle_deg": 57,
+                                                   "task.q_ini_deg": _q_ini_locked(7, 57)}))
     assert set(jobs) == {"sample"} | downstream_of_capacity
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": 900}))
-    assert not {"model", "sample", "capacity", "voxels"} & set(jobs)
+    assert set(jobs) == after_payload
+    # a second payload: one new plan/verify/plots job each, nothing for the first payload
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": [1500, 900]}))
+    assert set(jobs) == after_payload and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"verification.dt_s": 0.2}))
+    assert set(jobs) == after_payload - {"plan"}
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.v_max_mps": 0.1}))
+    assert set(jobs) == downstream_of_capacity
 
 
 def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
@@ -143,6 +167,52 @@ def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
     pd.testing.assert_series_equal(before.capacity_kg, after.capacity_kg)
 
 
+def test_plan_and_verify_outputs(run_dir):
+    tmp, _ = run_dir
+    res = tmp / "results"
+    wp = pd.read_parquet(res / "plan/payload_1500kg/waypoints.parquet")
+    meta = wp.attrs["capmap"]
+    assert meta["status"] == "ok" and meta["payload_kg"] == 1500
+    assert meta["config"]["plan"]["task"]["payload_kg"] == 1500
+    assert np.allclose(wp[["x_m", "y_m", "z_m"]].iloc[0], X_INI) and np.allclose(wp[["x_m", "y_m", "z_m"]].iloc[-1], X_DES)
+    assert (wp.voxel_capacity_kg >= 1500).all()
+    ts = pd.read_parquet(res / "verify/payload_1500kg/timeseries.parquet")
+    seg = pd.read_parquet(res / "verify/payload_1500kg/segments.parquet")
+    summ = pd.read_csv(res / "verify/summary.csv")
+    for col in ("t_s", "segment", "x_m", "q_j2_deg", "qd_j2_deg_s", "tau_j2_nm", "base_fx_n", "base_mz_nm"):
+        assert col in ts.columns
+    assert set(ts.path) == {"direct", "planned"} and list(summ.path) == ["direct", "planned"]
+    limits = ts.attrs["capmap"]["limits"]
+    for name in ("direct", "planned"):
+        g = ts[ts.path == name]
+        assert g.t_s.is_monotonic_increasing
+        peak = max((g[c].abs() / lim).max() for c, lim in limits.items())
+        row = summ.set_index("path").loc[name]
+        assert row.peak_load_pct == pytest.approx(100 * peak)
+        assert bool(row.loads_ok) == (peak <= 1)
+        # the segment table's capacity is the minimum of the state capacities in the time series
+        per_seg = g.groupby("segment").state_capacity_kg.min()
+        assert np.allclose(seg[seg.path == name].set_index("segment").capacity_kg, per_seg)
+    for png in ("workspace", "torques", "base_force", "base_moment"):
+        assert (res / f"verify/payload_1500kg/{png}.png").stat().st_size > 10_000
+    assert "1500 kg, direct" in (res / "verify/summary.md").read_text()
+
+
+def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
+    tmp, _ = run_dir
+    work = tmp_path / "w"
+    shutil.copytree(tmp, work, symlinks=True)
+    res = _snakemake(work, _config(tmp_path, **{"task.payload_kg": [1500, 90000]}))
+    assert res.returncode == 0, res.stderr[-2000:]
+    wp = pd.read_parquet(work / "results/plan/payload_90000kg/waypoints.parquet")
+    assert len(wp) == 0 and wp.attrs["capmap"]["status"] == "no_path"
+    assert "below task.payload_kg = 90000" in wp.attrs["capmap"]["reason"]
+    summ = pd.read_csv(work / "results/verify/summary.csv").set_index(["payload_kg", "path"])
+    assert "below task.payload_kg = 90000" in summ.loc[(90000, "planned"), "planner"]
+    direct = summ.loc[(90000, "direct")]
+    assert not direct.loads_ok and not direct.feasible and direct.limits_exceeded_at_payload
+
+
 @pytest.mark.parametrize("changes, expect", [
     ({"limts": 3}, "unknown key limts"),
     ({"lock.joint": 9}, "lock.joint = 9 is out of range"),
@@ -150,6 +220,10 @@ def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
     ({"limits.joint_torque_nm": [700, 700]}, "limits.joint_torque_nm has 2 values"),
     ({"directions.n": 0}, "directions.n"),
     ({"task.q_ini_deg": [90, 124, 98, 130, 146, 174, 57]}, "must equal lock.angle_deg"),
+    ({"task.goal_m": [30, 0, 0]}, "task.goal_m = [30, 0, 0] is not reachable"),
+    ({"task.q_ini_deg": [100, 124, 98, 140, 146, 174, 57]}, "task.q_ini_deg is 9.97 deg from the nearest"),
+    ({"task.payload_kg": [1500, 1500]}, "task.payload_kg"),
+    ({"verification.dt_s": 0}, "verification.dt_s"),
 ])
 def test_bad_config_is_one_line_before_any_job(tmp_path, changes, expect):
     res = _snakemake(tmp_path, _config(tmp_path, **changes), "-n")

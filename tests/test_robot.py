@@ -2,10 +2,18 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
+from conftest import (
+    Q_INI_DEG,
+    SSRMS_YAML,
+    X_INI,
+    craig_fk,
+    craig_step,
+    rpy_matrix,
+    spec_table,
+)
 
 from capmap.errors import CapmapError
 from capmap.robot import build_robot, load, load_robot, parse_robot
-from conftest import Q_INI_DEG, SSRMS_YAML, X_INI, craig_fk, craig_step, rpy_matrix, spec_table
 
 
 def test_fk_q_ini_matches_published_pose(ssrms):

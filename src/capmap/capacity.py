@@ -85,6 +85,13 @@ def capacity_from_affine(y0: np.ndarray, s: np.ndarray, limit: np.ndarray, axis:
 def state_affine(dyn: ArmDynamics, q_active: np.ndarray, v_lin: np.ndarray, a_lin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(y0, s) of one motion state computed directly: joint motion by J^-1, one RNEA each."""
     q, qd, qdd = dyn.motion(q_active, v_lin, a_lin)
+    return joint_state_affine(dyn, q, qd, qdd, a_lin)
+
+
+def joint_state_affine(dyn: ArmDynamics, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                       a_lin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(y0, s), each (n_out,), of a joint motion state: full q, qd, qdd (nv,), with the
+    end-effector linear acceleration a_lin (3,) m/s^2 that the payload shares. y(m) = y0 + m s."""
     y0 = dyn.outputs(q, qd, qdd)
     s = dyn.outputs(q, np.zeros_like(qd), np.zeros_like(qdd), payload_force=np.asarray(a_lin) - dyn.gravity,
                     gravity=False)

@@ -29,7 +29,7 @@ class TaskConfig:
     orientation_rpy_deg: tuple[float, float, float]
     v_max_mps: float
     a_max_mps2: float
-    payload_kg: float
+    payload_kg: tuple[float, ...]  # one or more task payloads; each is planned and verified
     start_m: tuple[float, float, float]
     goal_m: tuple[float, float, float]
     q_ini_deg: tuple[float, ...]
@@ -88,6 +88,9 @@ class DirectionsConfig:
         return directions.paper_grid(self.step_deg) if self.kind == "paper_grid" else directions.sphere(self.n)
 
 
+DEFAULT_DT_S = 0.1
+
+
 @dataclass(frozen=True)
 class RunConfig:
     robot: str
@@ -98,6 +101,7 @@ class RunConfig:
     directions: DirectionsConfig
     voxel_edge_m: float
     shards: int
+    dt_s: float = DEFAULT_DT_S  # verification sample spacing
 
 
 def _tuple(v):
@@ -118,6 +122,10 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
     if extra in d:
         raise CapmapError(f"{source}: directions.{extra} does not apply to kind {d['kind']}")
     task = {k: _tuple(v) for k, v in doc["task"].items()}
+    task["payload_kg"] = tuple(float(m) for m in np.atleast_1d(task["payload_kg"]))
+    labels = [payload_label(m) for m in task["payload_kg"]]
+    if len(set(labels)) != len(labels):
+        raise CapmapError(f"{source}: task.payload_kg has repeated values {labels}")
     limits = {k: _tuple(v) for k, v in doc["limits"].items()}
     return RunConfig(
         robot=doc["robot"],
@@ -128,6 +136,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         directions=DirectionsConfig(**d),
         voxel_edge_m=float(doc["voxels"]["edge_m"]),
         shards=int(doc["shards"]),
+        dt_s=float(doc.get("verification", {}).get("dt_s", DEFAULT_DT_S)),
     )
 
 
@@ -144,7 +153,12 @@ def config_hash(obj) -> str:
     return hashlib.sha256(canonical(obj).encode()).hexdigest()[:16]
 
 
-def stage_slices(doc: dict) -> dict[str, dict]:
+def payload_label(payload_kg: float) -> str:
+    """File-name label of a payload: 1500 -> '1500', 1250.5 -> '1250.5'."""
+    return f"{float(payload_kg):g}"
+
+
+def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     """Per-stage config slices: ``own`` (the keys a stage reads itself) and ``upstream`` (its
     own plus every earlier stage's: what its output depends on). ``upstream`` is what the
     Snakefile puts in the rule's params and what provenance records.
@@ -154,9 +168,14 @@ def stage_slices(doc: dict) -> dict[str, dict]:
     capacity: task orientation/speed/acceleration, limits, directions
     voxels:   voxels
     plan:     task payload/start/goal
-    verify:   task payload/start/goal/q_ini
+    verify:   task payload/start/goal/q_ini, verification
+
+    ``payload_kg``: the one payload a plan/verify job handles (the config may list several;
+    each job depends on its own only, so adding a payload reruns nothing else).
     """
-    task = doc["task"]
+    task = dict(doc["task"])
+    if payload_kg is not None:
+        task["payload_kg"] = float(payload_kg)
     own = {
         "model": {"robot": doc["robot"]},
         "sample": {"lock": doc["lock"], "sampling": doc["sampling"],
@@ -165,7 +184,8 @@ def stage_slices(doc: dict) -> dict[str, dict]:
                      "limits": doc["limits"], "directions": doc["directions"]},
         "voxels": {"voxels": doc["voxels"]},
         "plan": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m")}},
-        "verify": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m", "q_ini_deg")}},
+        "verify": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m", "q_ini_deg")},
+                   "verification": {"dt_s": doc.get("verification", {}).get("dt_s", DEFAULT_DT_S)}},
     }
     order = ["model", "sample", "capacity", "voxels", "plan", "verify"]
     out, acc = {}, {}
@@ -191,4 +211,21 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     if abs(run.task.q_ini_deg[run.lock.joint - 1] - run.lock.angle_deg) > 1e-9:
         raise CapmapError(f"{source}: task.q_ini_deg[{run.lock.joint - 1}] = {run.task.q_ini_deg[run.lock.joint - 1]:g} "
                           f"must equal lock.angle_deg = {run.lock.angle_deg:g} (joint {run.lock.joint} is locked)")
+    check_task_poses(arm, run.task, source)
     return run
+
+
+def check_task_poses(arm, task: TaskConfig, source: str = "config") -> None:
+    """Start and goal reachable at the task orientation; q_ini an IK solution at the start."""
+    from capmap import ik
+    from capmap.verification import start_branch
+
+    sol = ik.solve(arm, np.array([task.start_m, task.goal_m]), task.rotation)
+    for key, n, x in zip(("start_m", "goal_m"), sol.n_solutions, (task.start_m, task.goal_m)):
+        if n == 0:
+            raise CapmapError(f"{source}: task.{key} = [{', '.join(f'{v:g}' for v in x)}] is not reachable by the "
+                              f"locked arm at task.orientation_rpy_deg = {list(task.orientation_rpy_deg)}")
+    try:
+        start_branch(arm, np.asarray(task.start_m), task.rotation, np.deg2rad(np.asarray(task.q_ini_deg))[arm.active])
+    except CapmapError as exc:
+        raise CapmapError(f"{source}: {exc}") from None

@@ -16,7 +16,8 @@ import capmap
 from capmap.config import config_hash
 
 UNITS = [("_deg", "deg"), ("_rad", "rad"), ("_kg", "kg"), ("_nm", "N m"), ("_n", "N"), ("_mps2", "m/s^2"),
-         ("_mps", "m/s"), ("_m", "m"), ("_s", "s"), ("_pct", "%"), ("_rad_s", "rad/s"), ("_rad_s2", "rad/s^2")]
+         ("_mps", "m/s"), ("_m", "m"), ("_s", "s"), ("_pct", "%"), ("_rad_s", "rad/s"), ("_rad_s2", "rad/s^2"),
+         ("_deg_s", "deg/s"), ("_deg_s2", "deg/s^2")]
 
 
 def column_unit(name: str) -> str:

@@ -17,9 +17,15 @@ import numpy as np
 import pandas as pd
 
 from capmap import capacity as cap_mod
-from capmap import datasets, ik, sampling
-from capmap.config import DirectionsConfig, LimitsConfig, LockConfig, SamplingConfig, TaskConfig
-from capmap.dynamics import ArmDynamics
+from capmap import datasets, ik, planning, sampling, trajectory, verification
+from capmap.config import (
+    DirectionsConfig,
+    LimitsConfig,
+    LockConfig,
+    SamplingConfig,
+    TaskConfig,
+)
+from capmap.dynamics import ArmDynamics, output_names
 from capmap.errors import CapmapError
 from capmap.locking import LockedArm, lock
 from capmap.robot import Robot, load
@@ -213,6 +219,217 @@ def stage_voxels(shards: list[str], out_voxels: str, out_points: str, slice_json
     reach = vox.n_reachable > 0
     lg(f"grid {grid.shape} x {grid.edge_m} m: {int(reach.sum())} reachable voxels of {grid.n_voxels}; "
        f"{int((vox.n_points == 0).sum())} voxels without any sample; {len(pts)} points -> {out_voxels}")
+
+
+# --------------------------------------------------------------------------- plan
+
+
+def grid_of(vox: pd.DataFrame) -> Grid:
+    """The voxel grid recorded in a voxels dataset's provenance."""
+    g = vox.attrs["capmap"]["grid"]
+    return Grid(lower=np.asarray(g["lower_m"], dtype=float), shape=tuple(g["shape"]), edge_m=float(g["edge_m"]))
+
+
+WAYPOINT_COLUMNS = ["waypoint", "kind", "x_m", "y_m", "z_m", "i", "j", "k", "voxel_capacity_kg"]
+
+
+def stage_plan(voxels: str, out: str, slice_json: str, log: str | None = None) -> None:
+    """A* through the voxels that carry the task payload; a payload with no path is recorded
+    (status ``no_path`` and the reason in the provenance, zero waypoints), not an error."""
+    sl = json.loads(slice_json)
+    task = sl["plan"]["task"]
+    payload = float(task["payload_kg"])
+    lg = Log(log, f"plan {payload:g} kg")
+    vox = datasets.read(voxels)
+    grid = grid_of(vox)
+    cap = vox.capacity_kg.to_numpy()
+    status, reason, cost, expanded = "ok", "", float("nan"), 0
+    try:
+        p = planning.plan(grid, cap, task["start_m"], task["goal_m"], payload)
+        wv = p.waypoint_voxel
+        df = pd.DataFrame({"waypoint": np.arange(len(p.waypoints)), "kind": p.waypoint_kind,
+                           "x_m": p.waypoints[:, 0], "y_m": p.waypoints[:, 1], "z_m": p.waypoints[:, 2],
+                           "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2], "voxel_capacity_kg": cap[grid.flat(wv)]})
+        cost, expanded = p.cost_m, p.expanded
+        lg(f"{len(p.voxel_path)} voxels, {len(df)} waypoints, A* cost {cost:.3f} m, path {p.length_m:.3f} m, "
+           f"{expanded} voxels expanded; weakest voxel on it {df.voxel_capacity_kg.min():.1f} kg")
+    except planning.NoPath as exc:
+        status, reason = "no_path", str(exc)
+        df = pd.DataFrame({c: pd.Series(dtype=object if c == "kind" else float) for c in WAYPOINT_COLUMNS})
+        lg(f"no path: {reason}")
+    datasets.write(df, out, datasets.provenance("plan", sl, payload_kg=payload, status=status, reason=reason,
+                                                 cost_m=cost, expanded=expanded))
+
+
+# --------------------------------------------------------------------------- verify
+
+
+def _deg(x):
+    return np.rad2deg(x)
+
+
+def _path_tables(name: str, res: verification.PathResult, arm: LockedArm, names: tuple[str, ...],
+                 limit: np.ndarray, payload: float, planner: str) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+    """Time series, segment table and summary row of one verified path."""
+    tl, tr, ld = res.timeline, res.tracking, res.loads
+    y = ld.at(payload)
+    ratio = np.abs(y) / limit  # (N, n_out), NaN where untracked
+    bind_names = np.array(list(names) + ["untracked"])
+    ts = pd.DataFrame({"path": name, "t_s": tl.t_s, "segment": tl.segment,
+                       "phase": pd.Categorical.from_codes(tl.phase, list(trajectory.PHASES)),
+                       "x_m": tl.p[:, 0], "y_m": tl.p[:, 1], "z_m": tl.p[:, 2],
+                       "vx_mps": tl.v[:, 0], "vy_mps": tl.v[:, 1], "vz_mps": tl.v[:, 2],
+                       "ax_mps2": tl.a[:, 0], "ay_mps2": tl.a[:, 1], "az_mps2": tl.a[:, 2]})
+    for c, j in enumerate(arm.active_joint_numbers):
+        ts[f"q_j{j}_deg"] = _deg(tr.q[:, c])
+    for c, j in enumerate(arm.active_joint_numbers):
+        ts[f"qd_j{j}_deg_s"] = _deg(ld.qd[:, c])
+    for c, j in enumerate(arm.active_joint_numbers):
+        ts[f"qdd_j{j}_deg_s2"] = _deg(ld.qdd[:, c])
+    for c, col in enumerate(names):
+        ts[col] = y[:, c]
+    ts["state_capacity_kg"] = ld.capacity_kg
+    ts["binding"] = bind_names[ld.binding]
+    ts["tracked"] = ~np.isnan(tr.q).any(axis=1)
+    ts["in_joint_range"] = tr.in_range.all(axis=1)
+
+    seg_rows = []
+    wp = np.concatenate([tl.p[[0]], [tl.p[tl.segment == k][-1] for k in range(len(tl.profiles))]])
+    for k, prof in enumerate(tl.profiles):
+        rows = tl.segment == k
+        w = res.segment_worst[k]
+        r = ratio[rows]
+        peak = np.nanmax(r, axis=0) if np.isfinite(r).any() else np.full(len(names), np.nan)
+        seg_rows.append({
+            "path": name, "segment": k,
+            "x0_m": wp[k, 0], "y0_m": wp[k, 1], "z0_m": wp[k, 2], "x1_m": wp[k + 1, 0], "y1_m": wp[k + 1, 1],
+            "z1_m": wp[k + 1, 2], "length_m": prof.length_m, "duration_s": prof.duration_s, "v_peak_mps": prof.v_peak_mps,
+            "capacity_kg": res.segment_capacity_kg[k],
+            "binding": bind_names[ld.binding[w]] if w >= 0 else "",
+            "t_worst_s": tl.t_s[w] if w >= 0 else np.nan,
+            "margin_pct": 100 * (res.segment_capacity_kg[k] - payload) / payload if payload > 0 else np.nan,
+            "peak_load_pct": 100 * np.nanmax(peak),
+            "exceeded_at_payload": ",".join(n for n, v in zip(names, peak) if v > 1 + 1e-9),
+            "tracked": bool(ts.tracked[rows].all()), "in_joint_range": bool(ts.in_joint_range[rows].all()),
+        })
+    seg = pd.DataFrame(seg_rows)
+
+    peak_all = np.nanmax(ratio, axis=0) if np.isfinite(ratio).any() else np.full(len(names), np.nan)
+    exceeded = [n for n, v in zip(names, peak_all) if v > 1 + 1e-9]
+    worst_seg = int(np.argmin(res.segment_capacity_kg))
+    excursions = verification.range_excursions(tr.in_range)
+    range_note = "; ".join(
+        f"joint {arm.active_joint_numbers[c]} outside [{_deg(arm.q_lower[c]):g}, {_deg(arm.q_upper[c]):g}] deg "
+        f"for t = {tl.t_s[a]:.1f}..{tl.t_s[b]:.1f} s (peak {_deg(tr.q[a:b + 1, c]).max() if tr.q[a, c] > arm.q_upper[c] else _deg(tr.q[a:b + 1, c]).min():.1f} deg)"
+        for c, a, b in excursions)
+    loads_ok = tr.ok and not exceeded
+    mean_cap = float(np.mean(res.segment_capacity_kg))
+    summary = {
+        "path": name, "planner": planner, "segments": len(tl.profiles),
+        "length_m": float(sum(p.length_m for p in tl.profiles)), "duration_s": float(tl.t_s[-1]),
+        "tracking": "ok" if tr.ok else f"failed at t = {tl.t_s[tr.failed_at]:.1f} s: {tr.failure}",
+        "start_branch_offset_deg": _deg(tr.start_offset_rad),
+        "capacity_kg": float(res.segment_capacity_kg[worst_seg]),
+        "binding": seg.binding[worst_seg], "weakest_segment": worst_seg,
+        "mean_segment_capacity_kg": mean_cap,
+        "margin_pct": 100 * (mean_cap - payload) / payload if payload > 0 else np.nan,
+        "min_margin_pct": 100 * (res.segment_capacity_kg[worst_seg] - payload) / payload if payload > 0 else np.nan,
+        "peak_load_pct": 100 * float(np.nanmax(peak_all)),
+        "peak_load": names[int(np.nanargmax(peak_all))],
+        "limits_exceeded_at_payload": ",".join(exceeded),
+        "loads_ok": loads_ok, "joint_range": range_note or "ok",
+        "feasible": loads_ok and not excursions,
+    }
+    return ts, seg, summary
+
+
+def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv: str, out_md: str, slice_json: str,
+                 log: str | None = None) -> None:
+    """Verify the direct line and the planned path (if any) carrying the task payload."""
+    sl = json.loads(slice_json)
+    robot, arm = _arm_from(sl)
+    dyn = ArmDynamics(arm)
+    cs, vt = sl["capacity"]["task"], sl["verify"]["task"]
+    payload = float(vt["payload_kg"])
+    lg = Log(log, f"verify {payload:g} kg")
+    rotation = TaskConfig.rotation_from_rpy(cs["orientation_rpy_deg"])
+    limit = LimitsConfig(**sl["capacity"]["limits"]).resolve(robot.n_joints).vector(arm)
+    names = output_names(arm)
+    q_ini = np.deg2rad(np.asarray(vt["q_ini_deg"], dtype=float))[arm.active]
+    dt = float(sl["verify"]["verification"]["dt_s"])
+    wp = datasets.read(waypoints)
+    plan_meta = wp.attrs["capmap"]
+    paths = {"direct": np.array([vt["start_m"], vt["goal_m"]], dtype=float)}
+    if plan_meta["status"] == "ok":
+        paths["planned"] = wp[["x_m", "y_m", "z_m"]].to_numpy()
+    ts_parts, seg_parts, rows = [], [], []
+    for name, pts in paths.items():
+        res = verification.verify_path(dyn, pts, rotation, q_ini, cs["v_max_mps"], cs["a_max_mps2"], dt, limit)
+        planner = "straight line" if name == "direct" else f"A*, {len(pts)} waypoints"
+        ts, seg, row = _path_tables(name, res, arm, names, limit, payload, planner)
+        ts_parts.append(ts)
+        seg_parts.append(seg)
+        rows.append(row)
+        lg(f"{name}: {row['segments']} segments, {row['duration_s']:.1f} s, capacity {row['capacity_kg']:.1f} kg "
+           f"({row['binding']}), mean segment capacity {row['mean_segment_capacity_kg']:.1f} kg = "
+           f"{row['margin_pct']:+.1f}% vs {payload:g} kg; exceeded: {row['limits_exceeded_at_payload'] or 'none'}; "
+           f"tracking {row['tracking']}; joint range {row['joint_range']}")
+    if plan_meta["status"] != "ok":
+        rows.append({"path": "planned", "planner": f"A*: {plan_meta['reason']}", "feasible": False})
+        lg(f"planned: none ({plan_meta['reason']})")
+    summary = pd.DataFrame(rows)
+    summary.insert(0, "payload_kg", payload)
+    ts = pd.concat(ts_parts, ignore_index=True)
+    ts["path"] = ts.path.astype("category")
+    ts["binding"] = ts.binding.astype("category")
+    seg = pd.concat(seg_parts, ignore_index=True)
+    prov = datasets.provenance("verify", sl, payload_kg=payload, limits=dict(zip(names, limit.tolist())),
+                               plan_status=plan_meta["status"], plan_reason=plan_meta["reason"])
+    datasets.write(ts, out_timeseries, prov)
+    datasets.write(seg, out_segments, prov)
+    write_table(summary, out_csv, out_md)
+
+
+def write_table(df: pd.DataFrame, out_csv: str, out_md: str) -> None:
+    """A summary table as CSV and as Markdown transposed: one column per row of ``df``, headed
+    by its first two fields (e.g. payload and path)."""
+    Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(out_csv, index=False)
+
+    def fmt(v):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (float, np.floating)):
+            return "" if v is None else str(v)
+        return "" if np.isnan(v) else f"{v:.1f}"
+
+    md = df.iloc[:, 2:].map(fmt).T
+    md.columns = [f"{a:g} kg, {b}" if df.columns[0] == "payload_kg" else f"{a} {b}"
+                  for a, b in zip(df.iloc[:, 0], df.iloc[:, 1])]
+    Path(out_md).write_text(md.to_markdown() + "\n")
+
+
+def stage_verify_plots(voxels: str, timeseries: str, out_workspace: str, out_torques: str, out_force: str,
+                       out_moment: str, slice_json: str, log: str | None = None) -> None:
+    """Capacity workspace with both paths; torques, base force and base moment against their limits."""
+    from capmap import plots
+
+    vox, ts = datasets.read(voxels), datasets.read(timeseries)
+    meta = ts.attrs["capmap"]
+    payload, limits = meta["payload_kg"], meta["limits"]
+    plots.workspace_paths(vox, ts, payload, out_workspace)
+    tau = [c for c in limits if c.startswith("tau_")]
+    plots.load_series(ts, tau, limits, f"Joint torques carrying {payload:g} kg", out_torques)
+    plots.load_series(ts, [c for c in limits if c.startswith("base_f")], limits,
+                      f"Base disturbance force carrying {payload:g} kg", out_force)
+    plots.load_series(ts, [c for c in limits if c.startswith("base_m")], limits,
+                      f"Base disturbance moment carrying {payload:g} kg", out_moment)
+    Log(log, f"verify plots {payload:g} kg")(f"-> {out_workspace}, {out_torques}, {out_force}, {out_moment}")
+
+
+def stage_verify_summary(tables: list[str], out_csv: str, out_md: str, log: str | None = None) -> None:
+    """All payloads' verification summaries in one table."""
+    df = pd.concat([pd.read_csv(t) for t in tables], ignore_index=True)
+    write_table(df, out_csv, out_md)
+    Log(log, "verify summary")(f"{len(df)} rows -> {out_csv}")
 
 
 # --------------------------------------------------------------------------- summary and catalogue

@@ -4,6 +4,8 @@ DATASETS = [
     *expand("results/capacity/shard_{k}_of_{n}.parquet", k=range(SHARDS), n=SHARDS),
     "results/voxels/voxels.parquet",
     "results/voxels/points.parquet",
+    *expand("results/plan/payload_{payload}kg/waypoints.parquet", payload=PAYLOADS),
+    *expand("results/verify/payload_{payload}kg/{name}.parquet", payload=PAYLOADS, name=["timeseries", "segments"]),
 ]
 
 

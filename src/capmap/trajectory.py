@@ -1,0 +1,126 @@
+"""Time scaling of straight Cartesian segments.
+
+A rest-to-rest trapezoidal speed profile over a segment of length L with speed limit
+v_max and acceleration limit a_max: accelerate at a_max, cruise at v_max, decelerate at
+a_max; when L < v_max^2 / a_max the cruise vanishes and the peak speed is sqrt(a_max L)
+(triangular profile). Pure functions on arrays; units m, s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.errors import CapmapError
+
+PHASES = ("accelerate", "cruise", "decelerate")
+
+
+@dataclass(frozen=True)
+class Trapezoid:
+    """Profile of one segment: length_m, peak speed v_peak_mps, acceleration a_mps2,
+    acceleration time t_acc_s (= deceleration time), cruise time t_cruise_s."""
+
+    length_m: float
+    v_peak_mps: float
+    a_mps2: float
+    t_acc_s: float
+    t_cruise_s: float
+
+    @property
+    def duration_s(self) -> float:
+        return 2 * self.t_acc_s + self.t_cruise_s
+
+    def phase_bounds(self) -> np.ndarray:
+        """(4,) s: start, end of acceleration, end of cruise, end."""
+        return np.array([0.0, self.t_acc_s, self.t_acc_s + self.t_cruise_s, self.duration_s])
+
+    def phase_state(self, phase: int, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(s, sd, sdd), each like t (segment time, s), using ``phase``'s own formula (so a phase
+        boundary gets that phase's one-sided acceleration)."""
+        t = np.asarray(t, dtype=float)
+        a, v, ta = self.a_mps2, self.v_peak_mps, self.t_acc_s
+        if phase == 0:
+            return 0.5 * a * t**2, a * t, np.full_like(t, a)
+        if phase == 1:
+            return 0.5 * a * ta**2 + v * (t - ta), np.full_like(t, v), np.zeros_like(t)
+        r = np.maximum(self.duration_s - t, 0.0)  # time to go
+        return self.length_m - 0.5 * a * r**2, a * r, np.full_like(t, -a)
+
+
+def trapezoid(length_m: float, v_max_mps: float, a_max_mps2: float) -> Trapezoid:
+    """Rest-to-rest time-optimal profile under |sd| <= v_max, |sdd| <= a_max."""
+    if not (v_max_mps > 0 and a_max_mps2 > 0):
+        raise CapmapError(f"speed limit {v_max_mps!r} m/s and acceleration limit {a_max_mps2!r} m/s^2 must be > 0")
+    if length_m < 0:
+        raise CapmapError(f"segment length {length_m!r} m must be >= 0")
+    if length_m * a_max_mps2 >= v_max_mps**2:  # reaches v_max
+        ta = v_max_mps / a_max_mps2
+        return Trapezoid(length_m, v_max_mps, a_max_mps2, ta, (length_m - v_max_mps * ta) / v_max_mps)
+    v = math.sqrt(a_max_mps2 * length_m)
+    return Trapezoid(length_m, v, a_max_mps2, v / a_max_mps2, 0.0)
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """Samples of a sequence of straight segments, N samples.
+
+    t_s (N,) global time; segment (N,) int; phase (N,) int index into PHASES;
+    p (N, 3) m, v (N, 3) m/s, a (N, 3) m/s^2 of the end effector. A phase's samples
+    include both of its ends, so a phase boundary appears twice (once per side of the
+    acceleration jump); ``t_s`` is non-decreasing.
+    """
+
+    t_s: np.ndarray
+    segment: np.ndarray
+    phase: np.ndarray
+    p: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    profiles: tuple[Trapezoid, ...]
+
+    def __len__(self) -> int:
+        return len(self.t_s)
+
+
+def sample_segments(waypoints: np.ndarray, v_max_mps: float, a_max_mps2: float, dt_s: float) -> Timeline:
+    """Rest-to-rest trapezoidal motion through waypoints (W, 3) m, sampled every <= dt_s in each phase."""
+    waypoints = np.asarray(waypoints, dtype=float)
+    if len(waypoints) < 2:
+        raise CapmapError("a path needs at least two distinct waypoints")
+    if not dt_s > 0:
+        raise CapmapError(f"verification.dt_s = {dt_s!r} must be > 0")
+    parts = {k: [] for k in ("t", "seg", "ph", "s", "sd", "sdd", "dir", "p0")}
+    profiles = []
+    t0 = 0.0
+    for k in range(len(waypoints) - 1):
+        d = waypoints[k + 1] - waypoints[k]
+        L = float(np.linalg.norm(d))
+        prof = trapezoid(L, v_max_mps, a_max_mps2)
+        profiles.append(prof)
+        if L == 0:
+            continue
+        u = d / L
+        bounds = prof.phase_bounds()
+        for ph in range(3):
+            T = bounds[ph + 1] - bounds[ph]
+            if T <= 0:
+                continue
+            t = np.linspace(bounds[ph], bounds[ph + 1], max(2, math.ceil(T / dt_s - 1e-9) + 1))
+            s, sd, sdd = prof.phase_state(ph, t)
+            n = len(t)
+            parts["t"].append(t0 + t)
+            parts["seg"].append(np.full(n, k))
+            parts["ph"].append(np.full(n, ph))
+            parts["s"].append(s)
+            parts["sd"].append(sd)
+            parts["sdd"].append(sdd)
+            parts["dir"].append(np.broadcast_to(u, (n, 3)))
+            parts["p0"].append(np.broadcast_to(waypoints[k], (n, 3)))
+        t0 += prof.duration_s
+    cat = {k: np.concatenate(v) for k, v in parts.items()}
+    u = cat["dir"]
+    return Timeline(t_s=cat["t"], segment=cat["seg"], phase=cat["ph"], p=cat["p0"] + cat["s"][:, None] * u,
+                    v=cat["sd"][:, None] * u, a=cat["sdd"][:, None] * u, profiles=tuple(profiles))
