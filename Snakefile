@@ -15,7 +15,7 @@ if not workflow.overwrite_configfiles:
     configfile: "config/config.yaml"
 
 
-from capmap.config import canonical, check_run_config, payload_label, stage_slices
+from capmap.config import canonical, check_run_config, follow_slices, payload_label, stage_slices
 from capmap.errors import CapmapError
 
 # validate once, before any job: schema, robot file, locked joint, limits
@@ -26,6 +26,8 @@ except CapmapError as exc:
 SLICES = stage_slices(config)
 SHARDS = RUN.shards
 PAYLOADS = [payload_label(m) for m in RUN.task.payload_kg]  # wildcard values, e.g. "1500"
+FOLLOW_SLICES = follow_slices(config)
+FOLLOW_CASES = list(FOLLOW_SLICES)  # "space", "ground": those configured under follow
 PAYLOAD_RE = "|".join(p.replace(".", r"\.") for p in PAYLOADS)
 
 
@@ -43,6 +45,7 @@ include: "workflow/rules/capacity.smk"
 include: "workflow/rules/voxels.smk"
 include: "workflow/rules/plan.smk"
 include: "workflow/rules/verify.smk"
+include: "workflow/rules/follow.smk"
 include: "workflow/rules/catalogue.smk"
 
 
@@ -53,5 +56,7 @@ rule all:
         expand("results/verify/payload_{payload}kg/{name}.png", payload=PAYLOADS,
                name=["workspace", "torques", "base_force", "base_moment"]),
         "results/verify/summary.csv",
+        expand("results/follow/{case}/{name}.png", case=FOLLOW_CASES, name=["progress", "torques"]),
+        expand("results/follow/summary.csv", case=FOLLOW_CASES[:1]),
         "results/catalogue.parquet",
     default_target: True

@@ -20,6 +20,7 @@ TINY = ROOT / "tests" / "data" / "tiny.yaml"
 def _config(tmp: Path, **changes) -> Path:
     doc = yaml.safe_load(TINY.read_text())
     doc["robot"] = str(ROOT / "config" / "robots" / "ssrms7.yaml")
+    doc["follow"]["ground"]["robot"] = str(ROOT / "config" / "robots" / "ur5.yaml")
     for dotted, value in changes.items():
         node = doc
         *head, last = dotted.split(".")
@@ -117,8 +118,8 @@ def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
     cat = pd.read_parquet(tmp / "results/catalogue.parquet")
     assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "voxels", "waypoints",
-                             "timeseries", "segments"}  # two 'points'
-    assert len(cat) == 9
+                             "timeseries", "segments", "toppra"}  # two 'points', three 'timeseries'
+    assert len(cat) == 13
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256
@@ -132,7 +133,8 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     tmp, cfg = run_dir
     assert _planned_jobs(tmp, cfg) == {}
     after_payload = {"plan", "verify", "verify_plots", "verify_summary", "catalogue", "all"}
-    downstream_of_capacity = {"capacity", "voxels", "summary"} | after_payload
+    follow = {"follow", "follow_plots", "follow_summary"}
+    downstream_of_capacity = {"capacity", "voxels", "summary"} | after_payload | follow
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"limits.joint_torque_nm": 650}))
     assert set(jobs) == downstream_of_capacity and jobs["capacity"] == 2
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"limits.base_moment_nm": 450}))
@@ -142,13 +144,18 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.joint": 7, "lock.angle_deg": 57,
                                                    "task.q_ini_deg": _q_ini_locked(7, 57)}))
     assert set(jobs) == {"sample"} | downstream_of_capacity
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": 900}))
-    assert set(jobs) == after_payload
-    # a second payload: one new plan/verify/plots job each, nothing for the first payload
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": 900, "follow.space.payload_kg": 900}))
+    assert set(jobs) == after_payload | follow and jobs["follow"] == 1  # the space case follows the new plan
+    # a second payload: one new plan/verify/plots job each, nothing for the first payload (nor its follower)
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": [1500, 900]}))
     assert set(jobs) == after_payload and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"verification.dt_s": 0.2}))
-    assert set(jobs) == after_payload - {"plan"}
+    assert set(jobs) == (after_payload - {"plan"}) | follow and jobs["follow"] == 1  # in the space case's slice
+    # the follower's own settings: only that case
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"follow.ground.joint_torque_nm": 15}))
+    assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == jobs["follow_plots"] == 1
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"follow.period_s": 0.002}))
+    assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == 2
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.v_max_mps": 0.1}))
     assert set(jobs) == downstream_of_capacity
 
@@ -198,6 +205,26 @@ def test_plan_and_verify_outputs(run_dir):
     assert "1500 kg, direct" in (res / "verify/summary.md").read_text()
 
 
+def test_follow_outputs(run_dir):
+    tmp, _ = run_dir
+    summ = pd.read_csv(tmp / "results/follow/summary.csv").set_index("case")
+    assert list(summ.index) == ["space", "ground"]
+    ground = summ.loc["ground"]
+    assert ground.saturated_joints == "j1" and ground.command_peak_torque_pct > 105
+    assert 99.9 < ground.follower_peak_torque_pct <= 100.01 and ground.toppra_duration_s < ground.follower_duration_s
+    assert ground.max_deviation_m < 1e-4
+    space = summ.loc["space"]
+    assert space.path == "planned path" and space.segments >= 2 and space.follower_max_violation_pct < 0.01
+    ts = pd.read_parquet(tmp / "results/follow/ground/timeseries.parquet")
+    for col in ("t_s", "s_cmd_m", "s_m", "sd_mps", "sdd_mps2", "tau_cmd_j1_nm", "tau_j1_nm", "lag_m", "deviation_m"):
+        assert col in ts.columns
+    assert ts.attrs["capmap"]["torque_limits_nm"]["tau_j1_nm"] == 14
+    assert ts.s_m.iloc[-1] == pytest.approx(0.5, abs=1e-4) and ts.limited.any()
+    for case in ("space", "ground"):
+        for png in ("progress", "torques"):
+            assert (tmp / f"results/follow/{case}/{png}.png").stat().st_size > 10_000
+
+
 def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     tmp, _ = run_dir
     work = tmp_path / "w"
@@ -224,6 +251,10 @@ def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     ({"task.q_ini_deg": [100, 124, 98, 140, 146, 174, 57]}, "task.q_ini_deg is 9.97 deg from the nearest"),
     ({"task.payload_kg": [1500, 1500]}, "task.payload_kg"),
     ({"verification.dt_s": 0}, "verification.dt_s"),
+    ({"follow.space.payload_kg": 1234}, "follow.space.payload_kg = 1234 is not one of task.payload_kg"),
+    ({"follow.ground.joint_torque_nm": [14, 150]}, "follow.ground.joint_torque_nm has 2 values; give one or 6"),
+    ({"follow.ground.q_start_deg": [0, 0]}, "follow.ground.q_start_deg has 2 values"),
+    ({"follow.ground.speed": 1}, "unknown key"),
 ])
 def test_bad_config_is_one_line_before_any_job(tmp_path, changes, expect):
     res = _snakemake(tmp_path, _config(tmp_path, **changes), "-n")

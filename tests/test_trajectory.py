@@ -65,3 +65,21 @@ def test_bad_timing_inputs_are_one_line_errors():
         trapezoid(1.0, 0.0, 0.03)
     with pytest.raises(CapmapError, match="verification.dt_s"):
         sample_segments(np.array([[0, 0, 0], [1, 0, 0.0]]), 0.15, 0.03, 0)
+
+
+@pytest.mark.parametrize("L, v, a, j", [(0.001, 0.15, 0.03, 0.01), (0.05, 0.15, 0.03, 0.01), (4.77, 0.15, 0.03, 0.01),
+                                        (0.5, 1.0, 4.0, 40.0), (0.05, 1.0, 4.0, 40.0), (3.0, 1.0, 4.0, 5.0)])
+def test_scurve_reaches_the_end_at_rest_within_all_limits(L, v, a, j):
+    from capmap.trajectory import scurve
+
+    c = scurve(L, v, a, j)
+    t = np.linspace(0, c.duration_s, 200001)
+    s, sd, sdd = c.evaluate(t)
+    assert s[-1] == pytest.approx(L, abs=1e-12) and abs(sd[-1]) < 1e-12 and abs(sdd[-1]) < 1e-9
+    assert sd.max() <= v + 1e-12 and np.abs(sdd).max() <= a + 1e-12
+    dt = t[1] - t[0]
+    assert np.abs(np.diff(sdd)).max() <= j * dt * (1 + 1e-6)  # jerk
+    assert np.trapezoid(sd, t) == pytest.approx(L, rel=1e-6)  # s consistent with sd
+    assert np.all(np.diff(s) >= -1e-15)
+    # time-optimal shape: some limit is active (v_max reached, or a_max, or the jerk alone)
+    assert c.v_peak_mps == pytest.approx(v) or c.a_peak_mps2 == pytest.approx(a) or c.durations_s.size <= 4

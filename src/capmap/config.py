@@ -56,16 +56,19 @@ class LimitsConfig:
         """:class:`capmap.capacity.Limits` for an arm with n_joints joints (length checks here)."""
         from capmap.capacity import Limits
 
-        def vec(value, n, key):
-            v = np.atleast_1d(np.asarray(value, dtype=float))
-            if len(v) == 1:
-                return np.full(n, v[0])
-            if len(v) != n:
-                raise CapmapError(f"limits.{key} has {len(v)} values; give one or {n}")
-            return v
+        return Limits(per_item(self.joint_torque_nm, n_joints, "limits.joint_torque_nm"),
+                      per_item(self.base_force_n, 3, "limits.base_force_n"),
+                      per_item(self.base_moment_nm, 3, "limits.base_moment_nm"))
 
-        return Limits(vec(self.joint_torque_nm, n_joints, "joint_torque_nm"), vec(self.base_force_n, 3, "base_force_n"),
-                      vec(self.base_moment_nm, 3, "base_moment_nm"))
+
+def per_item(value, n: int, key: str) -> np.ndarray:
+    """One value for all n items, or exactly n values (else a one-line error naming key)."""
+    v = np.atleast_1d(np.asarray(value, dtype=float))
+    if len(v) == 1:
+        return np.full(n, v[0])
+    if len(v) != n:
+        raise CapmapError(f"{key} has {len(v)} values; give one or {n}")
+    return v
 
 
 @dataclass(frozen=True)
@@ -195,6 +198,42 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     return out
 
 
+FOLLOW_CASES = ("space", "ground")
+
+
+def follow_slices(doc: dict) -> dict[str, dict]:
+    """Config slice each follow case depends on (its rule's params). ``space`` follows the
+    verified path of its payload, so it depends on everything that path depends on;
+    ``ground`` is independent of the capacity pipeline."""
+    fol = doc.get("follow", {})
+    out = {}
+    if "space" in fol:
+        up = stage_slices(doc, fol["space"]["payload_kg"])["verify"]["upstream"]
+        out["space"] = {**up, "follow": {"period_s": fol["period_s"], "space": fol["space"]}}
+    if "ground" in fol:
+        out["ground"] = {"follow": {"period_s": fol["period_s"], "ground": fol["ground"]}}
+    return out
+
+
+def check_follow(doc: dict, run: RunConfig, source: str = "config") -> None:
+    """The follow section's cross-checks (payload known, robot loads, lengths match)."""
+    from capmap.robot import load
+
+    fol = doc.get("follow", {})
+    if "space" in fol and float(fol["space"]["payload_kg"]) not in run.task.payload_kg:
+        raise CapmapError(f"{source}: follow.space.payload_kg = {fol['space']['payload_kg']:g} is not one of "
+                          f"task.payload_kg {[f'{m:g}' for m in run.task.payload_kg]} (its verified path is followed)")
+    if "ground" in fol:
+        g = fol["ground"]
+        robot = load(g["robot"])
+        if len(g["q_start_deg"]) != robot.n_joints:
+            raise CapmapError(f"{source}: follow.ground.q_start_deg has {len(g['q_start_deg'])} values but "
+                              f"{robot.name} has {robot.n_joints} joints")
+        per_item(g["joint_torque_nm"], robot.n_joints, "follow.ground.joint_torque_nm")
+        if not np.linalg.norm(g["line_m"]) > 0:
+            raise CapmapError(f"{source}: follow.ground.line_m must not be zero")
+
+
 def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     """Everything that can be checked before any job: schema, robot file, lock, limits, directions."""
     from capmap.locking import lock
@@ -212,6 +251,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
         raise CapmapError(f"{source}: task.q_ini_deg[{run.lock.joint - 1}] = {run.task.q_ini_deg[run.lock.joint - 1]:g} "
                           f"must equal lock.angle_deg = {run.lock.angle_deg:g} (joint {run.lock.joint} is locked)")
     check_task_poses(arm, run.task, source)
+    check_follow(doc, run, source)
     return run
 
 

@@ -170,7 +170,7 @@ def _closed_form(chain: Chain, T_target: np.ndarray) -> tuple[np.ndarray, np.nda
 # --------------------------------------------------------------------------- numeric
 
 
-def _newton(chain: Chain, theta: np.ndarray, T_target: np.ndarray, iters: int, damping: float = 0.0) -> np.ndarray:
+def newton(chain: Chain, theta: np.ndarray, T_target: np.ndarray, iters: int, damping: float = 0.0) -> np.ndarray:
     """Damped Newton steps on the pose error; theta (M, n), T_target (M, 4, 4)."""
     eye = np.eye(6)
     for _ in range(iters):
@@ -192,8 +192,8 @@ def _numeric(chain: Chain, T_target: np.ndarray, lower: np.ndarray, upper: np.nd
     starts = lower + (upper - lower) * qmc.Sobol(d=n, scramble=False).random(n_starts)
     theta = np.broadcast_to(starts, (N, n_starts, n)).reshape(-1, n).copy()
     targets = np.repeat(T_target, n_starts, axis=0)
-    theta = _newton(chain, theta, targets, iters=40, damping=1e-2)
-    theta = _newton(chain, theta, targets, iters=5)
+    theta = newton(chain, theta, targets, iters=40, damping=1e-2)
+    theta = newton(chain, theta, targets, iters=5)
     return theta.reshape(N, n_starts, n), np.ones((N, n_starts), dtype=bool)
 
 
@@ -220,7 +220,7 @@ def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarra
             lower: np.ndarray, upper: np.ndarray, tol: float, method: str) -> IKSolutions:
     N, K, n = theta.shape
     flat = np.where(ok[..., None], theta, 0.0).reshape(-1, n)
-    flat = _newton(chain, flat, np.repeat(T_target, K, axis=0), iters=2)
+    flat = newton(chain, flat, np.repeat(T_target, K, axis=0), iters=2)
     err = pose_error(chain.fk(flat), np.repeat(T_target, K, axis=0))
     good = ((np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
             & np.all(np.isfinite(flat), axis=1))

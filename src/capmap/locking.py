@@ -20,7 +20,7 @@ from capmap.robot import EE_FRAME, Robot
 
 @dataclass(frozen=True, eq=False)
 class LockedArm:
-    """An arm with joint ``locked_joint`` (1-based) held at ``locked_angle_rad``."""
+    """An arm with joint ``locked_joint`` (1-based; 0 = none, see :func:`free`) held at ``locked_angle_rad``."""
 
     robot: Robot
     locked_joint: int
@@ -52,7 +52,8 @@ class LockedArm:
         q_active = np.asarray(q_active, dtype=float)
         out = np.empty(q_active.shape[:-1] + (self.robot.n_joints,))
         out[..., self.active] = q_active
-        out[..., self.locked_joint - 1] = self.locked_angle_rad
+        if self.locked_joint:
+            out[..., self.locked_joint - 1] = self.locked_angle_rad
         return out
 
     def full_v(self, v_active: np.ndarray) -> np.ndarray:
@@ -84,3 +85,10 @@ def lock(robot: Robot, joint: int, angle_rad: float) -> LockedArm:
     return LockedArm(robot=robot, locked_joint=int(joint), locked_angle_rad=float(angle_rad),
                      reduced_model=reduced, reduced_ee_frame_id=ee, active=active,
                      chain=Chain.from_model(reduced, ee))
+
+
+def free(robot: Robot) -> LockedArm:
+    """The arm with no joint locked (every joint active), for the same kinematics/dynamics API."""
+    ee = robot.model.getFrameId(EE_FRAME)
+    return LockedArm(robot=robot, locked_joint=0, locked_angle_rad=0.0, reduced_model=robot.model,
+                     reduced_ee_frame_id=ee, active=np.arange(robot.n_joints), chain=Chain.from_model(robot.model, ee))

@@ -24,6 +24,7 @@ from capmap.config import (
     LockConfig,
     SamplingConfig,
     TaskConfig,
+    per_item,
 )
 from capmap.dynamics import ArmDynamics, output_names
 from capmap.errors import CapmapError
@@ -399,7 +400,7 @@ def write_table(df: pd.DataFrame, out_csv: str, out_md: str) -> None:
     def fmt(v):
         if isinstance(v, (bool, np.bool_)) or not isinstance(v, (float, np.floating)):
             return "" if v is None else str(v)
-        return "" if np.isnan(v) else f"{v:.1f}"
+        return "" if np.isnan(v) else f"{v:.1f}" if abs(v) >= 100 else f"{v:.4g}"
 
     md = df.iloc[:, 2:].map(fmt).T
     md.columns = [f"{a:g} kg, {b}" if df.columns[0] == "payload_kg" else f"{a} {b}"
@@ -430,6 +431,142 @@ def stage_verify_summary(tables: list[str], out_csv: str, out_md: str, log: str 
     df = pd.concat([pd.read_csv(t) for t in tables], ignore_index=True)
     write_table(df, out_csv, out_md)
     Log(log, "verify summary")(f"{len(df)} rows -> {out_csv}")
+
+
+# --------------------------------------------------------------------------- follow
+
+
+def _follow_setup(case: str, sl: dict, waypoints: str | None):
+    """(arm, waypoints (W, 3), rotation, q_start, payload, tau_max, v, a, j, period, catch_up, label) of a case."""
+    from capmap.locking import free
+
+    fol = sl["follow"]
+    if case == "space":
+        sp = fol["space"]
+        robot, arm = _arm_from(sl)
+        task, vt = sl["capacity"]["task"], sl["verify"]["task"]
+        rotation = TaskConfig.rotation_from_rpy(task["orientation_rpy_deg"])
+        wp = datasets.read(waypoints)
+        if wp.attrs["capmap"]["status"] == "ok":
+            pts, label = wp[["x_m", "y_m", "z_m"]].to_numpy(), "planned path"
+        else:
+            pts, label = np.array([vt["start_m"], vt["goal_m"]], dtype=float), "direct line (no planned path)"
+        q0 = np.deg2rad(np.asarray(vt["q_ini_deg"], dtype=float))[arm.active]
+        tau = per_item(sp["joint_torque_nm"], robot.n_joints, "follow.space.joint_torque_nm")[arm.active]
+        return (arm, pts, rotation, q0, float(sp["payload_kg"]), tau, task["v_max_mps"], task["a_max_mps2"],
+                sp["j_max_mps3"], fol["period_s"], sp["catch_up_hz"], label)
+    g = fol["ground"]
+    robot = load(g["robot"])
+    arm = free(robot)
+    q0 = np.deg2rad(np.asarray(g["q_start_deg"], dtype=float))
+    T0 = arm.fk(q0[None])[0]
+    pts = np.array([T0[:3, 3], T0[:3, 3] + np.asarray(g["line_m"], dtype=float)])
+    tau = per_item(g["joint_torque_nm"], robot.n_joints, "follow.ground.joint_torque_nm")
+    return (arm, pts, T0[:3, :3], q0, float(g["payload_kg"]), tau, g["v_max_mps"], g["a_max_mps2"], g["j_max_mps3"],
+            fol["period_s"], g["catch_up_hz"], "straight line")
+
+
+def stage_follow(case: str, out_timeseries: str, out_toppra: str, out_csv: str, out_md: str, slice_json: str,
+                 waypoints: str | None = None, log: str | None = None) -> None:
+    """Torque-limited following of a case's path, segment by segment, and TOPP-RA on the same."""
+    from capmap import following
+    from capmap.toppra_reference import time_optimal
+
+    sl = json.loads(slice_json)
+    lg = Log(log, f"follow {case}")
+    arm, pts, rotation, q, payload, tau_max, v, a, j, period, catch_up, label = _follow_setup(case, sl, waypoints)
+    joints = arm.active_joint_numbers
+    parts, tparts, seg_rows = [], [], []
+    t_off = t_off_topp = s_off = 0.0
+    for k in range(len(pts) - 1):
+        t0 = time.perf_counter()
+        seg = following.follow_segment(arm, pts[k], pts[k + 1], rotation, q, payload, tau_max, v, a, j, period,
+                                       catch_up)
+        el = time.perf_counter() - t0
+        top = time_optimal(arm, seg.table, payload, tau_max, v, a, sample_dt_s=period)
+        r = seg.result
+        df = pd.DataFrame({"case": case, "segment": k, "t_s": t_off + r.t_s, "s_cmd_m": s_off + r.s_cmd,
+                           "sd_cmd_mps": r.sd_cmd, "sdd_cmd_mps2": r.sdd_cmd, "s_m": s_off + r.s, "sd_mps": r.sd,
+                           "sdd_mps2": r.sdd, "lag_m": r.s_cmd - r.s, "limited": r.limited,
+                           "infeasible": r.infeasible})
+        for c, jn in enumerate(joints):
+            df[f"tau_cmd_j{jn}_nm"] = seg.tau_cmd[:, c]
+        for c, jn in enumerate(joints):
+            df[f"tau_j{jn}_nm"] = seg.tau[:, c]
+        for c, jn in enumerate(joints):
+            df[f"q_j{jn}_deg"] = np.rad2deg(seg.q[:, c])
+        df["deviation_m"] = seg.deviation_m
+        df["deviation_rad"] = seg.deviation_rad
+        parts.append(df)
+        tdf = pd.DataFrame({"case": case, "segment": k, "t_s": t_off_topp + top.t_s, "s_m": s_off + top.s,
+                            "sd_mps": top.sd})
+        for c, jn in enumerate(joints):
+            tdf[f"tau_j{jn}_nm"] = top.tau[:, c]
+        tparts.append(tdf)
+        seg_rows.append({"segment": k, "length_m": seg.table.length_m, "command_s": seg.command.duration_s,
+                         "follower_s": r.duration_s, "toppra_s": top.duration_s,
+                         "follower_peak": float((np.abs(seg.tau) / tau_max).max()),
+                         "toppra_peak": float((np.abs(top.tau) / tau_max).max())})
+        lg(f"segment {k + 1}/{len(pts) - 1}: {seg.table.length_m:.3f} m, command {seg.command.duration_s:.3f} s, "
+           f"follower {r.duration_s:.3f} s ({int(r.limited.sum())} of {len(r.t_s)} periods limited), "
+           f"TOPP-RA {top.duration_s:.3f} s; {el:.2f} s wall incl. path preparation and exact evaluation")
+        t_off += r.duration_s
+        t_off_topp += top.duration_s
+        s_off += seg.table.length_m
+        q = seg.q[-1]
+    ts = pd.concat(parts, ignore_index=True)
+    tp = pd.concat(tparts, ignore_index=True)
+    segs = pd.DataFrame(seg_rows)
+    tau_cols = [f"tau_j{jn}_nm" for jn in joints]
+    ratio_f = np.abs(ts[tau_cols].to_numpy()) / tau_max
+    ratio_c = np.abs(ts[[f"tau_cmd_j{jn}_nm" for jn in joints]].to_numpy()) / tau_max
+    ratio_t = np.abs(tp[tau_cols].to_numpy()) / tau_max
+    summary = pd.DataFrame([{
+        "case": case, "robot": arm.robot.name, "path": label, "payload_kg": payload, "segments": len(segs),
+        "length_m": float(segs.length_m.sum()), "torque_limits_nm": " ".join(f"{t:g}" for t in tau_max),
+        "command_duration_s": float(segs.command_s.sum()), "follower_duration_s": float(segs.follower_s.sum()),
+        "toppra_duration_s": float(segs.toppra_s.sum()),
+        "duration_ratio": float(segs.follower_s.sum() / segs.toppra_s.sum()),
+        "command_vs_toppra_ratio": float(segs.command_s.sum() / segs.toppra_s.sum()),
+        "command_peak_torque_pct": 100 * float(ratio_c.max()),
+        "follower_peak_torque_pct": 100 * float(ratio_f.max()),
+        "follower_max_violation_pct": 100 * max(0.0, float(ratio_f.max()) - 1),
+        "toppra_peak_torque_pct": 100 * float(ratio_t.max()),
+        "toppra_max_violation_pct": 100 * max(0.0, float(ratio_t.max()) - 1),
+        "saturated_joints": " ".join(f"j{jn}" for c, jn in enumerate(joints) if ratio_f[:, c].max() > 0.999),
+        "limited_periods_pct": 100 * float(ts.limited.mean()),
+        "infeasible_periods": int(ts.infeasible.sum()),
+        "max_lag_m": float(ts.lag_m.max()),
+        "max_deviation_m": float(ts.deviation_m.max()), "max_deviation_rad": float(ts.deviation_rad.max()),
+        "period_s": period,
+    }])
+    prov = datasets.provenance("follow", sl, case=case, torque_limits_nm=dict(zip(tau_cols, tau_max.tolist())),
+                               payload_kg=payload)
+    datasets.write(ts, out_timeseries, prov)
+    datasets.write(tp, out_toppra, prov)
+    write_table(summary, out_csv, out_md)
+    row = summary.iloc[0]
+    lg(f"{row.length_m:.3f} m in {row.follower_duration_s:.3f} s vs TOPP-RA {row.toppra_duration_s:.3f} s "
+       f"(ratio {row.duration_ratio:.3f}); peak torque {row.follower_peak_torque_pct:.3f}% of limit "
+       f"(TOPP-RA {row.toppra_peak_torque_pct:.3f}%); command would need {row.command_peak_torque_pct:.1f}%; "
+       f"max path deviation {row.max_deviation_m:.2e} m")
+
+
+def stage_follow_plots(timeseries: str, toppra: str, out_s: str, out_torques: str, slice_json: str,
+                       log: str | None = None) -> None:
+    from capmap import plots
+
+    ts, tp = datasets.read(timeseries), datasets.read(toppra)
+    meta = ts.attrs["capmap"]
+    plots.follow_progress(ts, tp, meta["case"], out_s)
+    plots.follow_torques(ts, meta["torque_limits_nm"], meta["case"], out_torques)
+    Log(log, f"follow plots {meta['case']}")(f"-> {out_s}, {out_torques}")
+
+
+def stage_follow_summary(tables: list[str], out_csv: str, out_md: str, log: str | None = None) -> None:
+    df = pd.concat([pd.read_csv(t) for t in tables], ignore_index=True)
+    write_table(df, out_csv, out_md)
+    Log(log, "follow summary")(f"{len(df)} cases -> {out_csv}")
 
 
 # --------------------------------------------------------------------------- summary and catalogue

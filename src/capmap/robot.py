@@ -127,6 +127,22 @@ def _transform(xyz, rpy_deg) -> np.ndarray:
     return T
 
 
+def package_file(package: str, path: str, source: str) -> Path:
+    """A file shipped by an installed pip distribution (e.g. example-robot-data's URDFs), found by
+    the end of its installed path, so the distribution's own prefix layout does not matter."""
+    from importlib import metadata
+
+    try:
+        dist = metadata.distribution(package)
+    except metadata.PackageNotFoundError:
+        raise CapmapError(f"{source}: urdf.package = {package!r} is not installed (pip install {package})") from None
+    want = "/" + path.strip("/")
+    hits = [f for f in (dist.files or []) if ("/" + str(f)).endswith(want)]
+    if len(hits) != 1:
+        raise CapmapError(f"{source}: urdf.path = {path!r}: {len(hits)} files of {package} end with it (need one)")
+    return Path(dist.locate_file(hits[0]))
+
+
 def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> RobotDescription:
     """Validate a robot document (already parsed YAML) and convert it to SI / radians."""
     if not isinstance(doc, dict):
@@ -152,9 +168,12 @@ def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> Robot
     if has_urdf:
         if "links" in doc:
             raise CapmapError(f"{source}: 'links' is only for DH robots; a URDF carries its own inertias")
-        path = Path(doc["urdf"]["path"])
-        if not path.is_absolute() and base_dir is not None:
-            path = base_dir / path
+        if "package" in doc["urdf"]:
+            path = package_file(doc["urdf"]["package"], doc["urdf"]["path"], source)
+        else:
+            path = Path(doc["urdf"]["path"])
+            if not path.is_absolute() and base_dir is not None:
+                path = base_dir / path
         if not path.is_file():
             raise CapmapError(f"{source}: urdf.path = {doc['urdf']['path']!r}: no such file")
         return RobotDescription(convention=None, dh=None, links=(), joint_range_rad=ranges,

@@ -124,3 +124,74 @@ def sample_segments(waypoints: np.ndarray, v_max_mps: float, a_max_mps2: float, 
     u = cat["dir"]
     return Timeline(t_s=cat["t"], segment=cat["seg"], phase=cat["ph"], p=cat["p0"] + cat["s"][:, None] * u,
                     v=cat["sd"][:, None] * u, a=cat["sdd"][:, None] * u, profiles=tuple(profiles))
+
+
+@dataclass(frozen=True)
+class SCurve:
+    """Rest-to-rest jerk-limited ("double S") profile over length_m: piecewise-constant jerk.
+
+    durations_s (P,), jerks (P,) m/s^3 of its phases; t0_s, s0, v0, a0 (P,) state at each
+    phase start. Peak speed v_peak_mps, peak acceleration a_peak_mps2.
+    """
+
+    length_m: float
+    durations_s: np.ndarray
+    jerks: np.ndarray
+    t0_s: np.ndarray
+    s0: np.ndarray
+    v0: np.ndarray
+    a0: np.ndarray
+    v_peak_mps: float
+    a_peak_mps2: float
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.t0_s[-1] + self.durations_s[-1])
+
+    def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(s, sd, sdd) at times t (any shape, s); constant at the ends outside [0, duration]."""
+        t = np.clip(np.asarray(t, dtype=float), 0.0, self.duration_s)
+        k = np.clip(np.searchsorted(self.t0_s, t, side="right") - 1, 0, len(self.t0_s) - 1)
+        tau = t - self.t0_s[k]
+        j, a, v, s = self.jerks[k], self.a0[k], self.v0[k], self.s0[k]
+        return (s + v * tau + a * tau**2 / 2 + j * tau**3 / 6, v + a * tau + j * tau**2 / 2, a + j * tau)
+
+
+def scurve(length_m: float, v_max_mps: float, a_max_mps2: float, j_max_mps3: float) -> SCurve:
+    """Time-optimal rest-to-rest profile under |sd| <= v_max, |sdd| <= a_max, |jerk| <= j_max.
+
+    Acceleration part: jerk +j for Tj, 0 for Ta - 2 Tj, -j for Tj; then cruise Tv; then the
+    mirror image. Its distance is v_peak Ta, so a short segment lowers v_peak to fit.
+    """
+    v, a, j, L = float(v_max_mps), float(a_max_mps2), float(j_max_mps3), float(length_m)
+    if not (v > 0 and a > 0 and j > 0):
+        raise CapmapError(f"S-curve limits v_max = {v!r}, a_max = {a!r}, j_max = {j!r} must all be > 0")
+    if L < 0:
+        raise CapmapError(f"segment length {L!r} m must be >= 0")
+
+    def accel_time(vp):  # (Ta, Tj) to reach vp from rest
+        if vp * j >= a * a:
+            return vp / a + a / j, a / j
+        tj = math.sqrt(vp / j)
+        return 2 * tj, tj
+
+    vp = v
+    Ta, Tj = accel_time(vp)
+    if vp * Ta > L:  # no cruise: the largest vp with vp * Ta(vp) = L
+        vp = a / 2 * (-a / j + math.sqrt(a * a / (j * j) + 4 * L / a))
+        if vp * j < a * a:
+            vp = (L * math.sqrt(j) / 2) ** (2 / 3)
+        Ta, Tj = accel_time(vp)
+    Tv = max(L / vp - Ta, 0.0) if vp > 0 else 0.0
+    d = np.array([Tj, Ta - 2 * Tj, Tj, Tv, Tj, Ta - 2 * Tj, Tj])
+    jk = np.array([j, 0, -j, 0, -j, 0, j])
+    keep = d > 1e-15
+    d, jk = d[keep], jk[keep]
+    t0, s0, v0, a0 = (np.zeros(len(d)) for _ in range(4))
+    for k in range(1, len(d)):
+        T, jj = d[k - 1], jk[k - 1]
+        t0[k] = t0[k - 1] + T
+        s0[k] = s0[k - 1] + v0[k - 1] * T + a0[k - 1] * T**2 / 2 + jj * T**3 / 6
+        v0[k] = v0[k - 1] + a0[k - 1] * T + jj * T**2 / 2
+        a0[k] = a0[k - 1] + jj * T
+    return SCurve(L, d, jk, t0, s0, v0, a0, vp, min(a, j * Tj))

@@ -60,6 +60,7 @@ def start_branch(arm: LockedArm, position: np.ndarray, rotation: np.ndarray, q_i
     if n == 0:
         raise CapmapError("task.start_m is not reachable at the task orientation")
     cand = sol.q[0, :n]
+    cand = cand + 2 * np.pi * np.round((q_ini_active - cand) / (2 * np.pi))  # the turn of each joint nearest q_ini
     off = np.abs(cand - q_ini_active).max(axis=1)
     k = int(np.argmin(off))
     if off[k] > tol_rad:

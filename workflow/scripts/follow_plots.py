@@ -1,0 +1,4 @@
+from capmap.pipeline import run, stage_follow_plots
+
+run(stage_follow_plots, timeseries=snakemake.input.timeseries, toppra=snakemake.input.toppra, out_s=snakemake.output.s,
+    out_torques=snakemake.output.torques, slice_json=snakemake.params.slice, log=snakemake.log[0])
