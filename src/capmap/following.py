@@ -294,8 +294,8 @@ def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: fl
         raise CapmapError(f"command length {L} m differs from the path length {pd.s[-1]} m")
     w = 2 * math.pi * catch_up_hz
     kp, kv = w * w, 2 * w
-    n_max = int(math.ceil(max_time_factor * command.duration_s / dt)) + 2
-    n_cmd = int(math.ceil(command.duration_s / dt)) + 2
+    n_max = math.ceil(max_time_factor * command.duration_s / dt) + 2
+    n_cmd = math.ceil(command.duration_s / dt) + 2
     sc_all, sdc_all, sddc_all = (x.tolist() for x in command.evaluate(np.arange(n_cmd + 1) * dt))
     grid_a, grid_b, grid_c, h = pd.a, pd.b, pd.c, float(pd.s[1] - pd.s[0])
     vlim2 = (prep.v_limit**2).tolist()  # interpolate squared speeds: exact on a constant-deceleration braking curve
