@@ -260,8 +260,9 @@ def prepare(pd: PathDynamics, tau_max: np.ndarray, v_max_mps: float, brake_margi
 class FollowResult:
     """Per control period k (K rows): t_s; the command s_cmd, sd_cmd, sdd_cmd (at t_k); the
     follower's s, sd at t_k and the acceleration sdd it applies over [t_k, t_k + dt];
-    limited: the torque limits clipped the requested acceleration; infeasible: no
-    admissible acceleration existed (the least-violating one was applied)."""
+    limited: the torque limits clipped the requested acceleration (a speed ceiling alone
+    does not count); infeasible: no admissible acceleration existed (the midpoint of the
+    crossed bounds was applied)."""
 
     t_s: np.ndarray
     s_cmd: np.ndarray
