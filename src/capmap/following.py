@@ -10,7 +10,8 @@ are exactly
 (q', q'' derivatives of the joint path by s; the payload is a point mass at the end
 effector, added to the last body), so at a state (s, sd) each torque limit
 |tau_i| <= T_i bounds sdd to an interval, and their intersection [lo, hi] is the set of
-admissible path accelerations (Kunz/Pfeiffer-Johanni; the TOPP decomposition).
+admissible path accelerations (the decomposition of time-optimal path parametrisation:
+Bobrow et al. 1985, Shin & McKay 1985, Pfeiffer & Johanni 1987).
 
 Each control period dt the follower
 
@@ -22,8 +23,8 @@ Each control period dt the follower
    catch-up, w = 2 pi f); once the command rests at the end, u_des = +inf (the fastest
    approach that the ceiling of step 3 and the torque limits allow);
 3. keeps the next path speed in [0, ceiling], ceiling = min(v_max, the velocity limit
-   curve, the braking curve that can still stop at the end under the torque limits),
-   all precomputed along the path (:func:`prepare`);
+   curve, the braking curve that can still stop at the end using 90 % of the braking
+   capability the torque limits leave), all precomputed along the path (:func:`prepare`);
 4. clips to [lo, hi] from the torque limits at its current (s, sd): the path stays
    exact, only the timing yields; when the limit releases, step 2 catches up, and within
    1 nm and 1 nm/s of the command it rejoins it (step 1);
