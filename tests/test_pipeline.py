@@ -255,6 +255,7 @@ def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     ({"follow.ground.joint_torque_nm": [14, 150]}, "follow.ground.joint_torque_nm has 2 values; give one or 6"),
     ({"follow.ground.q_start_deg": [0, 0]}, "follow.ground.q_start_deg has 2 values"),
     ({"follow.ground.speed": 1}, "unknown key"),
+    ({"follow.ground.line_m": [0, 3, 0]}, "follow.ground.line_m = [0, 3, 0] ends at"),
 ])
 def test_bad_config_is_one_line_before_any_job(tmp_path, changes, expect):
     res = _snakemake(tmp_path, _config(tmp_path, **changes), "-n")

@@ -232,6 +232,16 @@ def check_follow(doc: dict, run: RunConfig, source: str = "config") -> None:
         per_item(g["joint_torque_nm"], robot.n_joints, "follow.ground.joint_torque_nm")
         if not np.linalg.norm(g["line_m"]) > 0:
             raise CapmapError(f"{source}: follow.ground.line_m must not be zero")
+        from capmap import ik
+        from capmap.locking import free
+
+        arm = free(robot)
+        T0 = arm.fk(np.deg2rad(np.asarray(g["q_start_deg"], dtype=float))[None])[0]
+        end = T0[:3, 3] + np.asarray(g["line_m"], dtype=float)
+        if ik.solve(arm, end[None], T0[:3, :3]).n_solutions[0] == 0:
+            raise CapmapError(f"{source}: follow.ground.line_m = {g['line_m']} ends at "
+                              f"[{', '.join(f'{v:.4g}' for v in end)}], which {robot.name} cannot reach at the "
+                              f"start orientation")
 
 
 def check_run_config(doc: dict, source: str = "config") -> RunConfig:

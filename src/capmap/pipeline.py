@@ -319,10 +319,13 @@ def _path_tables(name: str, res: verification.PathResult, arm: LockedArm, names:
     exceeded = [n for n, v in zip(names, peak_all) if v > 1 + 1e-9]
     worst_seg = int(np.argmin(res.segment_capacity_kg))
     excursions = verification.range_excursions(tr.in_range)
-    range_note = "; ".join(
-        f"joint {arm.active_joint_numbers[c]} outside [{_deg(arm.q_lower[c]):g}, {_deg(arm.q_upper[c]):g}] deg "
-        f"for t = {tl.t_s[a]:.1f}..{tl.t_s[b]:.1f} s (peak {_deg(tr.q[a:b + 1, c]).max() if tr.q[a, c] > arm.q_upper[c] else _deg(tr.q[a:b + 1, c]).min():.1f} deg)"
-        for c, a, b in excursions)
+    notes = []
+    for c, a, b in excursions:
+        run = _deg(tr.q[a:b + 1, c])
+        peak = run.max() if tr.q[a, c] > arm.q_upper[c] else run.min()  # the farthest beyond the stop
+        notes.append(f"joint {arm.active_joint_numbers[c]} outside [{_deg(arm.q_lower[c]):g}, "
+                     f"{_deg(arm.q_upper[c]):g}] deg for t = {tl.t_s[a]:.1f}..{tl.t_s[b]:.1f} s (peak {peak:.1f} deg)")
+    range_note = "; ".join(notes)
     loads_ok = tr.ok and not exceeded
     mean_cap = float(np.mean(res.segment_capacity_kg))
     summary = {
