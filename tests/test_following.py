@@ -71,12 +71,10 @@ def test_one_dof_limited_acceleration_is_the_analytic_value(pendulum):
     assert up.sum() > 50
     analytic = (T - m * g * r * np.cos(res.s[up])) / I_o  # largest admissible q'' at q = s
     assert np.allclose(res.sdd[up], analytic, rtol=1e-6)
-    # everywhere (braking included: it follows a braking curve at 90 % of the capability) the
-    # applied acceleration is inside the analytic interval
+    # everywhere (braking included) the applied acceleration is inside the analytic interval
     lo = (-T - m * g * r * np.cos(res.s)) / I_o
     hi = (T - m * g * r * np.cos(res.s)) / I_o
     assert np.all(res.sdd >= lo * (1 + 1e-6)) and np.all(res.sdd <= hi * (1 + 1e-6))  # table interpolation: ~1e-8
-    assert (res.sdd < 0.85 * lo).any()  # and it does brake near the limit
     assert res.s[-1] == pytest.approx(L, abs=1e-5) and res.s.max() <= L + 1e-5
 
 

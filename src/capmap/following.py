@@ -20,8 +20,10 @@ Each control period dt the follower
    command's next state: with no limit active it reproduces the command exactly;
 2. otherwise asks for u_des = u_cmd + k_v (sd_cmd - sd) + k_p (s_cmd - s), u_cmd the
    command's mean acceleration over the period, k_p = w^2, k_v = 2 w (critically damped
-   catch-up, w = 2 pi f); once the command rests at the end, u_des = +inf (the fastest
-   approach that the ceiling of step 3 and the torque limits allow);
+   catch-up, w = 2 pi f); if the command has come to rest at the end before the
+   follower, the follower approaches the end with at most the command's peak acceleration
+   and half its torque headroom (accelerate, then brake on sqrt(2 a d)): no exponential
+   tail and no torque pulse at the limit;
 3. keeps the next path speed in [0, ceiling], ceiling = min(v_max, the velocity limit
    curve, the braking curve that can still stop at the end using 90 % of the braking
    capability the torque limits leave), all precomputed along the path (:func:`prepare`);
@@ -304,6 +306,7 @@ def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: fl
     G = len(pd.s) - 1
     # a discrete follower braking at beta can stop only within ~beta dt^2 of the end
     end_tol = max(END_TOL_M, prep.brake_end_mps2 * dt * dt)
+    a_end = command.a_peak_mps2
 
     def ceiling(s_next: float) -> float:
         """Speed ceiling (v_max, velocity limit and braking curves) at a position."""
@@ -341,8 +344,10 @@ def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: fl
             in_sync = False
         if k < n_cmd - 1:
             u_des = u_c + kv * (sd_c - sd) + kp * (s_c - s)
-        else:  # the command rests at the end: go there as fast as the ceiling (braking curve) allows
-            u_des = math.inf
+        else:  # the command rests at the end: approach it on sqrt(2 a d) with half the torque headroom
+            a_app = min(a_end, 0.5 * min(hi, -lo)) if lo < 0 < hi else 0.0
+            d_next = max(L - s - sd * dt, 0.0)
+            u_des = min(max((math.sqrt(2 * a_app * d_next) - sd) / dt, -a_app), a_app)
         # under the speed ceiling at the next position (two passes: the ceiling falls towards the
         # end, so the second, at the first pass's position, is safe); no reversing
         u = min(u_des, (ceiling(s + sd * dt) - sd) / dt)
