@@ -35,7 +35,7 @@ def cases():
     R = TaskConfig.rotation_from_rpy([90, 0, 90])
     yield ("SSRMS joint 1 locked, 1.30 m segment, 1500 kg, 150 N m", ssrms, np.array([0.375, 4.875, 1.875]),
            np.array([1.125, 4.125, 2.625]), R, np.deg2rad([124.5, 97.3, 130.6, 145.7, 174.3, 56.9]), 1500.0,
-           np.full(6, 150.0), (0.15, 0.03, 0.01), 0.5)
+           np.full(6, 150.0), (0.15, 0.03, 0.01), 2.0)
 
 
 def main() -> None:
