@@ -128,7 +128,7 @@ def _endpoint_voxel(grid: Grid, penalty3: np.ndarray, cap3: np.ndarray, point: n
         raise CapmapError(f"{where} lies in voxel {idx}, which has no point reachable at the task orientation")
     if np.isinf(penalty3[idx]):
         raise NoPath(f"{where} lies in voxel {idx} whose capacity {cap3[idx]:.1f} kg is below "
-                          f"task.payload_kg = {payload_kg:g}")
+                     f"task.payload_kg = {payload_kg:g}")
     return idx
 
 
@@ -145,8 +145,8 @@ def plan(grid: Grid, capacity_kg: np.ndarray, start_m: np.ndarray, goal_m: np.nd
     res = astar(pen, s, g, grid.edge_m)
     if not len(res.path):
         raise NoPath(f"no path from the start voxel {s} to the goal voxel {g} through voxels with capacity >= "
-                          f"task.payload_kg = {payload_kg:g} ({int(res.reached.sum())} voxels connected to the start, "
-                          f"{int(np.isfinite(pen).sum())} voxels strong enough in all)")
+                     f"task.payload_kg = {payload_kg:g} ({int(res.reached.sum())} voxels connected to the start, "
+                     f"{int(np.isfinite(pen).sum())} voxels strong enough in all)")
     centres = grid.centres(res.path)
     pts = [start_m, *centres, goal_m]
     kinds = ["start", *["voxel"] * len(centres), "goal"]

@@ -143,7 +143,10 @@ def loads(dyn: ArmDynamics, q_active: np.ndarray, v: np.ndarray, a: np.ndarray, 
     qd, qdd = np.full((N, n), np.nan), np.full((N, n), np.nan)
     y0, s = np.full((N, dyn.n_out), np.nan), np.full((N, dyn.n_out), np.nan)
     for i in np.flatnonzero(~np.isnan(q_active).any(axis=1)):
-        qf, qdf, qddf = dyn.motion(q_active[i], v[i], a[i])
+        try:
+            qf, qdf, qddf = dyn.motion(q_active[i], v[i], a[i])
+        except np.linalg.LinAlgError:  # an exactly singular Jacobian: left untracked (capacity 0)
+            continue
         qd[i], qdd[i] = qdf[arm.active], qddf[arm.active]
         y0[i], s[i] = joint_state_affine(dyn, qf, qdf, qddf, a[i])
     ok = ~np.isnan(y0).any(axis=1)
