@@ -150,7 +150,9 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": [1500, 900]}))
     assert set(jobs) == after_payload and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"verification.dt_s": 0.2}))
-    assert set(jobs) == (after_payload - {"plan"}) | follow and jobs["follow"] == 1  # in the space case's slice
+    assert set(jobs) == after_payload - {"plan"}  # the follower does not sample at dt_s
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.q_ini_deg": [100, 124.5, 98, 130, 146, 174, 57]}))
+    assert set(jobs) == (after_payload - {"plan"}) | follow and jobs["follow"] == 1  # its start branch
     # the follower's own settings: only that case
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"follow.ground.joint_torque_nm": 15}))
     assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == jobs["follow_plots"] == 1

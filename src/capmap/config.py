@@ -208,7 +208,8 @@ def follow_slices(doc: dict) -> dict[str, dict]:
     fol = doc.get("follow", {})
     out = {}
     if "space" in fol:
-        up = stage_slices(doc, fol["space"]["payload_kg"])["verify"]["upstream"]
+        up = dict(stage_slices(doc, fol["space"]["payload_kg"])["verify"]["upstream"])
+        up["verify"] = {"task": up["verify"]["task"]}  # q_ini, start, goal; not verification.dt_s
         out["space"] = {**up, "follow": {"period_s": fol["period_s"], "space": fol["space"]}}
     if "ground" in fol:
         out["ground"] = {"follow": {"period_s": fol["period_s"], "ground": fol["ground"]}}
