@@ -411,8 +411,11 @@ def follow_segment(arm: LockedArm, p0: np.ndarray, p1: np.ndarray, rotation: np.
     prep = prepare(path_dynamics(arm, table, payload_kg), tau_max, v_max_mps)
     cmd = scurve(table.length_m, v_max_mps, a_max_mps2, j_max_mps3)
     res = follow(prep, cmd, period_s, catch_up_hz)
-    tau, q = exact_torques(arm, table, rotation, payload_kg, res.s, res.sd, res.sdd)
-    tau_cmd, _ = exact_torques(arm, table, rotation, payload_kg, res.s_cmd, res.sd_cmd, res.sdd_cmd)
+    # follower and command states in one evaluation (in step, they share their s values)
+    K = len(res.s)
+    tau_all, q_all = exact_torques(arm, table, rotation, payload_kg, np.concatenate([res.s, res.s_cmd]),
+                                   np.concatenate([res.sd, res.sd_cmd]), np.concatenate([res.sdd, res.sdd_cmd]))
+    tau, tau_cmd, q = tau_all[:K], tau_all[K:], q_all[:K]
     T = arm.fk(interpolate_q(table, res.s))
     T_line = np.zeros_like(T)
     T_line[:, :3, :3], T_line[:, :3, 3], T_line[:, 3, 3] = rotation, p0 + res.s[:, None] * (p1 - p0) / table.length_m, 1

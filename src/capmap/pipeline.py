@@ -429,11 +429,11 @@ def stage_verify_plots(voxels: str, timeseries: str, out_workspace: str, out_tor
     Log(log, f"verify plots {payload:g} kg")(f"-> {out_workspace}, {out_torques}, {out_force}, {out_moment}")
 
 
-def stage_verify_summary(tables: list[str], out_csv: str, out_md: str, log: str | None = None) -> None:
-    """All payloads' verification summaries in one table."""
+def stage_concat_summary(tables: list[str], out_csv: str, out_md: str, what: str, log: str | None = None) -> None:
+    """Several summary CSVs (every payload's verification, every follow case) in one table."""
     df = pd.concat([pd.read_csv(t) for t in tables], ignore_index=True)
     write_table(df, out_csv, out_md)
-    Log(log, "verify summary")(f"{len(df)} rows -> {out_csv}")
+    Log(log, f"{what} summary")(f"{len(df)} rows -> {out_csv}")
 
 
 # --------------------------------------------------------------------------- follow
@@ -564,12 +564,6 @@ def stage_follow_plots(timeseries: str, toppra: str, out_s: str, out_torques: st
     plots.follow_progress(ts, tp, meta["case"], out_s)
     plots.follow_torques(ts, meta["torque_limits_nm"], meta["case"], out_torques)
     Log(log, f"follow plots {meta['case']}")(f"-> {out_s}, {out_torques}")
-
-
-def stage_follow_summary(tables: list[str], out_csv: str, out_md: str, log: str | None = None) -> None:
-    df = pd.concat([pd.read_csv(t) for t in tables], ignore_index=True)
-    write_table(df, out_csv, out_md)
-    Log(log, "follow summary")(f"{len(df)} cases -> {out_csv}")
 
 
 # --------------------------------------------------------------------------- summary and catalogue

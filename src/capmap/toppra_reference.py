@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from capmap.errors import CapmapError
 from capmap.following import JointPath, payload_models
 from capmap.locking import LockedArm
 
@@ -65,8 +66,6 @@ def time_optimal(arm: LockedArm, path: JointPath, payload_kg: float, tau_max: np
                            parametrizer="ParametrizeConstAccel")
     traj = instance.compute_trajectory(0, 0)
     if traj is None:
-        from capmap.errors import CapmapError
-
         raise CapmapError("TOPP-RA found no feasible time parametrisation of the path under these limits")
     t = np.arange(0.0, traj.duration, sample_dt_s)
     t = np.append(t, traj.duration)

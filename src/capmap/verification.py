@@ -51,6 +51,11 @@ class Tracking:
         return self.failed_at < 0
 
 
+def nearest_turn(q: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """q (..., n) rad with each joint shifted by the multiple of 2 pi that brings it nearest ref (n,)."""
+    return q + 2 * np.pi * np.round((ref - q) / (2 * np.pi))
+
+
 def start_branch(arm: LockedArm, position: np.ndarray, rotation: np.ndarray, q_ini_active: np.ndarray,
                  tol_rad: float = START_TOL_RAD) -> tuple[np.ndarray, float]:
     """The exact IK branch at ``position`` nearest q_ini_active (n_active,) rad, and its max joint
@@ -60,7 +65,7 @@ def start_branch(arm: LockedArm, position: np.ndarray, rotation: np.ndarray, q_i
     if n == 0:
         raise CapmapError("task.start_m is not reachable at the task orientation")
     cand = sol.q[0, :n]
-    cand = cand + 2 * np.pi * np.round((q_ini_active - cand) / (2 * np.pi))  # the turn of each joint nearest q_ini
+    cand = nearest_turn(cand, q_ini_active)
     off = np.abs(cand - q_ini_active).max(axis=1)
     k = int(np.argmin(off))
     if off[k] > tol_rad:
@@ -90,7 +95,7 @@ def track(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, q_ini_act
         if n == 0:
             return result(i, "no IK solution at the task orientation (outside the workspace)")
         cand = sol.q[i, :n]
-        cand = cand + 2 * np.pi * np.round((q_prev - cand) / (2 * np.pi))  # nearest turn of each joint
+        cand = nearest_turn(cand, q_prev)
         jump = np.abs(cand - q_prev).max(axis=1)
         k = int(np.argmin(jump))
         if jump[k] > max_step_rad:

@@ -1,4 +1,4 @@
-from capmap.pipeline import run, stage_verify_summary
+from capmap.pipeline import run, stage_concat_summary
 
-run(stage_verify_summary, tables=list(snakemake.input), out_csv=snakemake.output.csv, out_md=snakemake.output.md,
-    log=snakemake.log[0])
+run(stage_concat_summary, tables=list(snakemake.input), out_csv=snakemake.output.csv, out_md=snakemake.output.md,
+    what="verify", log=snakemake.log[0])
