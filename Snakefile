@@ -1,8 +1,6 @@
-# capmap: capacity maps of a manipulator with a locked joint.
+# capmap: capacity maps of a manipulator with a locked joint, and torque-limited following.
 #   snakemake --cores 2 all                       (default config/config.yaml)
 #   snakemake --cores 2 all --configfile my.yaml  (a complete config: replaces the default)
-import sys
-
 from snakemake.utils import min_version
 
 min_version("8.0")
@@ -15,37 +13,9 @@ if not workflow.overwrite_configfiles:
     configfile: "config/config.yaml"
 
 
-from capmap.config import canonical, check_run_config, follow_slices, payload_label, stage_slices
-from capmap.errors import CapmapError
-
-# validate once, before any job: schema, robot file, locked joint, limits
-try:
-    RUN = check_run_config(config)
-except CapmapError as exc:
-    sys.exit(f"capmap: {exc}")
-SLICES = stage_slices(config)
-SHARDS = RUN.shards
-PAYLOADS = [payload_label(m) for m in RUN.task.payload_kg]  # wildcard values, e.g. "1500"
-FOLLOW_SLICES = follow_slices(config)
-FOLLOW_CASES = list(FOLLOW_SLICES)  # "space", "ground": those configured under follow
-PAYLOAD_RE = "|".join(p.replace(".", r"\.") for p in PAYLOADS)
-
-
-def slice_json(stage, payload=None):
-    """Canonical JSON of the config slice a stage depends on (rule params: exact reruns).
-    plan/verify jobs handle one payload each and depend on that payload only."""
-    if payload is None:
-        return canonical(SLICES[stage]["upstream"])
-    return canonical(stage_slices(config, float(payload))[stage]["upstream"])
-
-
-include: "workflow/rules/model.smk"
-include: "workflow/rules/sample.smk"
+include: "workflow/rules/common.smk"
 include: "workflow/rules/capacity.smk"
-include: "workflow/rules/voxels.smk"
-include: "workflow/rules/plan.smk"
-include: "workflow/rules/verify.smk"
-include: "workflow/rules/follow.smk"
+include: "workflow/rules/following.smk"
 include: "workflow/rules/catalogue.smk"
 
 

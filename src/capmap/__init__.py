@@ -1,14 +1,19 @@
-"""capmap: what a manipulator with a locked joint can still carry, and where.
+"""capmap: keep a manipulator working when things go wrong or space is tight.
 
-Stage modules (numerics are pure functions on arrays, batch on the leading axis):
+Layout (a shared core, one subpackage per method family, I/O at the edges):
 
-- :mod:`capmap.robot`      robot description (DH YAML or URDF) -> Pinocchio model
-- :mod:`capmap.locking`    lock one joint at an angle -> the reduced arm
-- :mod:`capmap.kinematics` serial-chain forward kinematics and Jacobians (batched numpy)
-- :mod:`capmap.ik`         all inverse-kinematics branches of the locked arm
-- :mod:`capmap.directions` motion-direction sets (paper grid, near-uniform sphere)
-- :mod:`capmap.dynamics`   constrained quantities (joint torques, base wrench) via Pinocchio
-- :mod:`capmap.capacity`   exact dynamic load-carrying capacity
+- :mod:`capmap.core`       robot models, joint locking, kinematics, IK, dynamics, branch
+                           tracking, speed profiles, affine limits (pure numerics)
+- :mod:`capmap.capacity`   family 1: capacity map, A* planning, verification
+- :mod:`capmap.following`  family 2: torque-limited path following vs TOPP-RA
+- :mod:`capmap.config`     config and robot files -> frozen dataclasses; stage slices; checks
+- :mod:`capmap.io`         Parquet datasets with provenance, tables, logging
+- :mod:`capmap.stages`     what each Snakemake rule runs (file I/O lives here)
+- :mod:`capmap.plots`      figures, one module per family
+- :mod:`capmap.errors`     the one-line exception hierarchy
+
+Dependencies point one way: core <- families <- config <- stages; io and errors are
+below everything, plots only read DataFrames.
 """
 
 __version__ = "0.1.0"

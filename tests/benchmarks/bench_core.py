@@ -21,10 +21,11 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
-from capmap import capacity, directions, ik  # noqa: E402
-from capmap.dynamics import ArmDynamics  # noqa: E402
-from capmap.locking import lock  # noqa: E402
-from capmap.robot import load  # noqa: E402
+from capmap.capacity import directions, engine  # noqa: E402
+from capmap.config.robot_file import load  # noqa: E402
+from capmap.core import ik  # noqa: E402
+from capmap.core.dynamics import ArmDynamics  # noqa: E402
+from capmap.core.reduction import lock  # noqa: E402
 
 ROBOT = Path(__file__).resolve().parents[2] / "config" / "robots" / "ssrms7.yaml"
 R_TASK = pin.rpy.rpyToMatrix(*np.deg2rad([90.0, 0.0, 90.0]))
@@ -37,13 +38,13 @@ def _arm():
 
 def _init(step):
     arm = _arm()  # model built once per worker, one Data per worker
-    _worker.update(dyn=ArmDynamics(arm), dirs=directions.paper_grid(step))
+    _worker.update(dyn=ArmDynamics(arm), dirs=directions.paper_grid(step),
+                   limits=engine.LoadLimits.uniform(7, 700, 200, 500).for_arm(arm))
 
 
 def _capacity_chunk(args):
     q, n = args
-    pc = capacity.point_capacity(_worker["dyn"], q, n, _worker["dirs"], capacity.Motion(0.15, 0.03),
-                                 capacity.Limits.uniform(7, 700, 200, 500))
+    pc = engine.point_capacity(_worker["dyn"], q, n, _worker["dirs"], engine.Motion(0.15, 0.03), _worker["limits"])
     return int(pc.n_states.sum())
 
 

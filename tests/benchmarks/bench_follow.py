@@ -4,7 +4,7 @@
 
 Per period the follower reads the command, interpolates the path dynamics a, b, c at s,
 computes the admissible acceleration interval from the torque limits, applies the speed
-ceiling and the catch-up law, and integrates (capmap.following.follow). Target (issue 5):
+ceiling and the catch-up law, and integrates (capmap.following.follower.follow). Target (issue 5):
 well under 50 us per period. Prints its figures.
 """
 
@@ -16,11 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
-from capmap import following as fo
-from capmap.config import TaskConfig
-from capmap.locking import free, lock
-from capmap.robot import load
-from capmap.trajectory import scurve
+from capmap.config.capacity import rotation_from_rpy
+from capmap.config.robot_file import load
+from capmap.core.limits import AffineLimits
+from capmap.core.profiles import scurve
+from capmap.core.reduction import free, lock
+from capmap.following.follower import follow
+from capmap.following.path import line_path
+from capmap.following.path_dynamics import path_dynamics, prepare
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -32,7 +35,7 @@ def cases():
     yield ("UR5, 0.5 m line, shoulder pan limited to 14 N m", ur5, T0[:3, 3], T0[:3, 3] + [0, 0.5, 0], T0[:3, :3], q0,
            2.0, np.array([14, 150, 150, 28, 28, 28.0]), (1.0, 4.0, 40.0), 5.0)
     ssrms = lock(load(ROOT / "config/robots/ssrms7.yaml"), 1, np.deg2rad(100))
-    R = TaskConfig.rotation_from_rpy([90, 0, 90])
+    R = rotation_from_rpy([90, 0, 90])
     yield ("SSRMS joint 1 locked, 1.30 m segment, 1500 kg, 150 N m", ssrms, np.array([0.375, 4.875, 1.875]),
            np.array([1.125, 4.125, 2.625]), R, np.deg2rad([124.5, 97.3, 130.6, 145.7, 174.3, 56.9]), 1500.0,
            np.full(6, 150.0), (0.15, 0.03, 0.01), 2.0)
@@ -45,15 +48,16 @@ def main() -> None:
     print("follower: online work per control period (1 ms), path preparation once per path")
     for name, arm, p0, p1, R, q0, m, lim, (v, a, j), f in cases():
         t0 = time.perf_counter()
-        table = fo.line_path(arm, p0, p1, R, q0, ds_m=1e-3)
+        table = line_path(arm, p0, p1, R, q0, ds_m=1e-3)
         t1 = time.perf_counter()
-        prep = fo.prepare(fo.path_dynamics(arm, table, m), lim, v)
+        limits = AffineLimits(lim, tuple(f"tau_j{j}_nm" for j in arm.active_joint_numbers))
+        prep = prepare(path_dynamics(arm, table, m), limits, v)
         t2 = time.perf_counter()
         cmd = scurve(table.length_m, v, a, j)
         per = []
         for _ in range(args.repeats):
             s = time.perf_counter()
-            res = fo.follow(prep, cmd, 1e-3, f)
+            res = follow(prep, cmd, 1e-3, f)
             per.append((time.perf_counter() - s) / len(res.t_s))
         per = np.array(per) * 1e6
         print(f"- {name}: {len(res.t_s)} periods ({int(res.limited.sum())} limited); "

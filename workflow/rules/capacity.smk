@@ -1,3 +1,34 @@
+# Method family 1: capacity map -> plan -> verify (one plan/verify job per payload).
+
+
+rule model:
+    """Load and validate the robot; write its joint/link table."""
+    input:
+        robot=config["robot"],
+    output:
+        "results/model/joints.parquet",
+    params:
+        slice=slice_json("model"),
+    log:
+        "results/logs/model.log",
+    script:
+        "../scripts/model.py"
+
+
+rule sample:
+    """Monte Carlo workspace of the locked arm (seeded)."""
+    input:
+        model="results/model/joints.parquet",
+    output:
+        "results/sample/points.parquet",
+    params:
+        slice=slice_json("sample"),
+    log:
+        "results/logs/sample.log",
+    script:
+        "../scripts/sample.py"
+
+
 rule capacity:
     """Shard k of n: every IK branch at the task orientation x every direction, per point."""
     input:
@@ -13,3 +44,107 @@ rule capacity:
         n=r"\d+",
     script:
         "../scripts/capacity.py"
+
+
+rule voxels:
+    """Gather the shards into the voxel grid (minimum capacity per voxel)."""
+    input:
+        shards=expand("results/capacity/shard_{k}_of_{n}.parquet", k=range(SHARDS), n=SHARDS),
+    output:
+        voxels="results/voxels/voxels.parquet",
+        points="results/voxels/points.parquet",
+    params:
+        slice=slice_json("voxels"),
+    log:
+        "results/logs/voxels.log",
+    script:
+        "../scripts/voxels.py"
+
+
+rule summary:
+    """Capacity summary table and workspace figure (in the report)."""
+    input:
+        voxels="results/voxels/voxels.parquet",
+        points="results/voxels/points.parquet",
+    output:
+        csv=report("results/summary/capacity_summary.csv", category="Capacity map", caption="../report/summary.rst"),
+        md="results/summary/capacity_summary.md",
+        png=report("results/summary/capacity_map.png", category="Capacity map", caption="../report/capacity_map.rst"),
+    params:
+        slice=slice_json("voxels"),
+    log:
+        "results/logs/summary.log",
+    script:
+        "../scripts/summary.py"
+
+
+rule plan:
+    """Improved A* through the voxels that carry the task payload (one job per payload)."""
+    input:
+        voxels="results/voxels/voxels.parquet",
+    output:
+        "results/plan/payload_{payload}kg/waypoints.parquet",
+    params:
+        slice=lambda w: slice_json("plan", w.payload),
+    log:
+        "results/logs/plan/payload_{payload}kg.log",
+    wildcard_constraints:
+        payload=PAYLOAD_RE,
+    script:
+        "../scripts/plan.py"
+
+
+rule verify:
+    """Direct line and planned path: trapezoidal timing, continuous-branch IK, loads carrying the payload."""
+    input:
+        waypoints="results/plan/payload_{payload}kg/waypoints.parquet",
+    output:
+        timeseries="results/verify/payload_{payload}kg/timeseries.parquet",
+        segments="results/verify/payload_{payload}kg/segments.parquet",
+        csv="results/verify/payload_{payload}kg/summary.csv",
+        md="results/verify/payload_{payload}kg/summary.md",
+    params:
+        slice=lambda w: slice_json("verify", w.payload),
+    log:
+        "results/logs/verify/payload_{payload}kg.log",
+    wildcard_constraints:
+        payload=PAYLOAD_RE,
+    script:
+        "../scripts/verify.py"
+
+
+rule verify_plots:
+    """Capacity workspace with both paths; torques, base force and moment against their limits."""
+    input:
+        voxels="results/voxels/voxels.parquet",
+        timeseries="results/verify/payload_{payload}kg/timeseries.parquet",
+    output:
+        workspace=report("results/verify/payload_{payload}kg/workspace.png", category="Verification",
+                         subcategory="{payload} kg", caption="../report/workspace.rst"),
+        torques=report("results/verify/payload_{payload}kg/torques.png", category="Verification",
+                       subcategory="{payload} kg", caption="../report/loads.rst"),
+        force=report("results/verify/payload_{payload}kg/base_force.png", category="Verification",
+                     subcategory="{payload} kg", caption="../report/loads.rst"),
+        moment=report("results/verify/payload_{payload}kg/base_moment.png", category="Verification",
+                      subcategory="{payload} kg", caption="../report/loads.rst"),
+    params:
+        slice=lambda w: slice_json("verify", w.payload),
+    log:
+        "results/logs/verify/plots_payload_{payload}kg.log",
+    wildcard_constraints:
+        payload=PAYLOAD_RE,
+    script:
+        "../scripts/verify_plots.py"
+
+
+rule verify_summary:
+    """Every payload's verification in one table (in the report)."""
+    input:
+        expand("results/verify/payload_{payload}kg/summary.csv", payload=PAYLOADS),
+    output:
+        csv=report("results/verify/summary.csv", category="Verification", caption="../report/verify_summary.rst"),
+        md="results/verify/summary.md",
+    log:
+        "results/logs/verify/summary.log",
+    script:
+        "../scripts/verify_summary.py"

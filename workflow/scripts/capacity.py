@@ -1,4 +1,5 @@
-from capmap.pipeline import run, stage_capacity
+from capmap.io.logs import call
+from capmap.stages.capacity import stage_capacity
 
-run(stage_capacity, points=snakemake.input.points, out=snakemake.output[0], slice_json=snakemake.params.slice,
-    shard=int(snakemake.wildcards.k), shards=int(snakemake.wildcards.n), log=snakemake.log[0])
+call(stage_capacity, points=snakemake.input.points, out=snakemake.output[0], slice_json=snakemake.params.slice,
+     shard=int(snakemake.wildcards.k), shards=int(snakemake.wildcards.n), log=snakemake.log[0])

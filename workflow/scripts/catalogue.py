@@ -1,3 +1,4 @@
-from capmap.pipeline import run, stage_catalogue
+from capmap.io.logs import call
+from capmap.stages.report import stage_catalogue
 
-run(stage_catalogue, paths=list(snakemake.input), out=snakemake.output[0], log=snakemake.log[0])
+call(stage_catalogue, paths=list(snakemake.input), out=snakemake.output[0], log=snakemake.log[0])

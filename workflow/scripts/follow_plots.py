@@ -1,4 +1,5 @@
-from capmap.pipeline import run, stage_follow_plots
+from capmap.io.logs import call
+from capmap.stages.following import stage_follow_plots
 
-run(stage_follow_plots, timeseries=snakemake.input.timeseries, toppra=snakemake.input.toppra, out_s=snakemake.output.s,
-    out_torques=snakemake.output.torques, slice_json=snakemake.params.slice, log=snakemake.log[0])
+call(stage_follow_plots, timeseries=snakemake.input.timeseries, toppra=snakemake.input.toppra, out_s=snakemake.output.s,
+     out_torques=snakemake.output.torques, slice_json=snakemake.params.slice, log=snakemake.log[0])

@@ -1,3 +1,4 @@
-from capmap.pipeline import run, stage_sample
+from capmap.io.logs import call
+from capmap.stages.capacity import stage_sample
 
-run(stage_sample, out=snakemake.output[0], slice_json=snakemake.params.slice, log=snakemake.log[0])
+call(stage_sample, out=snakemake.output[0], slice_json=snakemake.params.slice, log=snakemake.log[0])

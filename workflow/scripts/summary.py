@@ -1,4 +1,5 @@
-from capmap.pipeline import run, stage_summary
+from capmap.io.logs import call
+from capmap.stages.capacity import stage_summary
 
-run(stage_summary, voxels=snakemake.input.voxels, points=snakemake.input.points, out_csv=snakemake.output.csv,
-    out_md=snakemake.output.md, out_png=snakemake.output.png, slice_json=snakemake.params.slice, log=snakemake.log[0])
+call(stage_summary, voxels=snakemake.input.voxels, points=snakemake.input.points, out_csv=snakemake.output.csv,
+     out_md=snakemake.output.md, out_png=snakemake.output.png, slice_json=snakemake.params.slice, log=snakemake.log[0])

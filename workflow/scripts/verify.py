@@ -1,5 +1,6 @@
-from capmap.pipeline import run, stage_verify
+from capmap.io.logs import call
+from capmap.stages.verify import stage_verify
 
-run(stage_verify, waypoints=snakemake.input.waypoints, out_timeseries=snakemake.output.timeseries,
-    out_segments=snakemake.output.segments, out_csv=snakemake.output.csv, out_md=snakemake.output.md,
-    slice_json=snakemake.params.slice, log=snakemake.log[0])
+call(stage_verify, waypoints=snakemake.input.waypoints, out_timeseries=snakemake.output.timeseries,
+     out_segments=snakemake.output.segments, out_csv=snakemake.output.csv, out_md=snakemake.output.md,
+     slice_json=snakemake.params.slice, log=snakemake.log[0])

@@ -1,4 +1,5 @@
-from capmap.pipeline import run, stage_concat_summary
+from capmap.io.logs import call
+from capmap.stages.report import stage_concat_summary
 
-run(stage_concat_summary, tables=list(snakemake.input), out_csv=snakemake.output.csv, out_md=snakemake.output.md,
-    what="verify", log=snakemake.log[0])
+call(stage_concat_summary, tables=list(snakemake.input), out_csv=snakemake.output.csv, out_md=snakemake.output.md,
+     what="verify", log=snakemake.log[0])

@@ -1,0 +1,56 @@
+"""Sets of unit motion directions u for the straight-line motion set.
+
+The paper parametrises u = [sin b cos a, sin b sin a, cos b] with a, b on a grid over
+[0, 360) deg. That grid lists most directions twice (b and 360 - b with a + 180) and
+the poles many times; :func:`paper_grid` keeps the first occurrence of each distinct
+direction, which leaves every minimum over the set unchanged. :func:`sphere` gives a
+near-uniform (Fibonacci) set of any size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.errors import CapmapError
+
+__all__ = ["Directions", "paper_grid", "sphere"]
+
+
+@dataclass(frozen=True)
+class Directions:
+    """D unit directions: u (D, 3); alpha_deg, beta_deg (D,) their angles."""
+
+    u: np.ndarray
+    alpha_deg: np.ndarray
+    beta_deg: np.ndarray
+    kind: str
+
+    def __len__(self) -> int:
+        return len(self.u)
+
+
+def paper_grid(step_deg: float) -> Directions:
+    """The paper's (a, b) grid over [0, 360) deg with step ``step_deg``, duplicates removed."""
+    if not 0 < step_deg <= 180:
+        raise CapmapError(f"step_deg = {step_deg!r} must be in (0, 180]")
+    angles = np.arange(0.0, 360.0, step_deg)
+    a, b = np.meshgrid(angles, angles, indexing="ij")
+    a, b = a.ravel(), b.ravel()
+    ar, br = np.deg2rad(a), np.deg2rad(b)
+    u = np.stack([np.sin(br) * np.cos(ar), np.sin(br) * np.sin(ar), np.cos(br)], axis=1)
+    _, first = np.unique(np.round(u, 9) + 0.0, axis=0, return_index=True)
+    keep = np.sort(first)
+    return Directions(u=u[keep], alpha_deg=a[keep], beta_deg=b[keep], kind=f"paper_grid({step_deg:g} deg)")
+
+
+def sphere(n: int) -> Directions:
+    """``n`` near-uniform directions on the unit sphere (Fibonacci lattice)."""
+    if not isinstance(n, (int, np.integer)) or n < 1:
+        raise CapmapError(f"n = {n!r} must be a positive integer")
+    i = np.arange(n) + 0.5
+    beta = np.arccos(1 - 2 * i / n)
+    alpha = np.mod(np.pi * (1 + 5**0.5) * i, 2 * np.pi)
+    u = np.stack([np.sin(beta) * np.cos(alpha), np.sin(beta) * np.sin(alpha), np.cos(beta)], axis=1)
+    return Directions(u=u, alpha_deg=np.rad2deg(alpha), beta_deg=np.rad2deg(beta), kind=f"sphere({n})")

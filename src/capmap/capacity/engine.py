@@ -1,0 +1,192 @@
+"""Exact dynamic load-carrying capacity.
+
+With the motion fixed, every constrained output is affine in the payload mass m:
+y(m) = y0 + m s, with limits |y_k| <= L_k. The largest admissible m is therefore
+
+    m* = min_k  { (L_k - y0_k) / s_k  if s_k > 0;  (L_k + y0_k) / -s_k  if s_k < 0 },
+
+and m* = 0 when some |y0_k| > L_k already (the state violates a limit with no payload).
+Over a set of directions, y0 and s are evaluated from the exact polynomial coefficients
+of :meth:`capmap.core.dynamics.ArmDynamics.coefficients` with one matrix product.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.capacity.directions import Directions
+from capmap.core.dynamics import ArmDynamics, output_names
+from capmap.core.limits import AffineLimits
+from capmap.core.reduction import LockedArm
+from capmap.errors import CapmapError
+
+__all__ = ["LoadLimits", "Motion", "Coefficients", "coefficients", "state_affine", "joint_state_affine",
+           "state_capacity", "direction_features", "affine_over_directions", "capacity_over_directions",
+           "PointCapacity", "point_capacity", "margin_pct", "SINGULAR"]
+
+SINGULAR = "singular"
+
+
+@dataclass(frozen=True)
+class LoadLimits:
+    """Load limits of an arm: per-joint torque (n_joints,) N m (the locked joint's is ignored); base
+    force (3,) N and moment (3,) N m, per axis of the base frame."""
+
+    joint_torque_nm: np.ndarray
+    base_force_n: np.ndarray
+    base_moment_nm: np.ndarray
+
+    @classmethod
+    def uniform(cls, n_joints: int, torque_nm: float, force_n: float, moment_nm: float) -> "LoadLimits":
+        return cls(np.full(n_joints, float(torque_nm)), np.full(3, float(force_n)), np.full(3, float(moment_nm)))
+
+    def for_arm(self, arm: LockedArm) -> AffineLimits:
+        """The limits of ``arm``'s constrained outputs, in the order of :func:`output_names`."""
+        if len(self.joint_torque_nm) != arm.robot.n_joints:
+            raise CapmapError(f"{{torque}} has {len(self.joint_torque_nm)} entries but {arm.robot.name} has "
+                              f"{arm.robot.n_joints} joints", torque="the joint-torque limit")
+        vec = np.concatenate([self.joint_torque_nm[arm.active], self.base_force_n, self.base_moment_nm]).astype(float)
+        return AffineLimits(vec, output_names(arm))
+
+
+def margin_pct(capacity_kg, payload_kg: float):
+    """Capacity over the payload, in % of the payload (NaN for a zero payload)."""
+    return 100 * (capacity_kg - payload_kg) / payload_kg if payload_kg > 0 else np.nan
+
+
+@dataclass(frozen=True)
+class Motion:
+    """End-effector straight-line motion: speed v_max (m/s), acceleration a_max (m/s^2)."""
+
+    v_max_mps: float
+    a_max_mps2: float
+
+
+def state_affine(dyn: ArmDynamics, q_active: np.ndarray, v_lin: np.ndarray, a_lin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(y0, s) of one motion state computed directly: joint motion by J^-1, one RNEA each."""
+    q, qd, qdd = dyn.motion(q_active, v_lin, a_lin)
+    return joint_state_affine(dyn, q, qd, qdd, a_lin)
+
+
+def joint_state_affine(dyn: ArmDynamics, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                       a_lin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(y0, s), each (n_out,), of a joint motion state: full q, qd, qdd (nv,), with the
+    end-effector linear acceleration a_lin (3,) m/s^2 that the payload shares. y(m) = y0 + m s."""
+    y0 = dyn.outputs(q, qd, qdd)
+    s = dyn.outputs(q, np.zeros_like(qd), np.zeros_like(qdd), payload_force=np.asarray(a_lin) - dyn.gravity,
+                    gravity=False)
+    return y0, s
+
+
+def state_capacity(dyn: ArmDynamics, q_active: np.ndarray, v_lin: np.ndarray, a_lin: np.ndarray,
+                   limits: AffineLimits) -> tuple[float, str]:
+    """Capacity (kg) of one motion state and the name of its binding limit."""
+    y0, s = state_affine(dyn, q_active, v_lin, a_lin)
+    cap, k = limits.largest(y0, s)
+    return float(cap), limits.names[int(k)]
+
+
+@dataclass(frozen=True)
+class Coefficients:
+    """Stacked exact coefficients for B configurations (see ArmDynamics.coefficients).
+
+    c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6), S (B, n_out, 3), singular (B,)."""
+
+    c0: np.ndarray
+    L: np.ndarray
+    Q: np.ndarray
+    S: np.ndarray
+    singular: np.ndarray
+
+
+def coefficients(dyn: ArmDynamics, q_active: np.ndarray) -> Coefficients:
+    """Coefficients for configurations q_active (B, n_active) rad."""
+    rows = [dyn.coefficients(q) for q in np.atleast_2d(q_active)]
+    if not rows:
+        n = dyn.n_out
+        return Coefficients(np.zeros((0, n)), np.zeros((0, n, 3)), np.zeros((0, n, 6)), np.zeros((0, n, 3)),
+                            np.zeros(0, dtype=bool))
+    return Coefficients(*(np.array([r[k] for r in rows]) for k in ("c0", "L", "Q", "S", "singular")))
+
+
+def direction_features(u: np.ndarray) -> np.ndarray:
+    """Quadratic features phi(u) (D, 6) = [u0^2, u1^2, u2^2, u0 u1, u0 u2, u1 u2]."""
+    return np.stack([u[:, 0] ** 2, u[:, 1] ** 2, u[:, 2] ** 2, u[:, 0] * u[:, 1], u[:, 0] * u[:, 2],
+                     u[:, 1] * u[:, 2]], axis=1)
+
+
+def affine_over_directions(coef: Coefficients, u: np.ndarray, motion: Motion, gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(y0, s), each (B, n_out, D), for every configuration x direction u (D, 3)."""
+    v, a = motion.v_max_mps, motion.a_max_mps2
+    phi = np.concatenate([np.ones((len(u), 1)), a * u, v**2 * direction_features(u)], axis=1)  # (D, 10)
+    C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (B, n_out, 10)
+    y0 = C @ phi.T
+    s = coef.S @ (a * u - gravity).T
+    return y0, s
+
+
+def capacity_over_directions(coef: Coefficients, directions: Directions, motion: Motion, gravity: np.ndarray,
+                             limits: AffineLimits) -> tuple[np.ndarray, np.ndarray]:
+    """Capacity (B, D) kg and binding output index (B, D) (n_out = singular configuration)."""
+    y0, s = affine_over_directions(coef, directions.u, motion, gravity)
+    cap, binding = limits.largest(y0, s, axis=1)
+    cap[coef.singular] = 0.0
+    binding[coef.singular] = len(limits)
+    return cap, binding
+
+
+@dataclass(frozen=True)
+class PointCapacity:
+    """Per-point results for N points (arrays of length N).
+
+    capacity_kg: min over configuration set x motion set (NaN if unreachable);
+    binding: index into ``names`` (-1 if unreachable); branch, direction: the worst pair
+    (-1 if unreachable); n_states: configurations x directions evaluated."""
+
+    capacity_kg: np.ndarray
+    binding: np.ndarray
+    branch: np.ndarray
+    direction: np.ndarray
+    n_states: np.ndarray
+    names: tuple[str, ...]
+
+
+def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray, directions: Directions,
+                   motion: Motion, limits: AffineLimits) -> PointCapacity:
+    """Capacity of N points from their IK configuration sets.
+
+    q_sets: (N, K, n_active) rad, NaN-padded beyond n_solutions (N,) per point; ``limits`` on
+    ``dyn.arm``'s outputs (:meth:`LoadLimits.for_arm`).
+    """
+    N, K = q_sets.shape[:2]
+    names = limits.names + (SINGULAR,)
+    cap = np.full(N, np.nan)
+    binding = np.full(N, -1)
+    branch = np.full(N, -1)
+    direction = np.full(N, -1)
+    valid = np.arange(K)[None, :] < np.asarray(n_solutions)[:, None]
+    pts, brs = np.nonzero(valid)
+    if len(pts):
+        coef = coefficients(dyn, q_sets[pts, brs])
+        y0, s = affine_over_directions(coef, directions.u, motion, dyn.gravity)  # (M, n_out, D)
+        bound = limits.upper_from_zero(y0, s, axis=1)
+        c = bound.min(axis=1)  # (M, D)
+        c[coef.singular] = 0.0
+        worst_dir = np.argmin(c, axis=1)
+        rows = np.arange(len(c))
+        c_cfg = c[rows, worst_dir]
+        b_cfg = np.where(coef.singular, len(limits), np.argmin(bound[rows, :, worst_dir], axis=1))
+        # min over each point's configurations
+        order = np.lexsort((c_cfg, pts))
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = pts[order][1:] != pts[order][:-1]
+        sel = order[first]
+        p = pts[sel]
+        cap[p] = c_cfg[sel]
+        branch[p] = brs[sel]
+        direction[p] = worst_dir[sel]
+        binding[p] = b_cfg[sel]
+    return PointCapacity(capacity_kg=cap, binding=binding, branch=branch, direction=direction,
+                         n_states=np.asarray(n_solutions) * len(directions), names=names)

@@ -1,0 +1,17 @@
+"""Configuration: files in (YAML), frozen dataclasses out; validated once, before any job.
+
+- :mod:`~capmap.config.validation`  YAML loading and JSON-schema validation (``schemas/``)
+- :mod:`~capmap.config.robot_file`  robot files -> robot descriptions and models
+- :mod:`~capmap.config.capacity`    sections of the capacity-map family (lock, task, limits, ...)
+- :mod:`~capmap.config.following`   the ``follow`` section
+- :mod:`~capmap.config.run`         the whole run configuration
+- :mod:`~capmap.config.slices`      what each stage depends on (rule params, provenance)
+- :mod:`~capmap.config.checks`      checks that need the robot, with errors naming config keys
+"""
+
+from capmap.config.checks import check_run_config
+from capmap.config.run import RunConfig, load_config, parse_config
+from capmap.config.slices import canonical, config_hash, follow_slices, payload_label, stage_slices
+
+__all__ = ["RunConfig", "parse_config", "load_config", "check_run_config", "canonical", "config_hash",
+           "payload_label", "stage_slices", "follow_slices"]

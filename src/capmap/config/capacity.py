@@ -1,0 +1,142 @@
+"""Config sections of the capacity-map family: lock, task, limits, sampling, directions,
+voxels, verification. Frozen dataclasses built from the validated config document."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from capmap.capacity import directions
+from capmap.capacity.directions import Directions
+from capmap.capacity.engine import LoadLimits, Motion
+from capmap.config.validation import as_tuple
+from capmap.errors import ConfigError
+
+__all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "DirectionsConfig", "VerificationConfig",
+           "per_item", "rotation_from_rpy", "DEFAULT_DT_S"]
+
+DEFAULT_DT_S = 0.1  # verification.dt_s when not given
+
+
+def rotation_from_rpy(rpy_deg) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll) (3, 3) from [roll, pitch, yaw] deg."""
+    return pin.rpy.rpyToMatrix(*np.deg2rad(np.asarray(rpy_deg, dtype=float)))
+
+
+def per_item(value, n: int, key: str) -> np.ndarray:
+    """One value for all n items, or exactly n values (else a one-line error naming key)."""
+    v = np.atleast_1d(np.asarray(value, dtype=float))
+    if len(v) == 1:
+        return np.full(n, v[0])
+    if len(v) != n:
+        raise ConfigError(f"{key} has {len(v)} values; give one or {n}")
+    return v
+
+
+@dataclass(frozen=True)
+class LockConfig:
+    """``lock``: the failed joint (1-based) and the angle it is locked at."""
+
+    joint: int
+    angle_deg: float
+
+    @classmethod
+    def from_doc(cls, d: dict) -> "LockConfig":
+        return cls(**d)
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    """``task``: the fixed end-effector orientation, straight-line speed and acceleration limits,
+    the payloads to plan and verify, start and goal positions, and the start configuration."""
+
+    orientation_rpy_deg: tuple[float, float, float]
+    v_max_mps: float
+    a_max_mps2: float
+    payload_kg: tuple[float, ...]
+    start_m: tuple[float, float, float]
+    goal_m: tuple[float, float, float]
+    q_ini_deg: tuple[float, ...]
+
+    @classmethod
+    def from_doc(cls, d: dict) -> "TaskConfig":
+        task = {k: as_tuple(v) for k, v in d.items()}
+        task["payload_kg"] = tuple(float(m) for m in np.atleast_1d(task["payload_kg"]))
+        return cls(**task)
+
+    @property
+    def rotation(self) -> np.ndarray:
+        return rotation_from_rpy(self.orientation_rpy_deg)
+
+    @property
+    def motion(self) -> Motion:
+        return Motion(self.v_max_mps, self.a_max_mps2)
+
+
+@dataclass(frozen=True)
+class LimitsConfig:
+    """``limits``: joint torque (one value or one per joint), base force and moment (one or three)."""
+
+    joint_torque_nm: float | tuple[float, ...]
+    base_force_n: float | tuple[float, ...]
+    base_moment_nm: float | tuple[float, ...]
+
+    @classmethod
+    def from_doc(cls, d: dict) -> "LimitsConfig":
+        return cls(**{k: as_tuple(v) for k, v in d.items()})
+
+    def resolve(self, n_joints: int) -> LoadLimits:
+        """:class:`LoadLimits` for an arm with n_joints joints (length checks here)."""
+        return LoadLimits(per_item(self.joint_torque_nm, n_joints, "limits.joint_torque_nm"),
+                          per_item(self.base_force_n, 3, "limits.base_force_n"),
+                          per_item(self.base_moment_nm, 3, "limits.base_moment_nm"))
+
+
+@dataclass(frozen=True)
+class SamplingConfig:
+    """``sampling``: mode (joint | voxel_fill), joint-space samples, seed, jitter per voxel."""
+
+    mode: str
+    n_points: int
+    seed: int
+    jitter_per_voxel: int = 1
+
+    @classmethod
+    def from_doc(cls, d: dict) -> "SamplingConfig":
+        return cls(**d)
+
+
+@dataclass(frozen=True)
+class DirectionsConfig:
+    """``directions``: the paper's grid (step_deg) or a near-uniform sphere (n)."""
+
+    kind: str
+    step_deg: float | None = None
+    n: int | None = None
+
+    @classmethod
+    def from_doc(cls, d: dict) -> "DirectionsConfig":
+        if d["kind"] == "paper_grid" and "step_deg" not in d:
+            raise ConfigError("directions.step_deg is required for kind paper_grid")
+        if d["kind"] == "sphere" and "n" not in d:
+            raise ConfigError("directions.n is required for kind sphere")
+        extra = {"paper_grid": "n", "sphere": "step_deg"}[d["kind"]]
+        if extra in d:
+            raise ConfigError(f"directions.{extra} does not apply to kind {d['kind']}")
+        return cls(**d)
+
+    def build(self) -> Directions:
+        return directions.paper_grid(self.step_deg) if self.kind == "paper_grid" else directions.sphere(self.n)
+
+
+@dataclass(frozen=True)
+class VerificationConfig:
+    """``verification``: the largest sample spacing dt_s along a verified motion."""
+
+    dt_s: float = DEFAULT_DT_S
+
+    @classmethod
+    def from_doc(cls, d: dict | None) -> "VerificationConfig":
+        return cls(**(d or {}))

@@ -1,0 +1,54 @@
+"""Config section of the following family: ``follow`` (control period, the space and ground cases)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from capmap.config.validation import as_tuple
+
+__all__ = ["SpaceFollowConfig", "GroundFollowConfig", "FollowConfig"]
+
+
+@dataclass(frozen=True)
+class SpaceFollowConfig:
+    """``follow.space``: the space arm follows its verified path at ``payload_kg`` (one of
+    task.payload_kg) under a torque limit, with an S-curve of jerk j_max (v, a from task)."""
+
+    payload_kg: float
+    joint_torque_nm: float | tuple[float, ...]
+    j_max_mps3: float
+    catch_up_hz: float
+
+
+@dataclass(frozen=True)
+class GroundFollowConfig:
+    """``follow.ground``: a ground arm follows a straight line from FK(q_start) by line_m."""
+
+    robot: str
+    q_start_deg: tuple[float, ...]
+    line_m: tuple[float, float, float]
+    payload_kg: float
+    v_max_mps: float
+    a_max_mps2: float
+    j_max_mps3: float
+    joint_torque_nm: float | tuple[float, ...]
+    catch_up_hz: float
+
+
+@dataclass(frozen=True)
+class FollowConfig:
+    """``follow``: the control period and the configured cases (None when absent)."""
+
+    period_s: float
+    space: SpaceFollowConfig | None = None
+    ground: GroundFollowConfig | None = None
+
+    @classmethod
+    def from_doc(cls, d: dict) -> "FollowConfig":
+        space = SpaceFollowConfig(**{k: as_tuple(v) for k, v in d["space"].items()}) if "space" in d else None
+        ground = GroundFollowConfig(**{k: as_tuple(v) for k, v in d["ground"].items()}) if "ground" in d else None
+        return cls(period_s=d["period_s"], space=space, ground=ground)
+
+    @property
+    def cases(self) -> tuple[str, ...]:
+        return tuple(c for c in ("space", "ground") if getattr(self, c) is not None)

@@ -1,0 +1,134 @@
+"""Robot files (YAML, degrees) -> :class:`capmap.core.robot.RobotDescription` (SI, radians).
+
+Schema: ``capmap/config/schemas/robot.schema.json``. A robot is given either by DH rows
+(modified/Craig or standard) with per-link mass, centre of mass and inertia, or by a URDF
+file (a path relative to the robot file, or a file shipped by a pip package). Every
+problem is one :class:`capmap.errors.ConfigError` line naming the file and the key.
+"""
+
+from __future__ import annotations
+
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from capmap.config.validation import load_yaml, validate
+from capmap.core.robot import LinkInertia, Robot, RobotDescription, build_robot
+from capmap.errors import ConfigError
+
+__all__ = ["parse_robot", "load_robot", "load", "package_file"]
+
+
+def _inertia_matrix(values: list[float], where: str) -> np.ndarray:
+    v = np.asarray(values, dtype=float)
+    if len(v) == 3:
+        inertia = np.diag(v)
+    elif len(v) == 6:
+        ixx, iyy, izz, ixy, ixz, iyz = v
+        inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    else:
+        raise ConfigError(f"{where}: expected 3 (principal) or 6 values, got {len(v)}")
+    eig = np.linalg.eigvalsh(inertia)
+    if eig.min() <= 0:
+        raise ConfigError(f"{where}: inertia is not positive definite (eigenvalues {np.round(eig, 6).tolist()})")
+    a, b, c = np.sort(eig)
+    if a + b < c * (1 - 1e-9):
+        raise ConfigError(f"{where}: principal moments {np.round(eig, 6).tolist()} violate the triangle "
+                          "inequality (no rigid body has them)")
+    return inertia
+
+
+def _transform(xyz, rpy_deg) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = pin.rpy.rpyToMatrix(*np.deg2rad(rpy_deg))
+    T[:3, 3] = xyz
+    return T
+
+
+def package_file(package: str, path: str, source: str) -> Path:
+    """A file shipped by an installed pip distribution (e.g. example-robot-data's URDFs), found by
+    the end of its installed path, so the distribution's own prefix layout does not matter."""
+    try:
+        dist = metadata.distribution(package)
+    except metadata.PackageNotFoundError:
+        raise ConfigError(f"{source}: urdf.package = {package!r} is not installed (pip install {package})") from None
+    want = "/" + path.strip("/")
+    hits = [f for f in (dist.files or []) if ("/" + str(f)).endswith(want)]
+    if len(hits) != 1:
+        raise ConfigError(f"{source}: urdf.path = {path!r}: {len(hits)} files of {package} end with it (need one)")
+    return Path(dist.locate_file(hits[0]))
+
+
+def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> RobotDescription:
+    """Validate a robot document (already parsed YAML) and convert it to SI / radians."""
+    if not isinstance(doc, dict):
+        raise ConfigError(f"{source}: a robot file must be a mapping of keys, got {type(doc).__name__}")
+    validate(doc, "robot", source)
+    has_dh, has_urdf = "dh" in doc, "urdf" in doc
+    if has_dh == has_urdf:
+        raise ConfigError(f"{source}: give exactly one of 'dh' (with 'links') or 'urdf'")
+    tool = doc.get("tool", {})
+    common = dict(
+        name=doc["name"],
+        source=source,
+        tool=_transform(tool.get("xyz_m", [0, 0, 0]), tool.get("rpy_deg", [0, 0, 0])),
+        base_com_m=np.asarray(doc.get("base_com_m", [0, 0, 0]), dtype=float),
+        gravity_mps2=np.asarray(doc.get("gravity_mps2", [0, 0, 0]), dtype=float),
+    )
+    ranges = None
+    if "joint_range_deg" in doc:
+        ranges = np.deg2rad(np.asarray(doc["joint_range_deg"], dtype=float))
+        for i, (lo, hi) in enumerate(ranges):
+            if not lo < hi:
+                raise ConfigError(f"{source}: joint_range_deg[{i}] = {doc['joint_range_deg'][i]}: lower must be < upper")
+    if has_urdf:
+        if "links" in doc:
+            raise ConfigError(f"{source}: 'links' is only for DH robots; a URDF carries its own inertias")
+        if "package" in doc["urdf"]:
+            path = package_file(doc["urdf"]["package"], doc["urdf"]["path"], source)
+        else:
+            path = Path(doc["urdf"]["path"])
+            if not path.is_absolute() and base_dir is not None:
+                path = base_dir / path
+        if not path.is_file():
+            raise ConfigError(f"{source}: urdf.path = {doc['urdf']['path']!r}: no such file")
+        return RobotDescription(convention=None, dh=None, links=(), joint_range_rad=ranges,
+                                urdf_path=path, urdf_ee_frame=doc["urdf"]["ee_frame"], **common)
+    if "links" not in doc:
+        raise ConfigError(f"{source}: a DH robot needs 'links' (mass, centre of mass, inertia per link)")
+    rows = np.asarray(doc["dh"]["rows"], dtype=float)
+    n = len(rows)
+    if len(doc["links"]) != n:
+        raise ConfigError(f"{source}: links has {len(doc['links'])} entries but dh.rows has {n}")
+    if ranges is None:
+        raise ConfigError(f"{source}: joint_range_deg is required for a DH robot")
+    if len(ranges) != n:
+        raise ConfigError(f"{source}: joint_range_deg has {len(ranges)} entries but dh.rows has {n}")
+    dh = rows.copy()
+    dh[:, 0] = np.deg2rad(rows[:, 0])
+    dh[:, 2] = np.deg2rad(rows[:, 2])
+    links = tuple(
+        LinkInertia(
+            mass_kg=float(link["mass_kg"]),
+            com_m=np.asarray(link["com_m"], dtype=float),
+            inertia_kgm2=_inertia_matrix(link["inertia_kgm2"], f"{source}: links[{i}].inertia_kgm2"),
+        )
+        for i, link in enumerate(doc["links"])
+    )
+    return RobotDescription(convention=doc["dh"]["convention"], dh=dh, links=links, joint_range_rad=ranges, **common)
+
+
+def load_robot(path: str | Path) -> RobotDescription:
+    """Read and validate a robot YAML file."""
+    path = Path(path)
+    return parse_robot(load_yaml(path), str(path), base_dir=path.parent)
+
+
+# --------------------------------------------------------------------------- building
+
+
+def load(path: str | Path) -> Robot:
+    """Read, validate and build a robot file in one step."""
+    return build_robot(load_robot(path))

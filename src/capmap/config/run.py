@@ -1,0 +1,68 @@
+"""The run configuration: validated once against the JSON schema, then frozen dataclasses."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from capmap.config.capacity import (
+    DirectionsConfig,
+    LimitsConfig,
+    LockConfig,
+    SamplingConfig,
+    TaskConfig,
+    VerificationConfig,
+)
+from capmap.config.following import FollowConfig
+from capmap.config.slices import payload_label
+from capmap.config.validation import load_yaml, validate
+from capmap.errors import ConfigError
+
+__all__ = ["RunConfig", "parse_config", "load_config"]
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """A whole run: the robot file and every section (``follow`` is None when absent)."""
+
+    robot: str
+    lock: LockConfig
+    task: TaskConfig
+    limits: LimitsConfig
+    sampling: SamplingConfig
+    directions: DirectionsConfig
+    voxel_edge_m: float
+    shards: int
+    verification: VerificationConfig
+    follow: FollowConfig | None = None
+
+
+def parse_config(doc: object, source: str = "config") -> RunConfig:
+    """Validate a run-config mapping and turn it into a :class:`RunConfig`."""
+    if not isinstance(doc, dict):
+        raise ConfigError(f"{source}: the config must be a mapping of keys, got {type(doc).__name__}")
+    validate(doc, "config", source)
+    try:
+        directions = DirectionsConfig.from_doc(doc["directions"])
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+    task = TaskConfig.from_doc(doc["task"])
+    labels = [payload_label(m) for m in task.payload_kg]
+    if len(set(labels)) != len(labels):
+        raise ConfigError(f"{source}: task.payload_kg has repeated values {labels}")
+    return RunConfig(
+        robot=doc["robot"],
+        lock=LockConfig.from_doc(doc["lock"]),
+        task=task,
+        limits=LimitsConfig.from_doc(doc["limits"]),
+        sampling=SamplingConfig.from_doc(doc["sampling"]),
+        directions=directions,
+        voxel_edge_m=float(doc["voxels"]["edge_m"]),
+        shards=int(doc["shards"]),
+        verification=VerificationConfig.from_doc(doc.get("verification")),
+        follow=FollowConfig.from_doc(doc["follow"]) if "follow" in doc else None,
+    )
+
+
+def load_config(path: str | Path) -> RunConfig:
+    return parse_config(load_yaml(path), str(path))

@@ -1,0 +1,205 @@
+"""A robot description (SI, radians) -> Pinocchio model.
+
+A :class:`RobotDescription` holds either DH rows (modified/Craig or standard) with
+per-link mass, centre of mass and inertia, or the path of a URDF file; robot files
+(YAML, degrees) are parsed into it by :mod:`capmap.config.robot_file`.
+
+The model is built once (:func:`build_robot`) and treated as immutable; each worker makes
+its own ``pin.Data``. Frames: ``link<i>`` is DH frame i, ``ee`` is the end effector
+(last DH frame composed with the tool transform, or the URDF frame named in the file).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from capmap.errors import ConfigError
+
+__all__ = ["EE_FRAME", "LinkInertia", "RobotDescription", "Robot", "build_robot"]
+
+EE_FRAME = "ee"
+
+
+@dataclass(frozen=True)
+class LinkInertia:
+    """Rigid-body data of one link, in its link frame (SI)."""
+
+    mass_kg: float
+    com_m: np.ndarray  # (3,)
+    inertia_kgm2: np.ndarray  # (3, 3) about the centre of mass, link-frame axes
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """Validated contents of a robot file (SI units, radians)."""
+
+    name: str
+    source: str
+    convention: str | None  # "modified" | "standard" | None for URDF
+    dh: np.ndarray | None  # (n, 4): alpha_rad, a_m, offset_rad, d_m
+    links: tuple[LinkInertia, ...]
+    joint_range_rad: np.ndarray | None  # (n, 2); None: take the URDF's limits
+    tool: np.ndarray  # (4, 4) homogeneous transform last frame -> end effector
+    base_com_m: np.ndarray  # (3,)
+    gravity_mps2: np.ndarray  # (3,)
+    urdf_path: Path | None = None
+    urdf_ee_frame: str | None = None
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.dh) if self.dh is not None else -1
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """A built robot: Pinocchio models (with and without gravity) plus the task-relevant data.
+
+    ``model`` has the configured gravity, ``model_no_gravity`` is the same arm with zero
+    gravity (used for the velocity- and acceleration-dependent parts of the dynamics).
+    Joint k (1-based, as users count) is Pinocchio joint id k and configuration index k-1.
+    """
+
+    description: RobotDescription
+    model: pin.Model
+    model_no_gravity: pin.Model
+    ee_frame_id: int
+    q_lower: np.ndarray  # (n,) rad
+    q_upper: np.ndarray  # (n,) rad
+    joint_names: tuple[str, ...] = field(default=())
+
+    @property
+    def name(self) -> str:
+        return self.description.name
+
+    @property
+    def n_joints(self) -> int:
+        return self.model.nq
+
+    @property
+    def gravity(self) -> np.ndarray:
+        return self.description.gravity_mps2
+
+    @property
+    def base_com(self) -> np.ndarray:
+        return self.description.base_com_m
+
+    def fk(self, q: np.ndarray) -> np.ndarray:
+        """End-effector pose(s) by Pinocchio. q: (n,) or (N, n) rad -> (4, 4) or (N, 4, 4)."""
+        q = np.asarray(q, dtype=float)
+        data = self.model.createData()
+        out = []
+        for qi in np.atleast_2d(q):
+            pin.framesForwardKinematics(self.model, data, qi)
+            out.append(data.oMf[self.ee_frame_id].homogeneous.copy())
+        out = np.array(out)
+        return out[0] if q.ndim == 1 else out
+
+
+# --------------------------------------------------------------------------- building
+
+
+def _se3(T: np.ndarray) -> pin.SE3:
+    return pin.SE3(T[:3, :3].copy(), T[:3, 3].copy())
+
+
+def _rx(a):
+    c, s = np.cos(a), np.sin(a)
+    T = np.eye(4)
+    T[1:3, 1:3] = [[c, -s], [s, c]]
+    return T
+
+
+def _rz(a):
+    c, s = np.cos(a), np.sin(a)
+    T = np.eye(4)
+    T[:2, :2] = [[c, -s], [s, c]]
+    return T
+
+
+def _tx(a):
+    T = np.eye(4)
+    T[0, 3] = a
+    return T
+
+
+def _tz(d):
+    T = np.eye(4)
+    T[2, 3] = d
+    return T
+
+
+def _build_dh_model(desc: RobotDescription) -> pin.Model:
+    """Pinocchio model of a DH arm: joint i rotates about z of its joint frame.
+
+    Modified DH: joint frame i = DH frame i. Placement of joint i in joint i-1 is
+    Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(offset_i) Tz(d_i) (Rz(q) commutes with Tz(d)).
+    Standard DH: joint frame i = DH frame i-1 rotated by offset_i + q_i about its z;
+    DH frame i = joint frame i * Tz(d_i) Tx(a_i) Rx(alpha_i), where link i's inertia lives.
+    """
+    model = pin.Model()
+    model.name = desc.name
+    parent, parent_frame = 0, 0
+    prev_tail = np.eye(4)  # standard DH: joint frame i-1 -> DH frame i-1
+    for i, ((alpha, a, offset, d), link) in enumerate(zip(desc.dh, desc.links), start=1):
+        if desc.convention == "modified":
+            placement, body = _rx(alpha) @ _tx(a) @ _rz(offset) @ _tz(d), np.eye(4)
+        else:
+            placement, body = prev_tail @ _rz(offset), _tz(d) @ _tx(a) @ _rx(alpha)
+            prev_tail = body
+        lo, hi = desc.joint_range_rad[i - 1]
+        jid = model.addJoint(parent, pin.JointModelRZ(), _se3(placement), f"joint{i}",
+                             np.array([1e9]), np.array([1e9]), np.array([lo]), np.array([hi]))
+        inertia = pin.Inertia(link.mass_kg, link.com_m, link.inertia_kgm2)
+        model.appendBodyToJoint(jid, inertia, _se3(body))
+        jframe = model.addJointFrame(jid, parent_frame)
+        parent_frame = model.addBodyFrame(f"link{i}", jid, _se3(body), jframe)
+        parent = jid
+    tail = (prev_tail if desc.convention == "standard" else np.eye(4)) @ desc.tool
+    model.addFrame(pin.Frame(EE_FRAME, parent, parent_frame, _se3(tail), pin.FrameType.OP_FRAME))
+    return model
+
+
+def _build_urdf_model(desc: RobotDescription) -> tuple[pin.Model, np.ndarray]:
+    try:
+        model = pin.buildModelFromUrdf(str(desc.urdf_path))
+    except Exception as exc:  # Pinocchio raises bare ValueError/RuntimeError from C++
+        raise ConfigError(f"{desc.source}: urdf.path = {str(desc.urdf_path)!r}: cannot be parsed "
+                          f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+    if not model.existFrame(desc.urdf_ee_frame):
+        raise ConfigError(f"{desc.source}: urdf.ee_frame = {desc.urdf_ee_frame!r} is not a frame of the URDF")
+    if model.nq != model.nv or any(model.joints[j].nq != 1 for j in range(1, model.njoints)):
+        raise ConfigError(f"{desc.source}: only serial arms of 1-DOF revolute joints are supported")
+    src = model.frames[model.getFrameId(desc.urdf_ee_frame)]
+    model.addFrame(pin.Frame(EE_FRAME, src.parentJoint, model.getFrameId(desc.urdf_ee_frame),
+                             src.placement * _se3(desc.tool), pin.FrameType.OP_FRAME))
+    ranges = np.stack([model.lowerPositionLimit, model.upperPositionLimit], axis=1)
+    return model, ranges
+
+
+def build_robot(desc: RobotDescription) -> Robot:
+    """Build the Pinocchio model(s) of a validated description (do this once per process)."""
+    if desc.urdf_path is not None:
+        model, urdf_ranges = _build_urdf_model(desc)
+        ranges = desc.joint_range_rad if desc.joint_range_rad is not None else urdf_ranges
+        if len(ranges) != model.nq:
+            raise ConfigError(f"{desc.source}: joint_range_deg has {len(ranges)} entries but the URDF has "
+                              f"{model.nq} joints")
+    else:
+        model = _build_dh_model(desc)
+        ranges = desc.joint_range_rad
+    model.gravity = pin.Motion(np.asarray(desc.gravity_mps2, dtype=float), np.zeros(3))
+    model_ng = model.copy()
+    model_ng.gravity = pin.Motion.Zero()
+    return Robot(
+        description=desc,
+        model=model,
+        model_no_gravity=model_ng,
+        ee_frame_id=model.getFrameId(EE_FRAME),
+        q_lower=np.asarray(ranges[:, 0], dtype=float),
+        q_upper=np.asarray(ranges[:, 1], dtype=float),
+        joint_names=tuple(model.names[1:]),
+    )

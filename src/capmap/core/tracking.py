@@ -1,0 +1,110 @@
+"""Branch following: inverse kinematics along a sampled Cartesian path, one continuous branch.
+
+At every sample the IK branch nearest the previous configuration is taken (each joint
+angle shifted by the multiple of 2 pi nearest the previous one, so a revolute joint may
+pass +-180 deg), starting from the branch nearest a given configuration. A jump larger
+than ``max_step_rad`` (a singularity, or a branch that left the joint range) ends the
+tracking. Angles outside the joint range are kept and flagged (``Tracking.in_range``): a
+joint that must pass its stop makes the motion infeasible whatever the payload, and the
+caller says so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.core import ik
+from capmap.core.reduction import LockedArm
+from capmap.errors import CapmapError
+
+__all__ = ["Tracking", "nearest_turn", "start_branch", "track", "range_excursions", "START_TOL_RAD", "MAX_STEP_RAD"]
+
+START_TOL_RAD = np.deg2rad(2.0)  # a start configuration may be rounded: allow 2 deg to the nearest exact branch
+MAX_STEP_RAD = np.deg2rad(5.0)  # largest joint change between consecutive samples on one branch
+
+
+@dataclass(frozen=True)
+class Tracking:
+    """q (N, n_active) rad, continuous (NaN from ``failed_at`` on); failed_at: first failed
+    sample (-1: none); failure: reason ('' if none); start_offset_rad: max |q_start - start
+    branch| over joints; in_range (N, n_active) bool: angle within the joint range."""
+
+    q: np.ndarray
+    failed_at: int
+    failure: str
+    start_offset_rad: float
+    in_range: np.ndarray
+
+    @property
+    def ok(self) -> bool:
+        return self.failed_at < 0
+
+
+def nearest_turn(q: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """q (..., n) rad with each joint shifted by the multiple of 2 pi that brings it nearest ref (n,)."""
+    return q + 2 * np.pi * np.round((ref - q) / (2 * np.pi))
+
+
+def start_branch(arm: LockedArm, position: np.ndarray, rotation: np.ndarray, q_start: np.ndarray,
+                 tol_rad: float = START_TOL_RAD) -> tuple[np.ndarray, float]:
+    """The exact IK branch at ``position`` (3,) m, ``rotation`` (3, 3) nearest q_start (n_active,) rad,
+    and its max joint offset (rad). A one-line CapmapError (roles ``start``, ``q_ini``) if the
+    position is unreachable or q_start is not within tol_rad of any branch."""
+    sol = ik.solve(arm, np.asarray(position)[None], rotation)
+    n = int(sol.n_solutions[0])
+    if n == 0:
+        raise CapmapError("{start} is not reachable at the task orientation", start="the start position")
+    cand = nearest_turn(sol.q[0, :n], q_start)
+    off = np.abs(cand - q_start).max(axis=1)
+    k = int(np.argmin(off))
+    if off[k] > tol_rad:
+        raise CapmapError(f"{{q_ini}} is {np.rad2deg(off[k]):.2f} deg from the nearest of the {n} IK solutions at "
+                          f"{{start}} (allowed {np.rad2deg(tol_rad):g} deg): it does not put the end effector at "
+                          "the start", q_ini="the start configuration", start="the start position")
+    return cand[k], float(off[k])
+
+
+def track(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, q_start: np.ndarray,
+          max_step_rad: float = MAX_STEP_RAD) -> Tracking:
+    """Continuous-branch IK along positions (N, 3) m at a fixed rotation (3, 3).
+
+    The first position is the start; its branch is the one nearest q_start (n_active,) rad.
+    """
+    positions = np.asarray(positions, dtype=float)
+    q_prev, offset = start_branch(arm, positions[0], rotation, q_start)
+    sol = ik.solve(arm, positions, rotation)
+    N = len(positions)
+    q = np.full((N, arm.n_active), np.nan)
+
+    def result(failed_at: int, failure: str) -> Tracking:
+        in_range = (q >= arm.q_lower - 1e-9) & (q <= arm.q_upper + 1e-9)
+        return Tracking(q, failed_at, failure, offset, in_range | np.isnan(q))
+
+    for i in range(N):
+        n = int(sol.n_solutions[i])
+        if n == 0:
+            return result(i, "no IK solution at the task orientation (outside the workspace)")
+        cand = nearest_turn(sol.q[i, :n], q_prev)
+        jump = np.abs(cand - q_prev).max(axis=1)
+        k = int(np.argmin(jump))
+        if jump[k] > max_step_rad:
+            return result(i, f"branch lost: nearest solution {np.rad2deg(jump[k]):.1f} deg away "
+                             "(singularity or joint range)")
+        q[i] = q_prev = cand[k]
+    return result(-1, "")
+
+
+def range_excursions(in_range: np.ndarray) -> list[tuple[int, int, int]]:
+    """(joint column, first row, last row) of each run of samples outside the joint range;
+    in_range (N, n_active) bool."""
+    out = []
+    for c in range(in_range.shape[1]):
+        bad = np.flatnonzero(~in_range[:, c])
+        if len(bad):
+            breaks = np.flatnonzero(np.diff(bad) > 1)
+            starts = np.concatenate([[bad[0]], bad[breaks + 1]])
+            ends = np.concatenate([bad[breaks], [bad[-1]]])
+            out += [(c, int(a), int(b)) for a, b in zip(starts, ends)]
+    return sorted(out, key=lambda r: r[1])

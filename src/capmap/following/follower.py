@@ -1,0 +1,238 @@
+"""Torque-limited following of a fixed Cartesian path, online, one control period at a time.
+
+The end effector must stay on a straight segment (fixed orientation) while a jerk-limited
+S-curve commands the path coordinate s (arc length, m). At a state (s, sd) the torque
+limits bound the path acceleration to an interval [lo, hi] (:mod:`.path_dynamics`).
+
+Each control period dt the follower
+
+1. while in step with the command and the command's acceleration is admissible at the
+   current state (inside [lo, hi], next speed under the ceiling of step 3), takes the
+   command's next state: with no limit active it reproduces the command exactly;
+2. otherwise asks for u_des = u_cmd + k_v (sd_cmd - sd) + k_p (s_cmd - s), u_cmd the
+   command's mean acceleration over the period, k_p = w^2, k_v = 2 w (critically damped
+   catch-up, w = 2 pi f); if the command has come to rest at the end before the
+   follower, the follower approaches the end with at most the command's peak acceleration
+   and half its torque headroom (accelerate, then brake on sqrt(2 a d)): no exponential
+   tail and no torque pulse at the limit;
+3. keeps the next path speed in [0, ceiling], ceiling = min(v_max, the velocity limit
+   curve, the braking curve that can still stop at the end using 90 % of the braking
+   capability the torque limits leave), all precomputed along the path (:func:`.prepare`);
+4. clips to [lo, hi] from the torque limits at its current (s, sd): the path stays
+   exact, only the timing yields; when the limit releases, step 2 catches up, and within
+   1 nm and 1 nm/s of the command it rejoins it (step 1);
+5. integrates s, sd with that constant acceleration over the period.
+
+The path preparation (:func:`.line_path`, :func:`.path_dynamics`) is done once per path on
+a fine s grid; per period the follower interpolates a, b, c linearly, so its work is a
+few dozen floating-point operations (see ``tests/benchmarks/bench_follow.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.core.dynamics import torque_names
+from capmap.core.kinematics import pose_error
+from capmap.core.limits import AffineLimits
+from capmap.core.profiles import SCurve, scurve
+from capmap.core.reduction import LockedArm
+from capmap.errors import CapmapError, SolverFailed
+from capmap.following.path import JointPath, interpolate_q, line_path, path_at
+from capmap.following.path_dynamics import PreparedPath, path_dynamics, prepare
+
+__all__ = ["FollowResult", "follow", "FollowSettings", "FollowedSegment", "exact_torques", "follow_segment",
+           "SATURATED"]
+
+END_TOL_M = 1e-6  # the follower has arrived within max(this, beta dt^2) of the end, at (almost) rest
+END_TOL_MPS = 1e-6
+SYNC_TOL_M = 1e-9  # a follower this close to the command (and its speed) rejoins it exactly
+SYNC_TOL_MPS = 1e-9
+SATURATED = 0.999  # a joint whose peak torque reaches this fraction of its limit is saturated
+
+
+@dataclass(frozen=True)
+class FollowResult:
+    """Per control period k (K rows): t_s; the command s_cmd, sd_cmd, sdd_cmd (at t_k); the
+    follower's s, sd at t_k and the acceleration sdd it applies over [t_k, t_k + dt];
+    limited: the torque limits clipped the requested acceleration (a speed ceiling alone
+    does not count); infeasible: no admissible acceleration existed (the midpoint of the
+    crossed bounds was applied)."""
+
+    t_s: np.ndarray
+    s_cmd: np.ndarray
+    sd_cmd: np.ndarray
+    sdd_cmd: np.ndarray
+    s: np.ndarray
+    sd: np.ndarray
+    sdd: np.ndarray
+    limited: np.ndarray
+    infeasible: np.ndarray
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.t_s[-1])
+
+
+def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: float,
+           max_time_factor: float = 20.0) -> FollowResult:
+    """Run the follower from rest at s = 0 until it rests at the end of the path (see the module
+    docstring). Raises SolverFailed if it has not arrived within max_time_factor x the
+    command's duration."""
+    dt = float(period_s)
+    if not dt > 0:
+        raise CapmapError(f"period_s = {period_s!r} must be > 0")
+    if not catch_up_hz > 0:
+        raise CapmapError(f"catch_up_hz = {catch_up_hz!r} must be > 0")
+    pdyn, limits, v_max = prep.dynamics, prep.limits, prep.v_max_mps
+    L = command.length_m
+    if abs(L - pdyn.s[-1]) > 1e-9 * max(1.0, L):
+        raise CapmapError(f"command length {L} m differs from the path length {pdyn.s[-1]} m")
+    w = 2 * math.pi * catch_up_hz
+    kp, kv = w * w, 2 * w
+    n_max = math.ceil(max_time_factor * command.duration_s / dt) + 2
+    n_cmd = math.ceil(command.duration_s / dt) + 2
+    sc_all, sdc_all, sddc_all = (x.tolist() for x in command.evaluate(np.arange(n_cmd + 1) * dt))
+    grid_a, grid_b, grid_c, h = pdyn.a, pdyn.b, pdyn.c, float(pdyn.s[1] - pdyn.s[0])
+    vlim2 = (prep.v_limit**2).tolist()  # interpolate squared speeds: exact on a constant-deceleration braking curve
+    G = len(pdyn.s) - 1
+    # a discrete follower braking at beta can stop only within ~beta dt^2 of the end
+    end_tol = max(END_TOL_M, prep.brake_end_mps2 * dt * dt)
+    a_end = command.a_peak_mps2
+
+    def ceiling(s_next: float) -> float:
+        """Speed ceiling (v_max, velocity limit and braking curves) at a position."""
+        x = max(s_next / h, 0.0)
+        if x >= G:
+            return math.sqrt(vlim2[G])  # at or past the end: rest
+        i = int(x)
+        return min(math.sqrt(vlim2[i] + (x - i) * (vlim2[i + 1] - vlim2[i])), v_max)
+
+    rows = []
+    s = sd = 0.0
+    in_sync = True  # on the command exactly: take its state
+    for k in range(n_max):
+        if k < n_cmd:
+            s_c, sd_c, sdd_c = sc_all[k], sdc_all[k], sddc_all[k]
+            u_c = (sdc_all[k + 1] - sd_c) / dt
+        else:
+            s_c, sd_c, sdd_c, u_c = L, 0.0, 0.0, 0.0
+        if k >= n_cmd - 1 and abs(L - s) < end_tol and abs(sd) < END_TOL_MPS:
+            rows.append((k * dt, s_c, sd_c, sdd_c, s, sd, sdd_c if in_sync else 0.0, False, False))
+            break
+        # torque limits at the current state (interpolated path dynamics)
+        x = min(max(s / h, 0.0), G - 1e-9)
+        i = int(x)
+        f = x - i
+        a = grid_a[i] + f * (grid_a[i + 1] - grid_a[i])
+        b = grid_b[i] + f * (grid_b[i + 1] - grid_b[i])
+        c = grid_c[i] + f * (grid_c[i + 1] - grid_c[i])
+        lo, hi = limits.interval_one((b * (sd * sd) + c).tolist(), a.tolist())
+        if in_sync and k + 1 < n_cmd:
+            if lo <= sdd_c <= hi and sdc_all[k + 1] <= ceiling(sc_all[k + 1]) + 1e-12:
+                rows.append((k * dt, s_c, sd_c, sdd_c, s, sd, sdd_c, False, False))
+                s, sd = sc_all[k + 1], sdc_all[k + 1]
+                continue
+            in_sync = False
+        if k < n_cmd - 1:
+            u_des = u_c + kv * (sd_c - sd) + kp * (s_c - s)
+        else:  # the command rests at the end: approach it on sqrt(2 a d) with half the torque headroom
+            a_app = min(a_end, 0.5 * min(hi, -lo)) if lo < 0 < hi else 0.0
+            d_next = max(L - s - sd * dt, 0.0)
+            u_des = min(max((math.sqrt(2 * a_app * d_next) - sd) / dt, -a_app), a_app)
+        # under the speed ceiling at the next position (two passes: the ceiling falls towards the
+        # end, so the second, at the first pass's position, is safe); no reversing
+        u = min(u_des, (ceiling(s + sd * dt) - sd) / dt)
+        u = min(u, (ceiling(s + sd * dt + 0.5 * max(u, 0.0) * dt * dt) - sd) / dt)
+        u = max(u, -sd / dt)
+        infeasible = lo > hi
+        if infeasible:
+            u_lim = 0.5 * (lo + hi) if math.isfinite(lo + hi) else 0.0
+        else:
+            u_lim = min(max(u, lo), hi)
+        rows.append((k * dt, s_c, sd_c, sdd_c, s, sd, u_lim, u_lim != u, infeasible))
+        s = s + sd * dt + 0.5 * u_lim * dt * dt
+        sd = sd + u_lim * dt
+        if k + 1 < n_cmd and abs(s - sc_all[k + 1]) < SYNC_TOL_M and abs(sd - sdc_all[k + 1]) < SYNC_TOL_MPS:
+            in_sync, s, sd = True, sc_all[k + 1], sdc_all[k + 1]  # rejoined the command
+    else:
+        raise SolverFailed(f"the follower did not reach the end of the {L:.3f} m path within "
+                           f"{max_time_factor:g} x the command's {command.duration_s:.2f} s "
+                           f"(at s = {s:.9f} m, sd = {sd:.3g} m/s)")
+    arr = np.array(rows, dtype=float)
+    return FollowResult(t_s=arr[:, 0], s_cmd=arr[:, 1], sd_cmd=arr[:, 2], sdd_cmd=arr[:, 3], s=arr[:, 4],
+                        sd=arr[:, 5], sdd=arr[:, 6], limited=arr[:, 7].astype(bool), infeasible=arr[:, 8].astype(bool))
+
+
+@dataclass(frozen=True)
+class FollowedSegment:
+    """One straight segment followed: its grid table, prepared limits, command, the follower's
+    run, and the exact evaluation at the follower's and the command's states:
+    tau (K, n), tau_cmd (K, n) N m; q (K, n) rad (exact path at the follower's s);
+    deviation_m (K,), deviation_rad (K,): pose error of the interpolated joint command."""
+
+    table: JointPath
+    prepared: PreparedPath
+    command: SCurve
+    result: FollowResult
+    tau: np.ndarray
+    tau_cmd: np.ndarray
+    q: np.ndarray
+    deviation_m: np.ndarray
+    deviation_rad: np.ndarray
+
+
+def exact_torques(arm: LockedArm, table: JointPath, rotation: np.ndarray, payload_kg: float, s: np.ndarray,
+                  sd: np.ndarray, sdd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Exact torques (K, n) at states (s, sd, sdd) (K,) on the exact path, and the exact q (K, n)."""
+    us, inv = np.unique(s, return_inverse=True)
+    jp = path_at(arm, table, us, rotation)
+    exact = path_dynamics(arm, jp, payload_kg)
+    tau = exact.a[inv] * sdd[:, None] + exact.b[inv] * (sd**2)[:, None] + exact.c[inv]
+    return tau, jp.q[inv]
+
+
+@dataclass(frozen=True)
+class FollowSettings:
+    """What a follower needs besides its path: payload_kg (a point mass at the end effector),
+    joint_torque_nm (n_active,) limits of the active joints, the S-curve command's limits
+    v_max_mps, a_max_mps2, j_max_mps3, the control period_s, the catch-up bandwidth
+    catch_up_hz, and the grid ds_m of the path tables."""
+
+    payload_kg: float
+    joint_torque_nm: np.ndarray
+    v_max_mps: float
+    a_max_mps2: float
+    j_max_mps3: float
+    period_s: float
+    catch_up_hz: float
+    ds_m: float = 1e-3
+
+    def torque_limits(self, arm: LockedArm) -> AffineLimits:
+        """The torque limits on ``arm``'s active joints."""
+        return AffineLimits(np.asarray(self.joint_torque_nm, dtype=float), torque_names(arm))
+
+
+def follow_segment(arm: LockedArm, p0: np.ndarray, p1: np.ndarray, rotation: np.ndarray, q_start: np.ndarray,
+                   settings: FollowSettings) -> FollowedSegment:
+    """Prepare, command, follow and evaluate one straight segment p0 -> p1 (3,) m at ``rotation``
+    (3, 3), rest to rest, on the IK branch continuous from q_start (n_active,) rad."""
+    st = settings
+    table = line_path(arm, p0, p1, rotation, q_start, ds_m=st.ds_m)
+    prep = prepare(path_dynamics(arm, table, st.payload_kg), st.torque_limits(arm), st.v_max_mps)
+    cmd = scurve(table.length_m, st.v_max_mps, st.a_max_mps2, st.j_max_mps3)
+    res = follow(prep, cmd, st.period_s, st.catch_up_hz)
+    # follower and command states in one evaluation (in step, they share their s values)
+    K = len(res.s)
+    tau_all, q_all = exact_torques(arm, table, rotation, st.payload_kg, np.concatenate([res.s, res.s_cmd]),
+                                   np.concatenate([res.sd, res.sd_cmd]), np.concatenate([res.sdd, res.sdd_cmd]))
+    tau, tau_cmd, q = tau_all[:K], tau_all[K:], q_all[:K]
+    T = arm.fk(interpolate_q(table, res.s))
+    T_line = np.zeros_like(T)
+    T_line[:, :3, :3], T_line[:, :3, 3], T_line[:, 3, 3] = rotation, p0 + res.s[:, None] * (p1 - p0) / table.length_m, 1
+    err = pose_error(T, T_line)
+    return FollowedSegment(table, prep, cmd, res, tau, tau_cmd, q, np.linalg.norm(err[:, :3], axis=1),
+                           np.linalg.norm(err[:, 3:], axis=1))

@@ -1,0 +1,77 @@
+"""Logging for the stages: progress to the rule's log file and to stderr, one line per event.
+
+Every module logs through ``logging.getLogger(__name__)`` (below the ``capmap`` logger);
+:func:`stage_logger` adds the stage's label to each line (``[12:00:01] capacity shard 1/4:
+500/18500 points ...``). :func:`one_line_errors` turns a :class:`~capmap.errors.CapmapError`
+into one ``capmap:`` line on stderr and in the log, and exit status 1.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from capmap.errors import CapmapError
+
+__all__ = ["stage_logger", "logging_to", "one_line_errors", "call"]
+
+ROOT = "capmap"
+
+
+class _Labelled(logging.LoggerAdapter):
+    def process(self, msg, kwargs):
+        return f"{self.extra['label']}: {msg}", kwargs
+
+
+def stage_logger(name: str, label: str) -> logging.LoggerAdapter:
+    """The module logger ``name`` with ``label`` (e.g. 'verify 1500 kg') before every message."""
+    return _Labelled(logging.getLogger(name), {"label": label})
+
+
+@contextmanager
+def logging_to(log_path: str | Path | None) -> Iterator[None]:
+    """Send the capmap loggers' INFO lines to stderr and (if given) appended to ``log_path``;
+    the handlers are closed when the block ends."""
+    fmt = logging.Formatter("[%(asctime)s] %(message)s", datefmt="%H:%M:%S")
+    handlers: list[logging.Handler] = [logging.StreamHandler(sys.stderr)]
+    if log_path:
+        Path(log_path).parent.mkdir(parents=True, exist_ok=True)
+        handlers.append(logging.FileHandler(log_path, mode="a"))
+    root = logging.getLogger(ROOT)
+    old_level, old_propagate = root.level, root.propagate
+    root.setLevel(logging.INFO)
+    root.propagate = False
+    for h in handlers:
+        h.setFormatter(fmt)
+        root.addHandler(h)
+    try:
+        yield
+    finally:
+        for h in handlers:
+            root.removeHandler(h)
+            h.close()
+        root.setLevel(old_level)
+        root.propagate = old_propagate
+
+
+@contextmanager
+def one_line_errors(log_path: str | Path | None = None) -> Iterator[None]:
+    """Turn a CapmapError into one ``capmap:`` line on stderr (and the log) and exit status 1."""
+    try:
+        yield
+    except CapmapError as exc:
+        msg = f"capmap: {exc}"
+        print(msg, file=sys.stderr)
+        if log_path:
+            with open(log_path, "a") as f:
+                f.write(msg + "\n")
+        raise SystemExit(1) from None
+
+
+def call(fn, log: str | None = None, **kwargs) -> None:
+    """Entry for the thin Snakemake scripts: ``fn(**kwargs)`` with logging to ``log`` and one-line errors."""
+    with one_line_errors(log), logging_to(log):
+        fn(**kwargs)

@@ -1,0 +1,11 @@
+"""Stages: the functions the Snakemake scripts call, one per rule. File I/O lives here (and in
+:mod:`capmap.io`) only; each stage reads its inputs, calls the numerics of its family,
+writes Parquet with provenance, and logs its progress.
+
+- :mod:`~capmap.stages.capacity`   model, sample, capacity (sharded), voxels, summary
+- :mod:`~capmap.stages.verify`     plan, verify, verify_plots (one job per payload)
+- :mod:`~capmap.stages.following`  follow, follow_plots (one job per case)
+- :mod:`~capmap.stages.report`     catalogue, concatenated summaries
+"""
+
+__all__ = ["capacity", "verify", "following", "report", "common"]

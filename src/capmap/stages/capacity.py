@@ -1,0 +1,220 @@
+"""Stages of the capacity map: model -> sample -> capacity (sharded) -> voxels -> summary.
+
+Each function is what one Snakemake rule runs: file paths in and out, and ``slice_json``,
+the canonical JSON of the config slice the stage depends on (recorded as provenance).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+import pinocchio as pin
+
+from capmap.capacity import sampling
+from capmap.capacity.engine import Motion, point_capacity
+from capmap.capacity.voxels import Grid, voxelise
+from capmap.config.capacity import DirectionsConfig, LimitsConfig, SamplingConfig, rotation_from_rpy
+from capmap.config.robot_file import load
+from capmap.core import ik
+from capmap.core.dynamics import ArmDynamics
+from capmap.core.limits import AffineLimits
+from capmap.core.reduction import LockedArm
+from capmap.core.robot import Robot
+from capmap.io import datasets
+from capmap.io.logs import stage_logger
+from capmap.io.tables import write_quantities
+from capmap.plots.capacity import capacity_map
+from capmap.stages.common import arm_from, parse_slice
+
+__all__ = ["model_table", "stage_model", "stage_sample", "capacity_table", "stage_capacity", "stage_voxels",
+           "stage_summary"]
+
+
+# --------------------------------------------------------------------------- model
+
+
+def model_table(robot: Robot) -> pd.DataFrame:
+    """Joint/link table of a built robot (angles in deg)."""
+    m = robot.model
+    rows = []
+    for j in range(1, m.njoints):
+        inertia = m.inertias[j]
+        I = inertia.inertia
+        M = m.jointPlacements[j]
+        rpy = np.rad2deg(pin.rpy.matrixToRpy(M.rotation))
+        rows.append({
+            "joint": j, "name": m.names[j], "type": m.joints[j].shortname(),
+            "lower_deg": np.rad2deg(robot.q_lower[j - 1]), "upper_deg": np.rad2deg(robot.q_upper[j - 1]),
+            "placement_x_m": M.translation[0], "placement_y_m": M.translation[1], "placement_z_m": M.translation[2],
+            "placement_roll_deg": rpy[0], "placement_pitch_deg": rpy[1], "placement_yaw_deg": rpy[2],
+            "mass_kg": inertia.mass, "com_x_m": inertia.lever[0], "com_y_m": inertia.lever[1], "com_z_m": inertia.lever[2],
+            "ixx_kgm2": I[0, 0], "iyy_kgm2": I[1, 1], "izz_kgm2": I[2, 2], "ixy_kgm2": I[0, 1], "ixz_kgm2": I[0, 2],
+            "iyz_kgm2": I[1, 2],
+        })
+    return pd.DataFrame(rows)
+
+
+def stage_model(robot_yaml: str, out: str, slice_json: str) -> None:
+    deps = parse_slice(slice_json)
+    robot = load(robot_yaml)
+    df = model_table(robot)
+    datasets.write(df, out, datasets.provenance("model", deps, robot=robot.name,
+                                                 gravity_mps2=robot.gravity.tolist(), base_com_m=robot.base_com.tolist()))
+    stage_logger(__name__, "model").info(f"{robot.name}: {robot.n_joints} joints, total mass {df.mass_kg.sum():.1f} kg "
+                                         f"-> {out}")
+
+
+# --------------------------------------------------------------------------- sample
+
+
+def stage_sample(out: str, slice_json: str) -> None:
+    deps = parse_slice(slice_json)
+    log = stage_logger(__name__, "sample")
+    _, arm = arm_from(deps)
+    sc = SamplingConfig.from_doc(deps["sample"]["sampling"])
+    rng = np.random.default_rng(sc.seed)
+    _, pos = sampling.joint_samples(arm, sc.n_points, rng)
+    source = np.zeros(len(pos), dtype=int)
+    if sc.mode == "voxel_fill":
+        grid = Grid.covering(pos, deps["sample"]["voxels"]["edge_m"])
+        fill, kind = sampling.voxel_fill(grid, sc.jitter_per_voxel, rng)
+        pos = np.concatenate([pos, fill])
+        source = np.concatenate([source, kind + 1])
+        log.info(f"voxel_fill: grid {grid.shape} of {grid.edge_m} m = {grid.n_voxels} voxels, "
+                 f"+{len(fill)} points (centre + {sc.jitter_per_voxel} jittered each)")
+    df = pd.DataFrame({"point_id": np.arange(len(pos)), "x_m": pos[:, 0], "y_m": pos[:, 1], "z_m": pos[:, 2],
+                       "source": pd.Categorical.from_codes(source, ["joint_sample", "voxel_centre", "voxel_jitter"])})
+    datasets.write(df, out, datasets.provenance("sample", deps, seed=sc.seed))
+    log.info(f"{len(df)} points ({sc.n_points} joint samples, mode {sc.mode}, seed {sc.seed}) -> {out}")
+
+
+# --------------------------------------------------------------------------- capacity
+
+
+def capacity_table(arm: LockedArm, ids: np.ndarray, pos: np.ndarray, rotation: np.ndarray, motion: Motion,
+                   limits: AffineLimits, dirs, log=None, chunk: int = 500) -> pd.DataFrame:
+    """Per-point capacity table for points ``pos`` (N, 3) m at end-effector orientation ``rotation``
+    (all IK branches x all directions); progress to ``log`` (a logger) every chunk."""
+    dyn = ArmDynamics(arm)
+    parts = []
+    t0, states = time.perf_counter(), 0
+    for start in range(0, len(pos), chunk):
+        rows = slice(start, start + chunk)
+        sol = ik.solve(arm, pos[rows], rotation)
+        pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits)
+        states += int(pc.n_states.sum())
+        reach = sol.n_solutions > 0
+        d = np.where(pc.direction >= 0, pc.direction, 0)
+        br = np.where(pc.branch >= 0, pc.branch, 0)
+        q_worst = np.where(reach[:, None], sol.q[np.arange(len(br)), br], np.nan)
+        part = pd.DataFrame({
+            "point_id": ids[rows], "x_m": pos[rows, 0], "y_m": pos[rows, 1], "z_m": pos[rows, 2],
+            "reachable": reach, "n_branches": sol.n_solutions, "capacity_kg": pc.capacity_kg,
+            "binding": np.where(reach, np.array(pc.names + ("",))[pc.binding], ""),
+            "worst_branch": pc.branch,
+            "worst_alpha_deg": np.where(reach, dirs.alpha_deg[d], np.nan),
+            "worst_beta_deg": np.where(reach, dirs.beta_deg[d], np.nan),
+            "worst_ux": np.where(reach, dirs.u[d, 0], np.nan), "worst_uy": np.where(reach, dirs.u[d, 1], np.nan),
+            "worst_uz": np.where(reach, dirs.u[d, 2], np.nan),
+            "n_states": pc.n_states,
+        })
+        for c, j in enumerate(arm.active_joint_numbers):
+            part[f"worst_q_j{j}_deg"] = np.rad2deg(q_worst[:, c])
+        parts.append(part)
+        if log:
+            done = min(start + chunk, len(pos))
+            el = time.perf_counter() - t0
+            log.info(f"{done}/{len(pos)} points ({done / len(pos):.0%}), {states / el:,.0f} states/s, "
+                     f"eta {el / done * (len(pos) - done):.0f} s")
+    df = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+    if len(df):
+        df["binding"] = df["binding"].astype("category")
+    return df
+
+
+def stage_capacity(points: str, out: str, slice_json: str, shard: int, shards: int) -> None:
+    """Shard ``shard`` (0-based) of ``shards``: points with point_id % shards == shard."""
+    deps = parse_slice(slice_json)
+    log = stage_logger(__name__, f"capacity shard {shard + 1}/{shards}")
+    robot, arm = arm_from(deps)
+    cs = deps["capacity"]
+    task = cs["task"]
+    rotation = rotation_from_rpy(task["orientation_rpy_deg"])
+    motion = Motion(task["v_max_mps"], task["a_max_mps2"])
+    limits = LimitsConfig.from_doc(cs["limits"]).resolve(robot.n_joints).for_arm(arm)  # checked before the long work
+    dirs = DirectionsConfig.from_doc(cs["directions"]).build()
+    pts = datasets.read(points)
+    mine = pts[pts.point_id % shards == shard]
+    log.info(f"{len(mine)} of {len(pts)} points, {len(dirs)} directions ({dirs.kind})")
+    df = capacity_table(arm, mine.point_id.to_numpy(), mine[["x_m", "y_m", "z_m"]].to_numpy(), rotation, motion,
+                        limits, dirs, log)
+    datasets.write(df, out, datasets.provenance("capacity", deps, seed=deps["sample"]["sampling"]["seed"],
+                                                 shard=shard, shards=shards, directions=dirs.kind))
+    n_reach = int(df.reachable.sum()) if len(df) else 0
+    log.info(f"done: {n_reach} reachable, min capacity "
+             f"{np.nanmin(df.capacity_kg) if n_reach else float('nan'):.1f} kg -> {out}")
+
+
+# --------------------------------------------------------------------------- voxels
+
+
+def stage_voxels(shards: list[str], out_voxels: str, out_points: str, slice_json: str) -> None:
+    deps = parse_slice(slice_json)
+    pts = pd.concat([datasets.read(p) for p in shards], ignore_index=True).sort_values("point_id", ignore_index=True)
+    xyz = pts[["x_m", "y_m", "z_m"]].to_numpy()
+    grid = Grid.covering(xyz, deps["voxels"]["voxels"]["edge_m"])
+    vm = voxelise(grid, xyz, pts.capacity_kg.to_numpy(), pts.reachable.to_numpy())
+    idx = grid.all_indices()
+    centres = grid.centres(idx)
+    worst = vm.worst_point
+    binding = np.where(worst >= 0, pts.binding.astype(str).to_numpy()[np.maximum(worst, 0)], "")
+    vox = pd.DataFrame({"i": idx[:, 0], "j": idx[:, 1], "k": idx[:, 2],
+                        "x_m": centres[:, 0], "y_m": centres[:, 1], "z_m": centres[:, 2],
+                        "n_points": vm.n_points, "n_reachable": vm.n_reachable, "capacity_kg": vm.capacity_kg,
+                        "binding": pd.Categorical(binding),
+                        "worst_point_id": np.where(worst >= 0, pts.point_id.to_numpy()[np.maximum(worst, 0)], -1)})
+    pidx = grid.index(xyz)
+    pts["i"], pts["j"], pts["k"] = pidx[:, 0], pidx[:, 1], pidx[:, 2]
+    grid_meta = {"lower_m": grid.lower.tolist(), "shape": list(grid.shape), "edge_m": grid.edge_m}
+    seed = deps["sample"]["sampling"]["seed"]
+    datasets.write(vox, out_voxels, datasets.provenance("voxels", deps, seed=seed, grid=grid_meta))
+    datasets.write(pts, out_points, datasets.provenance("voxels", deps, seed=seed, grid=grid_meta))
+    reach = vox.n_reachable > 0
+    stage_logger(__name__, "voxels").info(
+        f"grid {grid.shape} x {grid.edge_m} m: {int(reach.sum())} reachable voxels of {grid.n_voxels}; "
+        f"{int((vox.n_points == 0).sum())} voxels without any sample; {len(pts)} points -> {out_voxels}")
+
+
+def grid_of(vox: pd.DataFrame) -> Grid:
+    """The voxel grid recorded in a voxels dataset's provenance."""
+    g = vox.attrs["capmap"]["grid"]
+    return Grid(lower=np.asarray(g["lower_m"], dtype=float), shape=tuple(g["shape"]), edge_m=float(g["edge_m"]))
+
+
+# --------------------------------------------------------------------------- summary
+
+
+def stage_summary(voxels: str, points: str, out_csv: str, out_md: str, out_png: str, slice_json: str) -> None:
+    """Capacity summary table (CSV + Markdown) and a capacity-coloured workspace figure."""
+    vox, pts = datasets.read(voxels), datasets.read(points)
+    reach_v = vox[vox.n_reachable > 0]
+    reach_p = pts[pts.reachable]
+    q = (reach_v.capacity_kg.quantile([0.0, 0.05, 0.5, 0.95, 1.0]) if len(reach_v)
+         else pd.Series(np.nan, [0, .05, .5, .95, 1]))
+    rows = [
+        ("points evaluated", len(pts)), ("points reachable at task orientation", len(reach_p)),
+        ("motion states evaluated", int(pts.n_states.sum())),
+        ("voxels in grid", len(vox)), ("voxels without samples", int((vox.n_points == 0).sum())),
+        ("reachable voxels", len(reach_v)),
+        ("voxel capacity min [kg]", round(q.iloc[0], 1)), ("voxel capacity p5 [kg]", round(q.iloc[1], 1)),
+        ("voxel capacity median [kg]", round(q.iloc[2], 1)), ("voxel capacity p95 [kg]", round(q.iloc[3], 1)),
+        ("voxel capacity max [kg]", round(q.iloc[4], 1)),
+    ]
+    for name, count in reach_p.binding.astype(str).value_counts().items():
+        rows.append((f"points bound by {name}", int(count)))
+    write_quantities(rows, out_csv, out_md)
+    capacity_map(vox, out_png)
+    stage_logger(__name__, "summary").info(f"{len(reach_v)} reachable voxels, median capacity {q.iloc[2]:.1f} kg "
+                                           f"-> {out_csv}, {out_png}")

@@ -1,0 +1,146 @@
+"""Stages of planning and verification: plan (A* per payload) -> verify (direct line and the
+planned path, carrying the payload) -> verify_plots; one job per payload."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+import numpy as np
+import pandas as pd
+
+from capmap.capacity import planning
+from capmap.capacity.engine import Motion
+from capmap.capacity.verification import PathResult, judge, verify_path
+from capmap.config.capacity import LimitsConfig, rotation_from_rpy
+from capmap.core.dynamics import ArmDynamics
+from capmap.core.limits import AffineLimits
+from capmap.core.profiles import PHASES
+from capmap.core.reduction import LockedArm
+from capmap.errors import CapmapError, ConfigError, NoPath
+from capmap.io import datasets
+from capmap.io.logs import stage_logger
+from capmap.io.tables import write_table
+from capmap.plots.capacity import load_series, workspace_paths
+from capmap.stages.capacity import grid_of
+from capmap.stages.common import arm_from, parse_slice
+
+__all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "stage_verify", "stage_verify_plots"]
+
+PLAN_KEYS = {"start": "task.start_m", "goal": "task.goal_m", "payload": "task.payload_kg"}  # planning's roles
+WAYPOINT_COLUMNS = ["waypoint", "kind", "x_m", "y_m", "z_m", "i", "j", "k", "voxel_capacity_kg"]
+
+
+def stage_plan(voxels: str, out: str, slice_json: str) -> None:
+    """A* through the voxels that carry the task payload; a payload with no path is recorded
+    (status ``no_path`` and the reason in the provenance, zero waypoints), not an error."""
+    deps = parse_slice(slice_json)
+    task = deps["plan"]["task"]
+    payload = float(task["payload_kg"])
+    log = stage_logger(__name__, f"plan {payload:g} kg")
+    vox = datasets.read(voxels)
+    grid = grid_of(vox)
+    cap = vox.capacity_kg.to_numpy()
+    status, reason, cost, expanded = "ok", "", float("nan"), 0
+    try:
+        p = planning.plan(grid, cap, task["start_m"], task["goal_m"], payload)
+        wv = p.waypoint_voxel
+        df = pd.DataFrame({"waypoint": np.arange(len(p.waypoints)), "kind": p.waypoint_kind,
+                           "x_m": p.waypoints[:, 0], "y_m": p.waypoints[:, 1], "z_m": p.waypoints[:, 2],
+                           "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2], "voxel_capacity_kg": cap[grid.flat(wv)]})
+        cost, expanded = p.cost_m, p.expanded
+        log.info(f"{len(p.voxel_path)} voxels, {len(df)} waypoints, A* cost {cost:.3f} m, path {p.length_m:.3f} m, "
+                 f"{expanded} voxels expanded; weakest voxel on it {df.voxel_capacity_kg.min():.1f} kg")
+    except NoPath as exc:
+        status, reason = "no_path", exc.in_terms(**PLAN_KEYS)
+        df = pd.DataFrame({c: pd.Series(dtype=object if c == "kind" else float) for c in WAYPOINT_COLUMNS})
+        log.info(f"no path: {reason}")
+    except CapmapError as exc:  # start or goal outside the map: the config's fault
+        raise ConfigError(exc.in_terms(**PLAN_KEYS)) from None
+    datasets.write(df, out, datasets.provenance("plan", deps, payload_kg=payload, status=status, reason=reason,
+                                                 cost_m=cost, expanded=expanded))
+
+
+def path_tables(name: str, res: PathResult, arm: LockedArm, limits: AffineLimits, payload: float,
+                planner: str) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
+    """Time series, segment table and summary row of one verified path."""
+    tl, tr, ld = res.timeline, res.tracking, res.loads
+    ts = pd.DataFrame({"path": name, "t_s": tl.t_s, "segment": tl.segment,
+                       "phase": pd.Categorical.from_codes(tl.phase, list(PHASES)),
+                       "x_m": tl.p[:, 0], "y_m": tl.p[:, 1], "z_m": tl.p[:, 2],
+                       "vx_mps": tl.v[:, 0], "vy_mps": tl.v[:, 1], "vz_mps": tl.v[:, 2],
+                       "ax_mps2": tl.a[:, 0], "ay_mps2": tl.a[:, 1], "az_mps2": tl.a[:, 2]})
+    joints = arm.active_joint_numbers
+    for prefix, values, unit in (("q", tr.q, "deg"), ("qd", ld.qd, "deg_s"), ("qdd", ld.qdd, "deg_s2")):
+        for c, j in enumerate(joints):
+            ts[f"{prefix}_j{j}_{unit}"] = np.rad2deg(values[:, c])
+    y = ld.at(payload)
+    for c, col in enumerate(limits.names):
+        ts[col] = y[:, c]
+    ts["state_capacity_kg"] = ld.capacity_kg
+    ts["binding"] = np.array(list(limits.names) + ["untracked"])[ld.binding]
+    ts["tracked"] = ~np.isnan(tr.q).any(axis=1)
+    ts["in_joint_range"] = tr.in_range.all(axis=1)
+    segments, verdict = judge(res, arm, limits, payload)
+    seg = pd.DataFrame([{"path": name, **asdict(s)} for s in segments])
+    return ts, seg, {"path": name, "planner": planner, **asdict(verdict)}
+
+
+def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv: str, out_md: str,
+                 slice_json: str) -> None:
+    """Verify the direct line and the planned path (if any) carrying the task payload."""
+    deps = parse_slice(slice_json)
+    robot, arm = arm_from(deps)
+    dyn = ArmDynamics(arm)
+    cs, vt = deps["capacity"]["task"], deps["verify"]["task"]
+    payload = float(vt["payload_kg"])
+    log = stage_logger(__name__, f"verify {payload:g} kg")
+    rotation = rotation_from_rpy(cs["orientation_rpy_deg"])
+    limits = LimitsConfig.from_doc(deps["capacity"]["limits"]).resolve(robot.n_joints).for_arm(arm)
+    q_ini = np.deg2rad(np.asarray(vt["q_ini_deg"], dtype=float))[arm.active]
+    motion = Motion(cs["v_max_mps"], cs["a_max_mps2"])
+    dt = float(deps["verify"]["verification"]["dt_s"])
+    wp = datasets.read(waypoints)
+    plan_meta = wp.attrs["capmap"]
+    paths = {"direct": np.array([vt["start_m"], vt["goal_m"]], dtype=float)}
+    if plan_meta["status"] == "ok":
+        paths["planned"] = wp[["x_m", "y_m", "z_m"]].to_numpy()
+    ts_parts, seg_parts, rows = [], [], []
+    for name, pts in paths.items():
+        res = verify_path(dyn, pts, rotation, q_ini, motion, dt, limits)
+        planner = "straight line" if name == "direct" else f"A*, {len(pts)} waypoints"
+        ts, seg, row = path_tables(name, res, arm, limits, payload, planner)
+        ts_parts.append(ts)
+        seg_parts.append(seg)
+        rows.append(row)
+        log.info(f"{name}: {row['segments']} segments, {row['duration_s']:.1f} s, capacity {row['capacity_kg']:.1f} kg "
+                 f"({row['binding']}), mean segment capacity {row['mean_segment_capacity_kg']:.1f} kg = "
+                 f"{row['margin_pct']:+.1f}% vs {payload:g} kg; exceeded: {row['limits_exceeded_at_payload'] or 'none'}; "
+                 f"tracking {row['tracking']}; joint range {row['joint_range']}")
+    if plan_meta["status"] != "ok":
+        rows.append({"path": "planned", "planner": f"A*: {plan_meta['reason']}", "feasible": False})
+        log.info(f"planned: none ({plan_meta['reason']})")
+    summary = pd.DataFrame(rows)
+    summary.insert(0, "payload_kg", payload)
+    ts = pd.concat(ts_parts, ignore_index=True)
+    ts["path"] = ts.path.astype("category")
+    ts["binding"] = ts.binding.astype("category")
+    seg = pd.concat(seg_parts, ignore_index=True)
+    prov = datasets.provenance("verify", deps, payload_kg=payload, limits=dict(zip(limits.names, limits.limit.tolist())),
+                               plan_status=plan_meta["status"], plan_reason=plan_meta["reason"])
+    datasets.write(ts, out_timeseries, prov)
+    datasets.write(seg, out_segments, prov)
+    write_table(summary, out_csv, out_md)
+
+
+def stage_verify_plots(voxels: str, timeseries: str, out_workspace: str, out_torques: str, out_force: str,
+                       out_moment: str, slice_json: str) -> None:
+    """Capacity workspace with both paths; torques, base force and base moment against their limits."""
+    vox, ts = datasets.read(voxels), datasets.read(timeseries)
+    meta = ts.attrs["capmap"]
+    payload, limits = meta["payload_kg"], meta["limits"]
+    workspace_paths(vox, ts, payload, out_workspace)
+    for prefix, what, out in (("tau_", "Joint torques", out_torques), ("base_f", "Base disturbance force", out_force),
+                              ("base_m", "Base disturbance moment", out_moment)):
+        load_series(ts, [c for c in limits if c.startswith(prefix)], limits, f"{what} carrying {payload:g} kg", out)
+    stage_logger(__name__, f"verify plots {payload:g} kg").info(f"-> {out_workspace}, {out_torques}, {out_force}, "
+                                                                f"{out_moment}")

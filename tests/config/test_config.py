@@ -1,0 +1,41 @@
+import numpy as np
+import pytest
+import yaml
+
+from capmap.config import load_config, parse_config, stage_slices
+from capmap.errors import CapmapError
+from tests.scenario import ROOT, TASK_R
+
+
+def _doc():
+    return yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+
+
+def test_default_config_parses_to_the_spec_scenario():
+    run = load_config(ROOT / "config" / "config.yaml")
+    assert run.lock.joint == 1 and run.lock.angle_deg == 100
+    assert np.allclose(run.task.rotation, TASK_R, atol=1e-15)  # independent Rz Ry Rx in tests/scenario.py
+    limits = run.limits.resolve(7)
+    assert np.all(limits.joint_torque_nm == 700) and np.all(limits.base_moment_nm == 500)
+
+
+def test_slices_separate_the_stages():
+    s = stage_slices(_doc())
+    assert "payload_kg" not in str(s["voxels"]["upstream"])
+    assert "payload_kg" in str(s["plan"]["own"])
+    assert "limits" not in s["sample"]["upstream"] and "lock" not in s["model"]["upstream"]
+    assert s["capacity"]["upstream"]["sample"] == s["sample"]["own"]
+
+
+@pytest.mark.parametrize("mutate, expect", [
+    (lambda d: d["task"].update(v_max_mps=0), "task.v_max_mps"),
+    (lambda d: d["sampling"].update(mode="grid"), "sampling.mode"),
+    (lambda d: d["directions"].update(kind="sphere"), "directions.n is required"),
+    (lambda d: d.update(shards=0), "shards"),
+    (lambda d: d["lock"].update(joint="one"), "lock.joint"),
+])
+def test_config_errors_name_the_key(mutate, expect):
+    doc = _doc()
+    mutate(doc)
+    with pytest.raises(CapmapError, match=expect.replace(".", r"\.")):
+        parse_config(doc)

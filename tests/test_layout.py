@@ -1,0 +1,104 @@
+"""The package layout as a contract: small modules, no import cycles, dependencies one way,
+``__all__`` everywhere, and no capmap imports hidden inside functions."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "capmap"
+MAX_LINES = 350
+
+# what each part of the package may import (besides itself and the standard/third-party libraries)
+ALLOWED = {
+    "errors": set(),
+    "core": {"errors"},
+    "capacity": {"core", "errors"},
+    "following": {"core", "errors"},
+    "io": {"errors"},
+    "config": {"core", "capacity", "following", "io", "errors"},
+    "plots": set(),
+    "stages": {"core", "capacity", "following", "config", "io", "plots", "errors"},
+}
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for path in sorted(SRC.rglob("*.py")):
+        parts = path.relative_to(SRC.parent).with_suffix("").parts
+        name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+        out[name] = path
+    return out
+
+
+MODULES = _modules()
+
+
+def _imports(path: Path) -> list[tuple[str, bool]]:
+    """(imported capmap module, at module level?) for every import of capmap in a file."""
+    tree = ast.parse(path.read_text())
+    top = set(map(id, tree.body))
+    out = []
+    for node in ast.walk(tree):
+        names = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            # ``from pkg import submodule`` depends on the submodule, ``from mod import name`` on mod
+            names = [f"{node.module}.{a.name}" if f"{node.module}.{a.name}" in MODULES else node.module
+                     for a in node.names]
+        for n in names:
+            if n.startswith("capmap."):
+                while n not in MODULES and "." in n:
+                    n = n.rsplit(".", 1)[0]
+                if n in MODULES:
+                    out.append((n, id(node) in top))
+    return out
+
+
+def _part(module: str) -> str:
+    return module.split(".")[1] if module.count(".") else "__init__"
+
+
+@pytest.mark.parametrize("name", sorted(MODULES))
+def test_module_is_small(name):
+    n = len(MODULES[name].read_text().splitlines())
+    assert n <= MAX_LINES, f"{name} has {n} lines (limit {MAX_LINES})"
+
+
+@pytest.mark.parametrize("name", sorted(m for m in MODULES if m.count(".")))
+def test_imports_point_one_way_and_sit_at_the_top(name):
+    part = _part(name)
+    for imported, at_top in _imports(MODULES[name]):
+        assert at_top, f"{name} imports {imported} inside a function"
+        other = _part(imported)
+        if other != part:
+            assert other in ALLOWED[part], f"{name} ({part}) must not import {imported} ({other})"
+
+
+def test_no_import_cycles():
+    graph = {m: {i for i, _ in _imports(p) if i != m} for m, p in MODULES.items()}
+    state: dict[str, int] = {}
+
+    def visit(m, stack):
+        state[m] = 1
+        for n in graph[m]:
+            if state.get(n) == 1:
+                raise AssertionError(" -> ".join(stack[stack.index(n):] + [m, n]) if n in stack else f"{m} -> {n}")
+            if n not in state:
+                visit(n, stack + [m])
+        state[m] = 2
+
+    for m in graph:
+        if m not in state:
+            visit(m, [])
+
+
+@pytest.mark.parametrize("name", sorted(m for m in MODULES if m != "capmap"))
+def test_every_module_declares_all(name):
+    tree = ast.parse(MODULES[name].read_text())
+    assigned = {t.id for node in tree.body if isinstance(node, ast.Assign) for t in node.targets
+                if isinstance(t, ast.Name)}
+    assert "__all__" in assigned, f"{name} has no __all__"

@@ -1,0 +1,268 @@
+"""The Snakemake pipeline on the tiny config: outputs, provenance, catalogue, exact caching."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from capmap.config.robot_file import load
+from capmap.core import ik
+from capmap.core.reduction import lock
+from tests.scenario import ROOT, TASK_R, X_DES, X_INI
+
+TINY = ROOT / "tests" / "data" / "tiny.yaml"
+
+
+def _config(tmp: Path, **changes) -> Path:
+    doc = yaml.safe_load(TINY.read_text())
+    doc["robot"] = str(ROOT / "config" / "robots" / "ssrms7.yaml")
+    doc["follow"]["ground"]["robot"] = str(ROOT / "config" / "robots" / "ur5.yaml")
+    for dotted, value in changes.items():
+        node = doc
+        *head, last = dotted.split(".")
+        for h in head:
+            node = node.setdefault(h, {})
+        node[last] = value
+    path = tmp / f"config_{abs(hash(repr(sorted(changes.items()))))}.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return path
+
+
+def _snakemake(workdir: Path, config: Path, *extra: str) -> subprocess.CompletedProcess:
+    cmd = ["snakemake", "all", "-s", str(ROOT / "Snakefile"), "-d", str(workdir), "--cores", "2", *extra,
+           "--configfile", str(config)]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+
+
+def _planned_jobs(workdir: Path, config: Path) -> dict[str, int]:
+    """Rules a dry run would execute, with counts (empty when nothing is to be done)."""
+    res = _snakemake(workdir, config, "-n")
+    assert res.returncode == 0, res.stderr[-2000:]
+    out = res.stdout + res.stderr
+    m = re.search(r"job\s+count\n-+\s+-+\n(.*?)\ntotal", out, re.S)
+    if not m:
+        assert "Nothing to be done" in out, out[-2000:]
+        return {}
+    return {line.split()[0]: int(line.split()[1]) for line in m.group(1).strip().splitlines()}
+
+
+def _q_ini_locked(joint: int, angle_deg: float) -> list[float]:
+    """An exact start configuration with ``joint`` locked at angle_deg (the branch nearest the scenario's)."""
+    arm = lock(load(ROOT / "config/robots/ssrms7.yaml"), joint, np.deg2rad(angle_deg))
+    sol = ik.solve(arm, X_INI[None], TASK_R)
+    q = sol.q[0, : sol.n_solutions[0]]
+    ref = np.deg2rad(np.delete([100, 124, 98, 130, 146, 174, 57.0], joint - 1))
+    best = np.rad2deg(q[np.argmin(np.abs(q - ref).max(axis=1))]).tolist()
+    return best[: joint - 1] + [float(angle_deg)] + best[joint - 1:]
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("pipeline")
+    cfg = _config(tmp)
+    res = _snakemake(tmp, cfg)
+    assert res.returncode == 0, res.stderr[-3000:]
+    return tmp, cfg
+
+
+def test_outputs_and_provenance(run_dir):
+    tmp, _ = run_dir
+    pts = pd.read_parquet(tmp / "results/voxels/points.parquet")
+    vox = pd.read_parquet(tmp / "results/voxels/voxels.parquet")
+    for col in ("point_id", "x_m", "y_m", "z_m", "reachable", "n_branches", "capacity_kg", "binding",
+                "worst_alpha_deg", "worst_beta_deg", "worst_branch"):
+        assert col in pts.columns
+    for col in ("i", "j", "k", "x_m", "y_m", "z_m", "n_points", "capacity_kg"):
+        assert col in vox.columns
+    meta = pts.attrs["capmap"]
+    assert meta["stage"] == "voxels" and meta["seed"] == 7 and meta["capmap_version"]
+    assert meta["config"]["capacity"]["limits"]["joint_torque_nm"] == 700
+    # points: each id exactly once across shards
+    assert pts.point_id.is_unique and len(pts) == pd.read_parquet(tmp / "results/sample/points.parquet").shape[0]
+    # reachable <=> at least one branch <=> finite capacity
+    assert np.array_equal(pts.reachable, pts.n_branches > 0)
+    assert np.array_equal(pts.reachable, np.isfinite(pts.capacity_kg))
+    assert pts.reachable.sum() > 20
+
+
+def test_voxel_capacity_is_min_of_points_inside(run_dir):
+    tmp, _ = run_dir
+    pts = pd.read_parquet(tmp / "results/voxels/points.parquet")
+    vox = pd.read_parquet(tmp / "results/voxels/voxels.parquet")
+    grid = vox.attrs["capmap"]["grid"]
+    edge, lower = grid["edge_m"], np.array(grid["lower_m"])
+    # independent binning
+    idx = np.floor((pts[["x_m", "y_m", "z_m"]].to_numpy() - lower) / edge).astype(int)
+    pts = pts.assign(ii=idx[:, 0], jj=idx[:, 1], kk=idx[:, 2])
+    expect = pts[pts.reachable].groupby(["ii", "jj", "kk"]).capacity_kg.min()
+    got = vox[vox.n_reachable > 0].set_index(["i", "j", "k"]).capacity_kg
+    got.index.names = expect.index.names
+    pd.testing.assert_series_equal(got.sort_index(), expect.sort_index(), check_names=False)
+    assert vox[vox.n_reachable == 0].capacity_kg.isna().all()
+    # centres = lower + (index + 1/2) edge, lower corner on multiples of the edge
+    assert np.allclose(vox.x_m, lower[0] + (vox.i + 0.5) * edge)
+    assert np.allclose(lower / edge, np.round(lower / edge))
+    # voxel_fill evaluated every voxel of the grid
+    assert (vox.n_points > 0).all()
+
+
+def test_catalogue_lists_every_dataset(run_dir):
+    tmp, _ = run_dir
+    cat = pd.read_parquet(tmp / "results/catalogue.parquet")
+    assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "voxels", "waypoints",
+                             "timeseries", "segments", "toppra"}  # two 'points', three 'timeseries'
+    assert len(cat) == 13
+    for _, row in cat.iterrows():
+        data = (tmp / row.path).read_bytes()
+        assert hashlib.sha256(data).hexdigest() == row.sha256
+        assert row.rows == len(pd.read_parquet(tmp / row.path))
+        assert row.config_hash
+    cols = cat.set_index("path").loc["results/voxels/voxels.parquet", "columns"]
+    assert "capacity_kg [kg]" in list(cols) and "x_m [m]" in list(cols)
+
+
+def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
+    tmp, cfg = run_dir
+    assert _planned_jobs(tmp, cfg) == {}
+    after_payload = {"plan", "verify", "verify_plots", "verify_summary", "catalogue", "all"}
+    follow = {"follow", "follow_plots", "follow_summary"}
+    downstream_of_capacity = {"capacity", "voxels", "summary"} | after_payload | follow
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"limits.joint_torque_nm": 650}))
+    assert set(jobs) == downstream_of_capacity and jobs["capacity"] == 2
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"limits.base_moment_nm": 450}))
+    assert set(jobs) == downstream_of_capacity
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.angle_deg": 95, "task.q_ini_deg": _q_ini_locked(1, 95)}))
+    assert set(jobs) == {"sample"} | downstream_of_capacity
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.joint": 7, "lock.angle_deg": 57,
+                                                   "task.q_ini_deg": _q_ini_locked(7, 57)}))
+    assert set(jobs) == {"sample"} | downstream_of_capacity
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": 900, "follow.space.payload_kg": 900}))
+    assert set(jobs) == after_payload | follow and jobs["follow"] == 1  # the space case follows the new plan
+    # a second payload: one new plan/verify/plots job each, nothing for the first payload (nor its follower)
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": [1500, 900]}))
+    assert set(jobs) == after_payload and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"verification.dt_s": 0.2}))
+    assert set(jobs) == after_payload - {"plan"}  # the follower does not sample at dt_s
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.q_ini_deg": [100, 124.5, 98, 130, 146, 174, 57]}))
+    assert set(jobs) == (after_payload - {"plan"}) | follow and jobs["follow"] == 1  # its start branch
+    # the follower's own settings: only that case
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"follow.ground.joint_torque_nm": 15}))
+    assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == jobs["follow_plots"] == 1
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"follow.period_s": 0.002}))
+    assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == 2
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.v_max_mps": 0.1}))
+    assert set(jobs) == downstream_of_capacity
+
+
+def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
+    tmp, _ = run_dir
+    cfg3 = _config(tmp_path, shards=3)
+    jobs = _planned_jobs(tmp, cfg3)
+    assert jobs.get("capacity") == 3 and "sample" not in jobs and "model" not in jobs
+    before = pd.read_parquet(tmp / "results/voxels/voxels.parquet")
+    work3 = tmp_path / "w3"
+    work3.mkdir()
+    res = _snakemake(work3, cfg3)
+    assert res.returncode == 0, res.stderr[-2000:]
+    after = pd.read_parquet(work3 / "results/voxels/voxels.parquet")
+    pd.testing.assert_series_equal(before.capacity_kg, after.capacity_kg)
+
+
+def test_plan_and_verify_outputs(run_dir):
+    tmp, _ = run_dir
+    res = tmp / "results"
+    wp = pd.read_parquet(res / "plan/payload_1500kg/waypoints.parquet")
+    meta = wp.attrs["capmap"]
+    assert meta["status"] == "ok" and meta["payload_kg"] == 1500
+    assert meta["config"]["plan"]["task"]["payload_kg"] == 1500
+    assert np.allclose(wp[["x_m", "y_m", "z_m"]].iloc[0], X_INI) and np.allclose(wp[["x_m", "y_m", "z_m"]].iloc[-1], X_DES)
+    assert (wp.voxel_capacity_kg >= 1500).all()
+    ts = pd.read_parquet(res / "verify/payload_1500kg/timeseries.parquet")
+    seg = pd.read_parquet(res / "verify/payload_1500kg/segments.parquet")
+    summ = pd.read_csv(res / "verify/summary.csv")
+    for col in ("t_s", "segment", "x_m", "q_j2_deg", "qd_j2_deg_s", "tau_j2_nm", "base_fx_n", "base_mz_nm"):
+        assert col in ts.columns
+    assert set(ts.path) == {"direct", "planned"} and list(summ.path) == ["direct", "planned"]
+    limits = ts.attrs["capmap"]["limits"]
+    for name in ("direct", "planned"):
+        g = ts[ts.path == name]
+        assert g.t_s.is_monotonic_increasing
+        peak = max((g[c].abs() / lim).max() for c, lim in limits.items())
+        row = summ.set_index("path").loc[name]
+        assert row.peak_load_pct == pytest.approx(100 * peak)
+        assert bool(row.loads_ok) == (peak <= 1)
+        # the segment table's capacity is the minimum of the state capacities in the time series
+        per_seg = g.groupby("segment").state_capacity_kg.min()
+        assert np.allclose(seg[seg.path == name].set_index("segment").capacity_kg, per_seg)
+    for png in ("workspace", "torques", "base_force", "base_moment"):
+        assert (res / f"verify/payload_1500kg/{png}.png").stat().st_size > 10_000
+    assert "1500 kg, direct" in (res / "verify/summary.md").read_text()
+
+
+def test_follow_outputs(run_dir):
+    tmp, _ = run_dir
+    summ = pd.read_csv(tmp / "results/follow/summary.csv").set_index("case")
+    assert list(summ.index) == ["space", "ground"]
+    ground = summ.loc["ground"]
+    assert ground.saturated_joints == "j1" and ground.command_peak_torque_pct > 105
+    assert 99.9 < ground.follower_peak_torque_pct <= 100.01 and ground.toppra_duration_s < ground.follower_duration_s
+    assert ground.max_deviation_m < 1e-4
+    space = summ.loc["space"]
+    assert space.path == "planned path" and space.segments >= 2 and space.follower_max_violation_pct < 0.01
+    ts = pd.read_parquet(tmp / "results/follow/ground/timeseries.parquet")
+    for col in ("t_s", "s_cmd_m", "s_m", "sd_mps", "sdd_mps2", "tau_cmd_j1_nm", "tau_j1_nm", "lag_m", "deviation_m"):
+        assert col in ts.columns
+    assert ts.attrs["capmap"]["torque_limits_nm"]["tau_j1_nm"] == 14
+    assert ts.s_m.iloc[-1] == pytest.approx(0.5, abs=1e-4) and ts.limited.any()
+    for case in ("space", "ground"):
+        for png in ("progress", "torques"):
+            assert (tmp / f"results/follow/{case}/{png}.png").stat().st_size > 10_000
+
+
+def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
+    tmp, _ = run_dir
+    work = tmp_path / "w"
+    shutil.copytree(tmp, work, symlinks=True)
+    res = _snakemake(work, _config(tmp_path, **{"task.payload_kg": [1500, 90000]}))
+    assert res.returncode == 0, res.stderr[-2000:]
+    wp = pd.read_parquet(work / "results/plan/payload_90000kg/waypoints.parquet")
+    assert len(wp) == 0 and wp.attrs["capmap"]["status"] == "no_path"
+    assert "below task.payload_kg = 90000" in wp.attrs["capmap"]["reason"]
+    summ = pd.read_csv(work / "results/verify/summary.csv").set_index(["payload_kg", "path"])
+    assert "below task.payload_kg = 90000" in summ.loc[(90000, "planned"), "planner"]
+    direct = summ.loc[(90000, "direct")]
+    assert not direct.loads_ok and not direct.feasible and direct.limits_exceeded_at_payload
+
+
+@pytest.mark.parametrize("changes, expect", [
+    ({"limts": 3}, "unknown key limts"),
+    ({"lock.joint": 9}, "lock.joint = 9 is out of range"),
+    ({"limits.joint_torque_nm": -5}, "limits.joint_torque_nm"),
+    ({"limits.joint_torque_nm": [700, 700]}, "limits.joint_torque_nm has 2 values"),
+    ({"directions.n": 0}, "directions.n"),
+    ({"task.q_ini_deg": [90, 124, 98, 130, 146, 174, 57]}, "must equal lock.angle_deg"),
+    ({"task.goal_m": [30, 0, 0]}, "task.goal_m = [30, 0, 0] is not reachable"),
+    ({"task.q_ini_deg": [100, 124, 98, 140, 146, 174, 57]}, "task.q_ini_deg is 9.97 deg from the nearest"),
+    ({"task.payload_kg": [1500, 1500]}, "task.payload_kg"),
+    ({"verification.dt_s": 0}, "verification.dt_s"),
+    ({"follow.space.payload_kg": 1234}, "follow.space.payload_kg = 1234 is not one of task.payload_kg"),
+    ({"follow.ground.joint_torque_nm": [14, 150]}, "follow.ground.joint_torque_nm has 2 values; give one or 6"),
+    ({"follow.ground.q_start_deg": [0, 0]}, "follow.ground.q_start_deg has 2 values"),
+    ({"follow.ground.speed": 1}, "unknown key"),
+    ({"follow.ground.line_m": [0, 3, 0]}, "follow.ground.line_m = [0, 3, 0] ends at"),
+])
+def test_bad_config_is_one_line_before_any_job(tmp_path, changes, expect):
+    res = _snakemake(tmp_path, _config(tmp_path, **changes), "-n")
+    assert res.returncode != 0
+    err = [line for line in (res.stdout + res.stderr).splitlines() if line.startswith("capmap:")]
+    assert len(err) == 1 and expect in err[0], res.stdout + res.stderr
+    assert "Traceback" not in res.stdout + res.stderr
+    assert not (tmp_path / "results").exists()
