@@ -1,4 +1,4 @@
-# capmap: capacity maps of a manipulator with a locked joint, and torque-limited following.
+# capmap: capacity maps of a manipulator with a locked joint, torque-limited following, boom reconfiguration.
 #   snakemake --cores 2 all                       (default config/config.yaml)
 #   snakemake --cores 2 all --configfile my.yaml  (a complete config: replaces the default)
 from snakemake.utils import min_version
@@ -16,6 +16,7 @@ if not workflow.overwrite_configfiles:
 include: "workflow/rules/common.smk"
 include: "workflow/rules/capacity.smk"
 include: "workflow/rules/following.smk"
+include: "workflow/rules/reconfig.smk"
 include: "workflow/rules/catalogue.smk"
 
 
@@ -28,5 +29,7 @@ rule all:
         "results/verify/summary.csv",
         expand("results/follow/{case}/{name}.png", case=FOLLOW_CASES, name=["progress", "torques"]),
         ["results/follow/summary.csv"] if FOLLOW_CASES else [],
+        [f"results/reconfig/{name}" for name in ("summary.csv", "manipulability.png", "joint_rates.png",
+                                                 "passive_joint.png", "animation.html")] if RECONFIG_METHODS else [],
         "results/catalogue.parquet",
     default_target: True

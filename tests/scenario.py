@@ -15,7 +15,7 @@ X_DES = np.array([2.6250, 1.8750, 4.8750])
 RPY_TASK_DEG = (90.0, 0.0, 90.0)
 
 
-def _rpy(roll, pitch, yaw):
+def rpy_matrix(roll, pitch, yaw):
     """R = Rz(yaw) Ry(pitch) Rx(roll), angles in rad (written out, not capmap's)."""
     cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
     return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
@@ -23,4 +23,4 @@ def _rpy(roll, pitch, yaw):
                      [-sp, cp * sr, cp * cr]])
 
 
-TASK_R = _rpy(*np.deg2rad(RPY_TASK_DEG))
+TASK_R = rpy_matrix(*np.deg2rad(RPY_TASK_DEG))

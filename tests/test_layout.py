@@ -17,10 +17,11 @@ ALLOWED = {
     "core": {"errors"},
     "capacity": {"core", "errors"},
     "following": {"core", "errors"},
+    "reconfig": {"core", "errors"},
     "io": {"errors"},
-    "config": {"core", "capacity", "following", "io", "errors"},
+    "config": {"core", "capacity", "following", "reconfig", "io", "errors"},
     "plots": set(),
-    "stages": {"core", "capacity", "following", "config", "io", "plots", "errors"},
+    "stages": {"core", "capacity", "following", "reconfig", "config", "io", "plots", "errors"},
 }
 
 

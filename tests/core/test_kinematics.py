@@ -49,3 +49,24 @@ def test_rotation_log_matches_pinocchio_including_near_pi():
 def test_pose_error_zero_at_target():
     T = np.eye(4)[None]
     assert np.allclose(pose_error(T, T), 0)
+
+
+def test_jacobian_derivatives_match_finite_differences(scenario_arm):
+    chain = scenario_arm.chain
+    q = np.random.default_rng(9).uniform(-np.pi, np.pi, (4, 6))
+    T, J, dJ = chain.jacobian_derivatives(q)
+    assert np.allclose(T, chain.fk(q)) and np.allclose(J, chain.jacobian(q)[1])
+    h = 1e-6
+    for i in range(6):
+        e = np.zeros(6)
+        e[i] = h
+        fd = (chain.jacobian(q + e)[1] - chain.jacobian(q - e)[1]) / (2 * h)
+        assert np.allclose(dJ[:, i], fd, atol=1e-8)
+
+
+def test_inverted_chain_takes_the_same_angles_reversed(scenario_arm):
+    chain = scenario_arm.chain
+    q = np.random.default_rng(10).uniform(-np.pi, np.pi, (6, 6))
+    assert np.allclose(chain.fk(q) @ chain.inverted().fk(q[:, ::-1]), np.eye(4), atol=1e-12)
+    both = chain.then(chain.inverted())  # there and back again
+    assert both.n == 12 and np.allclose(both.fk(np.concatenate([q, q[:, ::-1]], axis=1)), np.eye(4), atol=1e-12)

@@ -27,11 +27,6 @@ def rot_z(a):
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
-def rpy_matrix(roll, pitch, yaw):
-    """R = Rz(yaw) Ry(pitch) Rx(roll), angles in rad."""
-    return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
-
-
 def spec_table(path=SSRMS_YAML):
     """The DH rows and link data straight from the YAML, SI/radians (independent of capmap)."""
     doc = yaml.safe_load(Path(path).read_text())

@@ -25,6 +25,7 @@ def _config(tmp: Path, **changes) -> Path:
     doc = yaml.safe_load(TINY.read_text())
     doc["robot"] = str(ROOT / "config" / "robots" / "ssrms7.yaml")
     doc["follow"]["ground"]["robot"] = str(ROOT / "config" / "robots" / "ur5.yaml")
+    doc["reconfig"]["robot"] = str(ROOT / "config" / "robots" / "reconfig3.yaml")
     for dotted, value in changes.items():
         node = doc
         *head, last = dotted.split(".")
@@ -118,8 +119,8 @@ def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
     cat = pd.read_parquet(tmp / "results/catalogue.parquet")
     assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "voxels", "waypoints",
-                             "timeseries", "segments", "toppra"}  # two 'points', three 'timeseries'
-    assert len(cat) == 13
+                             "timeseries", "segments", "toppra", "nullspace", "pinv"}  # two 'points', three 'timeseries'
+    assert len(cat) == 15
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256
@@ -160,6 +161,14 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == 2
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.v_max_mps": 0.1}))
     assert set(jobs) == downstream_of_capacity
+    # the reconfiguration family: kappa0 is the null-space method's only; the frame rate the animation's
+    reconfig = {"reconfig", "reconfig_summary", "reconfig_plots", "reconfig_animation", "catalogue", "all"}
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"reconfig.kappa0": 0.0003}))
+    assert set(jobs) == reconfig and jobs["reconfig"] == 1
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"reconfig.animation_fps": 4}))
+    assert set(jobs) == {"reconfig_animation", "all"}
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"reconfig.law.d_m": 0.2}))
+    assert set(jobs) == reconfig and jobs["reconfig"] == 2
 
 
 def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
@@ -227,6 +236,28 @@ def test_follow_outputs(run_dir):
             assert (tmp / f"results/follow/{case}/{png}.png").stat().st_size > 10_000
 
 
+def test_reconfig_outputs(run_dir):
+    tmp, _ = run_dir
+    res = tmp / "results" / "reconfig"
+    runs = {m: pd.read_parquet(res / f"{m}.parquet") for m in ("nullspace", "pinv")}
+    for method, df in runs.items():
+        meta = df.attrs["capmap"]
+        assert meta["status"] == "completed" and meta["unlocked"] == "arm1.P1" and len(meta["moving_joints"]) == 10
+        for col in ("t_s", "q_arm2_j1_deg", "qd_arm1_j3_deg_s", "q_arm1_j1_deg", "passive_theta_deg", "passive_d_m",
+                    "manipulability", "dm_dt", "closure_pos_err_m", "closure_rot_err_rad"):
+            assert col in df.columns
+        assert df.closure_pos_err_m.max() < 1e-9 and df.closure_rot_err_rad.max() < 1e-9
+        assert df.passive_d_m.iloc[-1] == pytest.approx(0.3) and df.passive_theta_deg.iloc[-1] == pytest.approx(20)
+        assert (df.qd_arm1_j1_deg_s == 0).all()  # the short side keeps still
+    assert runs["nullspace"].dm_dt.min() >= -1e-9
+    summ = pd.read_csv(res / "summary.csv").set_index("method")
+    assert summ.loc["nullspace", "m_final"] > summ.loc["nullspace", "m_initial"] > summ.loc["pinv", "m_final"]
+    html = (res / "animation.html").read_text()
+    assert len(html) > 100_000 and "MeshCat" in html and "http://" not in html.split("<script>")[0]
+    for png in ("manipulability", "joint_rates", "passive_joint"):
+        assert (res / f"{png}.png").stat().st_size > 10_000
+
+
 def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     tmp, _ = run_dir
     work = tmp_path / "w"
@@ -258,6 +289,13 @@ def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     ({"follow.ground.q_start_deg": [0, 0]}, "follow.ground.q_start_deg has 2 values"),
     ({"follow.ground.speed": 1}, "unknown key"),
     ({"follow.ground.line_m": [0, 3, 0]}, "follow.ground.line_m = [0, 3, 0] ends at"),
+    ({"reconfig.unlock": "arm1.J3"}, "arm1.J3 is a revolute joint, not a passive one"),
+    ({"reconfig.unlock": "arm3.P1"}, "arm3.P1 is not on the closed chain through capture arm1_arm2"),
+    ({"reconfig.capture": "arm1_arm9"}, "reconfig.capture = 'arm1_arm9': reconfig3 has no capture 'arm1_arm9'"),
+    ({"reconfig.law.d_m": 2.0}, "reconfig.law takes arm1.P1's d to 2 m, outside its range [-0.5, 0.8] m"),
+    ({"reconfig.configuration_deg.arm2": [0, 0, 0, 0, 0]}, "reconfig.configuration_deg.arm2 has 5 values but arm2 has 6"),
+    ({"reconfig.configuration_deg.arm1": [0, 0, 0, 0, 0, 0]}, "reconfig.configuration_deg does not close capture"),
+    ({"reconfig.joint_rate_limit_deg_s": [1, 2]}, "reconfig.joint_rate_limit_deg_s has 2 values; give one or 10"),
 ])
 def test_bad_config_is_one_line_before_any_job(tmp_path, changes, expect):
     res = _snakemake(tmp_path, _config(tmp_path, **changes), "-n")

@@ -7,6 +7,7 @@ DATASETS = [
     *expand("results/plan/payload_{payload}kg/waypoints.parquet", payload=PAYLOADS),
     *expand("results/verify/payload_{payload}kg/{name}.parquet", payload=PAYLOADS, name=["timeseries", "segments"]),
     *expand("results/follow/{case}/{name}.parquet", case=FOLLOW_CASES, name=["timeseries", "toppra"]),
+    *expand("results/reconfig/{method}.parquet", method=RECONFIG_METHODS),
 ]
 
 

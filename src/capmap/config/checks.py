@@ -9,6 +9,7 @@ import numpy as np
 
 from capmap.config.capacity import TaskConfig, per_item
 from capmap.config.following import FollowConfig
+from capmap.config.reconfig import rate_limits, reconfig_problem
 from capmap.config.robot_file import load
 from capmap.config.run import RunConfig, parse_config
 from capmap.core import ik
@@ -44,6 +45,8 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     check_task_poses(arm, cfg.task, source)
     if cfg.follow is not None:
         check_follow(cfg.follow, cfg, source)
+    if cfg.reconfig is not None:
+        rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
     return cfg
 
 

@@ -18,7 +18,7 @@ from capmap.config.validation import load_yaml, validate
 from capmap.core.robot import LinkInertia, Robot, RobotDescription, build_robot
 from capmap.errors import ConfigError
 
-__all__ = ["parse_robot", "load_robot", "load", "package_file"]
+__all__ = ["parse_robot", "load_robot", "load", "package_file", "transform"]
 
 
 def _inertia_matrix(values: list[float], where: str) -> np.ndarray:
@@ -40,7 +40,7 @@ def _inertia_matrix(values: list[float], where: str) -> np.ndarray:
     return inertia
 
 
-def _transform(xyz, rpy_deg) -> np.ndarray:
+def transform(xyz, rpy_deg) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3] = pin.rpy.rpyToMatrix(*np.deg2rad(rpy_deg))
     T[:3, 3] = xyz
@@ -66,14 +66,19 @@ def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> Robot
     if not isinstance(doc, dict):
         raise ConfigError(f"{source}: a robot file must be a mapping of keys, got {type(doc).__name__}")
     validate(doc, "robot", source)
+    if "arms" in doc:
+        raise ConfigError(f"{source}: describes a platform of arms ('arms'); this needs a single arm given by "
+                          "'dh' or 'urdf'")
+    if "captures" in doc:
+        raise ConfigError(f"{source}: 'captures' belong to a platform of arms ('arms')")
     has_dh, has_urdf = "dh" in doc, "urdf" in doc
     if has_dh == has_urdf:
-        raise ConfigError(f"{source}: give exactly one of 'dh' (with 'links') or 'urdf'")
+        raise ConfigError(f"{source}: give exactly one of 'dh' (with 'links') or 'urdf' (or 'arms' for a platform)")
     tool = doc.get("tool", {})
     common = dict(
         name=doc["name"],
         source=source,
-        tool=_transform(tool.get("xyz_m", [0, 0, 0]), tool.get("rpy_deg", [0, 0, 0])),
+        tool=transform(tool.get("xyz_m", [0, 0, 0]), tool.get("rpy_deg", [0, 0, 0])),
         base_com_m=np.asarray(doc.get("base_com_m", [0, 0, 0]), dtype=float),
         gravity_mps2=np.asarray(doc.get("gravity_mps2", [0, 0, 0]), dtype=float),
     )

@@ -14,6 +14,7 @@ from capmap.config.capacity import (
     VerificationConfig,
 )
 from capmap.config.following import FollowConfig
+from capmap.config.reconfig import ReconfigConfig
 from capmap.config.slices import payload_label
 from capmap.config.validation import load_yaml, validate
 from capmap.errors import ConfigError
@@ -23,7 +24,7 @@ __all__ = ["RunConfig", "parse_config", "load_config"]
 
 @dataclass(frozen=True)
 class RunConfig:
-    """A whole run: the robot file and every section (``follow`` is None when absent)."""
+    """A whole run: the robot file and every section (``follow``, ``reconfig``: None when absent)."""
 
     robot: str
     lock: LockConfig
@@ -35,6 +36,7 @@ class RunConfig:
     shards: int
     verification: VerificationConfig
     follow: FollowConfig | None = None
+    reconfig: ReconfigConfig | None = None
 
 
 def parse_config(doc: object, source: str = "config") -> RunConfig:
@@ -61,6 +63,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         shards=int(doc["shards"]),
         verification=VerificationConfig.from_doc(doc.get("verification")),
         follow=FollowConfig.from_doc(doc["follow"]) if "follow" in doc else None,
+        reconfig=ReconfigConfig.from_doc(doc["reconfig"]) if "reconfig" in doc else None,
     )
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 from capmap.config.capacity import DEFAULT_DT_S
 from capmap.io.datasets import canonical, config_hash
 
-__all__ = ["canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "STAGES"]
+__all__ = ["canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "STAGES"]
 
 STAGES = ("model", "sample", "capacity", "voxels", "plan", "verify")  # the capacity family, in order
 
@@ -68,3 +68,15 @@ def follow_slices(doc: dict) -> dict[str, dict]:
     if "ground" in fol:
         out["ground"] = {"follow": {"period_s": fol["period_s"], "ground": fol["ground"]}}
     return out
+
+
+def reconfig_slices(doc: dict) -> dict[str, dict]:
+    """Config slice of each reconfiguration job: ``nullspace`` and ``pinv`` (which does not use
+    kappa0) plan; ``animation`` also depends on its frame rate. Empty without a reconfig section."""
+    rc = doc.get("reconfig")
+    if rc is None:
+        return {}
+    plan = {k: v for k, v in rc.items() if k != "animation_fps"}
+    return {"nullspace": {"reconfig": plan},
+            "pinv": {"reconfig": {k: v for k, v in plan.items() if k != "kappa0"}},
+            "animation": {"reconfig": rc}}

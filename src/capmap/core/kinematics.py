@@ -19,10 +19,10 @@ import pinocchio as pin
 
 from capmap.errors import CapmapError
 
-__all__ = ["Chain", "inverse_transform", "rotation_log", "pose_error"]
+__all__ = ["Chain", "inverse_transform", "rotation_log", "pose_error", "align_z", "FLIP_Z"]
 
 
-def _align_z(axis: np.ndarray) -> np.ndarray:
+def align_z(axis: np.ndarray) -> np.ndarray:
     """A rotation R with R e_z = axis (unit)."""
     z = axis / np.linalg.norm(axis)
     helper = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
@@ -60,6 +60,9 @@ def _joint_axis(jmodel) -> np.ndarray:
     raise CapmapError(f"joint type {name} is not a 1-DOF revolute joint; closed-chain IK needs revolute joints")
 
 
+FLIP_Z = np.diag([1.0, -1.0, -1.0, 1.0])  # Rx(pi): turns a joint's z axis over (its own inverse)
+
+
 @dataclass(frozen=True)
 class Chain:
     """Serial revolute chain ``T = X[0] Rz(q1) X[1] ... Rz(qn) X[n]``; X: (n+1, 4, 4)."""
@@ -82,7 +85,7 @@ class Chain:
         X = []
         prev_align = np.eye(3)
         for j in range(1, model.njoints):
-            align = _align_z(_joint_axis(model.joints[j]))
+            align = align_z(_joint_axis(model.joints[j]))
             M = model.jointPlacements[j].homogeneous
             X.append(_homogeneous(prev_align.T) @ M @ _homogeneous(align))
             prev_align = align
@@ -92,6 +95,25 @@ class Chain:
     def reversed(self) -> "Chain":
         """Chain of the inverse transform: T(theta)^-1 = chain'(-theta[::-1])."""
         return Chain(inverse_transform(self.X[::-1]))
+
+    def inverted(self) -> "Chain":
+        """Chain of the inverse transform in the same joint angles, joints in reverse order:
+        T(theta)^-1 = inverted().fk(theta[::-1]). (Rz(-q) = F Rz(q) F^-1 with F = Rx(pi), so
+        each joint of :meth:`reversed` is turned over to take +q.)"""
+        X = inverse_transform(self.X[::-1]).copy()
+        X[:-1] = X[:-1] @ FLIP_Z
+        X[1:] = FLIP_Z @ X[1:]  # F^-1 = F
+        return Chain(X)
+
+    def then(self, other: "Chain") -> "Chain":
+        """The chain ``self`` followed by ``other`` (other's base at self's tip); joints concatenated."""
+        X = np.concatenate([self.X[:-1], (self.X[-1] @ other.X[0])[None], other.X[1:]])
+        return Chain(X)
+
+    @classmethod
+    def fixed(cls, T: np.ndarray) -> "Chain":
+        """A chain with no joint: the fixed transform T (4, 4)."""
+        return cls(np.asarray(T, dtype=float)[None].copy())
 
     def _frames(self, theta: np.ndarray):
         """Yield the frame before each joint's rotation (..., 4, 4), then the tip pose."""
@@ -121,6 +143,37 @@ class Chain:
         o = np.stack([F[..., :3, 3] for F in joints], axis=-1)  # points on them
         Jv = np.cross(z, T[..., :3, 3][..., None] - o, axis=-2)
         return T, np.concatenate([Jv, z], axis=-2)
+
+    def jacobian_derivatives(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The geometric Jacobian and its derivatives by every joint angle.
+
+        Returns (pose (N, 4, 4), J (N, 6, n), dJ (N, n, 6, n)) with dJ[:, i] = dJ / dtheta_i. For
+        the world-aligned Jacobian at the tip p (column j = [z_j x (p - o_j); z_j]) a turn of
+        joint i rotates everything outboard of it about z_i, so with r_j = p - o_j
+
+            i <= j:  d[z_j x r_j] = (z_i x z_j) x r_j + z_j x (z_i x r_j),   d z_j = z_i x z_j
+            i >  j:  d[z_j x r_j] = z_j x (z_i x r_i),                         d z_j = 0.
+        """
+        *joints, T = self._frames(np.atleast_2d(theta))
+        z = np.stack([F[..., :3, 2] for F in joints], axis=-1)  # (N, 3, n)
+        r = T[..., :3, 3][..., None] - np.stack([F[..., :3, 3] for F in joints], axis=-1)  # (N, 3, n)
+        Jv = _cross1(z, r)
+        zi, zj = z[..., :, None], z[..., None, :]  # (N, 3, n_i, 1), (N, 3, 1, n_j)
+        zz = _cross1(zi, zj)  # z_i x z_j, (N, 3, n, n)
+        after = _cross1(zz, r[..., None, :]) + _cross1(zj, _cross1(zi, r[..., None, :]))
+        before = _cross1(zj, Jv[..., :, None])  # z_j x (z_i x r_i)
+        upper = np.triu(np.ones((z.shape[-1],) * 2, dtype=bool))  # [i, j]: i <= j
+        dJv = np.where(upper, after, before)
+        dJw = np.where(upper, zz, 0.0)
+        dJ = np.moveaxis(np.concatenate([dJv, dJw], axis=1), 2, 1)  # (N, n_i, 6, n_j)
+        return T, np.concatenate([Jv, z], axis=-2), dJ
+
+
+def _cross1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b with the vectors on axis 1 of (N, 3, ...) arrays (broadcast); faster than np.cross(axis=1)."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
 
 
 def rotation_log(R: np.ndarray) -> np.ndarray:

@@ -1,0 +1,130 @@
+"""Stages of the reconfigurable robot: reconfig (one job per method: nullspace, pinv) ->
+reconfig_summary, reconfig_plots, reconfig_animation."""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from capmap.config.reconfig import ReconfigConfig, rate_limits, reconfig_problem
+from capmap.io import datasets
+from capmap.io.logs import stage_logger
+from capmap.io.tables import write_table
+from capmap.plots.reconfig import animation, joint_rates, manipulability, passive_joint
+from capmap.reconfig.multiarm import link_segments, platform_model
+from capmap.reconfig.planner import reconfigure
+from capmap.reconfig.problem import closure_errors, summarise
+from capmap.stages.common import parse_slice
+
+__all__ = ["column", "stage_reconfig", "stage_reconfig_summary", "stage_reconfig_plots", "stage_reconfig_animation"]
+
+
+def column(joint: str) -> str:
+    """Column stem of a qualified joint name: 'arm2.J1' -> 'arm2_j1'."""
+    return joint.replace(".", "_").lower()
+
+
+def stage_reconfig(method: str, out: str, out_timing: str, slice_json: str) -> None:
+    """Plan the reconfiguration with one method; a table row per step (the whole loop's joints)."""
+    deps = parse_slice(slice_json)
+    cfg = ReconfigConfig.from_doc(deps["reconfig"])
+    log = stage_logger(__name__, f"reconfig {method}")
+    problem = reconfig_problem(cfg)
+    split = problem.split
+    settings = problem.settings(method, cfg.dt_s, cfg.kappa0, rate_limits(cfg, problem), cfg.min_time_scale)
+    log.info(f"{split.unlocked} unlocked in the loop of capture {split.capture}: moving side {split.moving.dof} "
+             f"joints ({', '.join(split.moving.joints)}), fixed side {split.fixed.dof}; capture closed by IK with a "
+             f"change of {np.rad2deg(np.abs(problem.correction_rad).max()):.2e} deg")
+    t0 = time.perf_counter()
+    run = reconfigure(split, problem.fixed_end, problem.q0, problem.law, settings)
+    wall = time.perf_counter() - t0
+    closure = closure_errors(problem, platform_model(problem.description), run)
+    df = pd.DataFrame({"method": method, "t_s": run.t_s, "law_phase": run.u, "time_scale": run.time_scale})
+    for c, j in enumerate(split.moving.joints):
+        df[f"q_{column(j)}_deg"] = np.rad2deg(run.q[:, c])
+    for j, v in zip(split.fixed.joints, split.fixed.values(problem.state)):
+        df[f"q_{column(j)}_deg"] = np.rad2deg(v)
+    for c, j in enumerate(split.moving.joints):
+        df[f"qd_{column(j)}_deg_s"] = np.rad2deg(run.qd[:, c])
+    for j in split.fixed.joints:
+        df[f"qd_{column(j)}_deg_s"] = 0.0
+    df["passive_theta_deg"] = np.rad2deg(run.theta)
+    df["passive_d_m"] = run.d
+    df["manipulability"] = run.m
+    df["dm_dt"] = run.dm_dt
+    df["min_singular_value"] = run.min_singular_value
+    df["kappa"] = run.kappa
+    df["closure_pos_err_m"] = np.linalg.norm(closure[:, :3], axis=1)
+    df["closure_rot_err_rad"] = np.linalg.norm(closure[:, 3:], axis=1)
+    df["task_pos_err_m"] = np.linalg.norm(run.task_error[:, :3], axis=1)
+    df["task_rot_err_rad"] = np.linalg.norm(run.task_error[:, 3:], axis=1)
+    summary = summarise(run, closure, settings, split.moving.joints)
+    prov = datasets.provenance(
+        "reconfig", deps, method=method, status=run.status, message=run.message, unlocked=split.unlocked,
+        capture=split.capture, moving_joints=list(split.moving.joints), fixed_joints=list(split.fixed.joints),
+        rate_limits_deg_s={f"qd_{column(j)}_deg_s": float(np.rad2deg(v)) for j, v in
+                           zip(split.moving.joints, settings.rate_limit)},
+        ranges_deg={f"q_{column(j)}_deg": np.rad2deg([lo, hi]).tolist() for j, lo, hi in
+                    zip(split.moving.joints, settings.q_lower, settings.q_upper)},
+        passive_ranges={"theta_deg": np.rad2deg(problem.description.joint(split.unlocked).range_rad).tolist(),
+                        "d_m": problem.description.joint(split.unlocked).range_m.tolist()},
+        capture_correction_deg=float(np.rad2deg(np.abs(problem.correction_rad).max())), summary=asdict(summary))
+    datasets.write(df, out, prov)
+    Path(out_timing).write_text(json.dumps({"method": method, "steps": run.steps, "wall_s": wall,
+                                            "per_step_ms": 1e3 * wall / max(run.steps, 1)}) + "\n")
+    log.info(f"{run.status}{': ' + run.message if run.message else ''}; {run.steps} steps in {wall:.2f} s "
+             f"({1e3 * wall / max(run.steps, 1):.2f} ms/step); m {summary.m_initial:.1f} -> min {summary.m_min:.1f} "
+             f"-> {summary.m_final:.1f}; dm/dt < 0 in {summary.steps_dm_dt_negative} steps; closure "
+             f"{summary.max_closure_pos_err_m:.1e} m, {summary.max_closure_rot_err_rad:.1e} rad; peak rate "
+             f"{summary.max_joint_rate_deg_s:.3f} deg/s ({summary.max_rate_pct_of_limit:.0f}% of its limit)")
+
+
+def stage_reconfig_summary(tables: list[str], timings: list[str], out_csv: str, out_md: str) -> None:
+    """One row per method: the run's summary and its wall time per step."""
+    rows = []
+    for table, timing in zip(tables, timings):
+        meta = datasets.read(table).attrs["capmap"]
+        t = json.loads(Path(timing).read_text())
+        rows.append({"method": meta["method"], "unlocked": meta["unlocked"], **meta["summary"],
+                     "message": meta["message"], "per_step_ms": t["per_step_ms"]})
+    write_table(pd.DataFrame(rows), out_csv, out_md)
+    stage_logger(__name__, "reconfig summary").info(f"{len(rows)} methods -> {out_csv}")
+
+
+def stage_reconfig_plots(tables: list[str], out_manipulability: str, out_rates: str, out_passive: str) -> None:
+    """m(t), the smallest singular value and dm/dt of both methods; joint rates; the passive joint."""
+    runs = {df.attrs["capmap"]["method"]: df for df in map(datasets.read, tables)}
+    manipulability(runs, out_manipulability)
+    joint_rates(runs, out_rates)
+    passive_joint(runs, out_passive)
+    stage_logger(__name__, "reconfig plots").info(f"-> {out_manipulability}, {out_rates}, {out_passive}")
+
+
+def stage_reconfig_animation(tables: list[str], out_html: str, slice_json: str) -> None:
+    """MeshCat static HTML: the robot during the null-space reconfiguration (the pseudo-inverse's
+    motion as a translucent ghost), sampled at ``reconfig.animation_fps`` frames per second."""
+    deps = parse_slice(slice_json)
+    cfg = ReconfigConfig.from_doc(deps["reconfig"])
+    problem = reconfig_problem(cfg)
+    model = platform_model(problem.description)
+    segments = link_segments(problem.description)
+    links = tuple(sorted({s[0] for s in segments}))
+    frames = {}
+    for df in map(datasets.read, tables):
+        meta = df.attrs["capmap"]
+        t = np.arange(0.0, df.t_s.iloc[-1] + 1e-9, 1.0 / cfg.animation_fps)
+        rows = np.clip(np.searchsorted(df.t_s.to_numpy(), t), 0, len(df) - 1)
+        sub = df.iloc[rows]
+        names = problem.split.moving.joints
+        states = [problem.state.with_values(names, np.deg2rad([r[f"q_{column(j)}_deg"] for j in names]))
+                  .with_passive(problem.split.unlocked, np.deg2rad(r.passive_theta_deg), r.passive_d_m)
+                  for _, r in sub.iterrows()]
+        frames[meta["method"]] = np.array([model.placements(s, links) for s in states])
+    animation(links, segments, frames, cfg.animation_fps, problem.split.unlocked,
+              f"{problem.description.name}: {problem.split.unlocked} unlocked", out_html)
+    stage_logger(__name__, "reconfig animation").info(f"{len(next(iter(frames.values())))} frames -> {out_html}")

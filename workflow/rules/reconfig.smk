@@ -1,0 +1,67 @@
+# Method family 3: reconfigurable robot, one boom reconfigured in a closed chain (one job per method).
+RECONFIG_SLICES = reconfig_slices(config)
+RECONFIG_METHODS = ["nullspace", "pinv"] if RECONFIG_SLICES else []
+
+
+rule reconfig:
+    """Plan the boom reconfiguration: null-space singularity avoidance or the plain pseudo-inverse."""
+    input:
+        robot=lambda w: config["reconfig"]["robot"],
+    output:
+        table="results/reconfig/{method}.parquet",
+        timing="results/reconfig/{method}_timing.json",
+    params:
+        slice=lambda w: canonical(RECONFIG_SLICES[w.method]),
+    log:
+        "results/logs/reconfig/{method}.log",
+    wildcard_constraints:
+        method="nullspace|pinv",
+    script:
+        "../scripts/reconfig.py"
+
+
+rule reconfig_summary:
+    """Both methods side by side: m, closure, rates, range margins, time per step."""
+    input:
+        tables=expand("results/reconfig/{method}.parquet", method=RECONFIG_METHODS),
+        timings=expand("results/reconfig/{method}_timing.json", method=RECONFIG_METHODS),
+    output:
+        csv=report("results/reconfig/summary.csv", category="Reconfiguration", caption="../report/reconfig_summary.rst"),
+        md="results/reconfig/summary.md",
+    log:
+        "results/logs/reconfig/summary.log",
+    script:
+        "../scripts/reconfig_summary.py"
+
+
+rule reconfig_plots:
+    """m(t), joint rates and the passive joint's motion for both methods."""
+    input:
+        expand("results/reconfig/{method}.parquet", method=RECONFIG_METHODS),
+    output:
+        manipulability=report("results/reconfig/manipulability.png", category="Reconfiguration",
+                              caption="../report/reconfig_manipulability.rst"),
+        rates=report("results/reconfig/joint_rates.png", category="Reconfiguration",
+                     caption="../report/reconfig_rates.rst"),
+        passive=report("results/reconfig/passive_joint.png", category="Reconfiguration",
+                       caption="../report/reconfig_passive.rst"),
+    log:
+        "results/logs/reconfig/plots.log",
+    script:
+        "../scripts/reconfig_plots.py"
+
+
+rule reconfig_animation:
+    """Offline 3D animation (MeshCat static HTML) of the reconfiguration."""
+    input:
+        robot=lambda w: config["reconfig"]["robot"],
+        tables=expand("results/reconfig/{method}.parquet", method=RECONFIG_METHODS),
+    output:
+        report("results/reconfig/animation.html", category="Reconfiguration",
+               caption="../report/reconfig_animation.rst"),
+    params:
+        slice=lambda w: canonical(RECONFIG_SLICES["animation"]),
+    log:
+        "results/logs/reconfig/animation.log",
+    script:
+        "../scripts/reconfig_animation.py"
