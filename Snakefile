@@ -1,4 +1,5 @@
-# capmap: capacity maps of a manipulator with a locked joint, torque-limited following, boom reconfiguration.
+# capmap: capacity maps of a manipulator with a locked joint, torque-limited following, boom reconfiguration,
+# dual-arm assembly in a confined space.
 #   snakemake --cores 2 all                       (default config/config.yaml)
 #   snakemake --cores 2 all --configfile my.yaml  (a complete config: replaces the default)
 from snakemake.utils import min_version
@@ -17,6 +18,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/capacity.smk"
 include: "workflow/rules/following.smk"
 include: "workflow/rules/reconfig.smk"
+include: "workflow/rules/dualarm.smk"
 include: "workflow/rules/catalogue.smk"
 
 
@@ -31,5 +33,8 @@ rule all:
         ["results/follow/summary.csv"] if FOLLOW_CASES else [],
         [f"results/reconfig/{name}" for name in ("summary.csv", "manipulability.png", "joint_rates.png",
                                                  "passive_joint.png", "animation.html")] if RECONFIG_METHODS else [],
+        [f"results/dualarm/{name}" for name in ("summary.csv", "csqp_check.csv", "constraint_errors.png", "distances.png",
+                                                "joints.png", "velocities.png", "convergence.png", "animation.html")]
+        if DUALARM else [],
         "results/catalogue.parquet",
     default_target: True

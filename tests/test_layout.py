@@ -18,10 +18,11 @@ ALLOWED = {
     "capacity": {"core", "errors"},
     "following": {"core", "errors"},
     "reconfig": {"core", "errors"},
+    "dualarm": {"core", "errors"},
     "io": {"errors"},
-    "config": {"core", "capacity", "following", "reconfig", "io", "errors"},
+    "config": {"core", "capacity", "following", "reconfig", "dualarm", "io", "errors"},
     "plots": set(),
-    "stages": {"core", "capacity", "following", "reconfig", "config", "io", "plots", "errors"},
+    "stages": {"core", "capacity", "following", "reconfig", "dualarm", "config", "io", "plots", "errors"},
 }
 
 

@@ -8,6 +8,8 @@ DATASETS = [
     *expand("results/verify/payload_{payload}kg/{name}.parquet", payload=PAYLOADS, name=["timeseries", "segments"]),
     *expand("results/follow/{case}/{name}.parquet", case=FOLLOW_CASES, name=["timeseries", "toppra"]),
     *expand("results/reconfig/{method}.parquet", method=RECONFIG_METHODS),
+    *([f"results/dualarm/{name}.parquet" for name in ("cloud", "environment", "robot_capsules", "trajectory", "fine",
+                                                       "outer")] if DUALARM else []),
 ]
 
 

@@ -1,7 +1,8 @@
 # Validation and config slices: run once, before any job (snakemake-workflows' common.smk).
 import sys
 
-from capmap.config import canonical, check_run_config, follow_slices, payload_label, reconfig_slices, stage_slices
+from capmap.config import (canonical, check_run_config, dualarm_slices, follow_slices, payload_label, reconfig_slices,
+                           stage_slices)
 from capmap.errors import CapmapError
 
 # validate once, before any job: schema, robot file, locked joint, limits, task poses, follow cases

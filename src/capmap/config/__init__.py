@@ -5,6 +5,8 @@
 - :mod:`~capmap.config.capacity`    sections of the capacity-map family (lock, task, limits, ...)
 - :mod:`~capmap.config.following`   the ``follow`` section
 - :mod:`~capmap.config.reconfig`    the ``reconfig`` section
+- :mod:`~capmap.config.dualarm`     the ``dualarm`` section and dual-arm robot files
+- :mod:`~capmap.config.scene_file`  scene files of the dual-arm family
 - :mod:`~capmap.config.platform_file` platform robot files (arms of revolute and passive joints)
 - :mod:`~capmap.config.run`         the whole run configuration
 - :mod:`~capmap.config.slices`      what each stage depends on (rule params, provenance)
@@ -13,7 +15,15 @@
 
 from capmap.config.checks import check_run_config
 from capmap.config.run import RunConfig, load_config, parse_config
-from capmap.config.slices import canonical, config_hash, follow_slices, payload_label, reconfig_slices, stage_slices
+from capmap.config.slices import (
+    canonical,
+    config_hash,
+    dualarm_slices,
+    follow_slices,
+    payload_label,
+    reconfig_slices,
+    stage_slices,
+)
 
 __all__ = ["RunConfig", "parse_config", "load_config", "check_run_config", "canonical", "config_hash",
-           "payload_label", "stage_slices", "follow_slices", "reconfig_slices"]
+           "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices"]

@@ -8,9 +8,11 @@ from __future__ import annotations
 import numpy as np
 
 from capmap.config.capacity import TaskConfig, per_item
+from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.following import FollowConfig
 from capmap.config.reconfig import rate_limits, reconfig_problem
 from capmap.config.robot_file import load
+from capmap.config.scene_file import load_scene
 from capmap.config.run import RunConfig, parse_config
 from capmap.core import ik
 from capmap.core.reduction import LockedArm, free, lock
@@ -47,6 +49,9 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
         check_follow(cfg.follow, cfg, source)
     if cfg.reconfig is not None:
         rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
+    if cfg.dualarm is not None:
+        load_dual_arm_file(cfg.dualarm.robot)
+        load_scene(cfg.dualarm.scene)
     return cfg
 
 

@@ -13,6 +13,7 @@ from capmap.config.capacity import (
     TaskConfig,
     VerificationConfig,
 )
+from capmap.config.dualarm import DualArmConfig
 from capmap.config.following import FollowConfig
 from capmap.config.reconfig import ReconfigConfig
 from capmap.config.slices import payload_label
@@ -24,7 +25,7 @@ __all__ = ["RunConfig", "parse_config", "load_config"]
 
 @dataclass(frozen=True)
 class RunConfig:
-    """A whole run: the robot file and every section (``follow``, ``reconfig``: None when absent)."""
+    """A whole run: the robot file and every section (``follow``, ``reconfig``, ``dualarm``: None when absent)."""
 
     robot: str
     lock: LockConfig
@@ -37,6 +38,7 @@ class RunConfig:
     verification: VerificationConfig
     follow: FollowConfig | None = None
     reconfig: ReconfigConfig | None = None
+    dualarm: DualArmConfig | None = None
 
 
 def parse_config(doc: object, source: str = "config") -> RunConfig:
@@ -46,6 +48,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
     validate(doc, "config", source)
     try:
         directions = DirectionsConfig.from_doc(doc["directions"])
+        dualarm = DualArmConfig.from_doc(doc["dualarm"]) if "dualarm" in doc else None
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
     task = TaskConfig.from_doc(doc["task"])
@@ -64,6 +67,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         verification=VerificationConfig.from_doc(doc.get("verification")),
         follow=FollowConfig.from_doc(doc["follow"]) if "follow" in doc else None,
         reconfig=ReconfigConfig.from_doc(doc["reconfig"]) if "reconfig" in doc else None,
+        dualarm=dualarm,
     )
 
 

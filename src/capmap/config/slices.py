@@ -9,7 +9,7 @@ from __future__ import annotations
 from capmap.config.capacity import DEFAULT_DT_S
 from capmap.io.datasets import canonical, config_hash
 
-__all__ = ["canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "STAGES"]
+__all__ = ["canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices", "STAGES"]
 
 STAGES = ("model", "sample", "capacity", "voxels", "plan", "verify")  # the capacity family, in order
 
@@ -80,3 +80,22 @@ def reconfig_slices(doc: dict) -> dict[str, dict]:
     return {"nullspace": {"reconfig": plan},
             "pinv": {"reconfig": {k: v for k, v in plan.items() if k != "kappa0"}},
             "animation": {"reconfig": rc}}
+
+
+def dualarm_slices(doc: dict) -> dict[str, dict]:
+    """Config slice of each dual-arm rule: the scan, the envelope (scan + fitting), the capsules
+    (robot), the optimisation (envelope + capsules + horizon, weights, margin, solver, finer
+    grid), the CSQP check (its own horizon), the animation (+ its frame rate). A cost weight
+    changes the optimisation and the check, never the scan, envelope or capsules."""
+    da = doc.get("dualarm")
+    if da is None:
+        return {}
+    scan = {"scene": da["scene"], "cloud": da["cloud"]}
+    envelope = {**scan, "fit": da.get("fit", {})}
+    capsules = {"robot": da["robot"]}
+    problem = {**envelope, **capsules, **{k: da[k] for k in ("weights", "margin_m", "solver")}}
+    motion = {**problem, "horizon": da["horizon"], "fine_factor": da.get("fine_factor", 5)}
+    check = {**problem, "check": da["check"]}  # the check has its own horizon
+    return {"scan": {"dualarm": scan}, "envelope": {"dualarm": envelope}, "capsules": {"dualarm": capsules},
+            "optimise": {"dualarm": motion}, "check": {"dualarm": check},
+            "animation": {"dualarm": {**motion, "animation_fps": da.get("animation_fps", 25)}}}

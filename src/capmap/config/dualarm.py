@@ -1,0 +1,165 @@
+"""Config section of the dual-arm family (``dualarm``) and its robot file format.
+
+A dual-arm robot file names a URDF (a path relative to the file, or a file shipped by a pip
+package), the two arms' joints and gripper frames, the joints to lock and their values, and
+the capsule groups (URDF collision objects each capsule covers) with the self-collision
+rules ``self_gap``, ``body_skip`` and ``hold`` (see :mod:`capmap.dualarm.assembly`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from capmap.config.robot_file import package_file
+from capmap.config.validation import load_yaml
+from capmap.dualarm.cloud import FitSettings
+from capmap.dualarm.robot import CapsuleGroup, DualArmDescription
+from capmap.dualarm.scene import ScanSettings
+from capmap.dualarm.settings import ALSettings, Weights
+from capmap.errors import ConfigError
+
+__all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "check_horizon",
+           "weights", "DEFAULT_FINE_FACTOR", "DEFAULT_ANIMATION_FPS"]
+
+DEFAULT_FINE_FACTOR = 5
+DEFAULT_ANIMATION_FPS = 25.0
+_ROBOT_KEYS = {"name", "description", "urdf", "arms", "locked", "capsules", "self_gap", "body_skip", "hold"}
+
+
+@dataclass(frozen=True)
+class Horizon:
+    """nodes N (N + 1 states), step dt_s, the node of the pre-insertion pose."""
+
+    nodes: int
+    dt_s: float
+    pre_insertion_node: int
+
+
+@dataclass(frozen=True)
+class DualArmConfig:
+    """``dualarm``: robot and scene files, the cloud (a file, or a synthetic scan), fitting
+    overrides, the horizon, cost weights, the safety margin, solver settings, the CSQP check's
+    horizon, the re-check's refinement and the animation's frame rate."""
+
+    robot: str
+    scene: str
+    cloud_file: str | None
+    scan: ScanSettings | None
+    scan_seed: int
+    fit: FitSettings
+    fit_seed: int
+    horizon: Horizon
+    weights: Weights
+    solver: ALSettings
+    check: Horizon
+    check_iterations: int
+    fine_factor: int = DEFAULT_FINE_FACTOR
+    animation_fps: float = DEFAULT_ANIMATION_FPS
+
+    @classmethod
+    def from_doc(cls, d: dict) -> "DualArmConfig":
+        """The whole section (every key a job might read; see the piece builders below)."""
+        cloud_file, scan, scan_seed = cloud_source(d)
+        fit, fit_seed = fit_settings(d)
+        check, iterations = check_horizon(d)
+        return cls(robot=d["robot"], scene=d["scene"], cloud_file=cloud_file, scan=scan, scan_seed=scan_seed, fit=fit,
+                   fit_seed=fit_seed, horizon=horizon(d), weights=weights(d), solver=ALSettings(**d["solver"]),
+                   check=check, check_iterations=iterations, fine_factor=int(d.get("fine_factor", DEFAULT_FINE_FACTOR)),
+                   animation_fps=float(d.get("animation_fps", DEFAULT_ANIMATION_FPS)))
+
+
+# --------------------------------------------------------------------------- pieces (a job reads only its own)
+
+
+def cloud_source(d: dict) -> tuple[str | None, ScanSettings | None, int]:
+    """``dualarm.cloud``: (the user's file, None, 0) or (None, the scan's settings, its seed)."""
+    cloud = d["cloud"]
+    if "file" in cloud:
+        if len(cloud) > 1:
+            raise ConfigError(f"dualarm.cloud: give either file or a synthetic scan (viewpoints_m, spacing_m, noise_m, "
+                              f"seed), not both (found {sorted(cloud)})")
+        return cloud["file"], None, 0
+    missing = [k for k in ("viewpoints_m", "spacing_m", "noise_m", "seed") if k not in cloud]
+    if missing:
+        raise ConfigError(f"dualarm.cloud.{missing[0]} is required for a synthetic scan (or give dualarm.cloud.file)")
+    scan = ScanSettings(np.asarray(cloud["viewpoints_m"], float), float(cloud["spacing_m"]), float(cloud["noise_m"]))
+    return None, scan, int(cloud["seed"])
+
+
+def fit_settings(d: dict) -> tuple[FitSettings, int]:
+    """``dualarm.fit`` over the defaults, and its RANSAC seed."""
+    fit = dict(d.get("fit", {}))
+    seed = int(fit.pop("seed", 0))
+    return FitSettings(**fit), seed
+
+
+def _horizon(key: str, h: dict) -> Horizon:
+    out = Horizon(int(h["nodes"]), float(h["dt_s"]), int(h["pre_insertion_node"]))
+    if not 0 < out.pre_insertion_node < out.nodes:
+        raise ConfigError(f"dualarm.{key}.pre_insertion_node = {out.pre_insertion_node} must lie between 0 and "
+                          f"dualarm.{key}.nodes = {out.nodes}")
+    return out
+
+
+def horizon(d: dict) -> Horizon:
+    """``dualarm.horizon``."""
+    return _horizon("horizon", d["horizon"])
+
+
+def check_horizon(d: dict) -> tuple[Horizon, int]:
+    """``dualarm.check``: its horizon and the CSQP iteration limit."""
+    c = dict(d["check"])
+    iterations = int(c.pop("max_iterations", 100))
+    return _horizon("check", c), iterations
+
+
+def weights(d: dict) -> Weights:
+    """``dualarm.weights`` and ``dualarm.margin_m``."""
+    w = d["weights"]
+    control = np.broadcast_to(np.asarray(w["control"], float), (14,)).copy()
+    return Weights(control, float(w["velocity"]), float(w["panel"]), float(d["margin_m"]))
+
+
+def load_dual_arm_file(path: str | Path) -> DualArmDescription:
+    """Read a dual-arm robot file; one-line errors naming the file and key."""
+    path = Path(path)
+    doc = load_yaml(path)
+    src = str(path)
+    if not isinstance(doc, dict):
+        raise ConfigError(f"{src}: a robot file must be a mapping of keys, got {type(doc).__name__}")
+    extra = sorted(set(doc) - _ROBOT_KEYS)
+    if extra:
+        raise ConfigError(f"{src}: unknown key {extra[0]} (allowed: {', '.join(sorted(_ROBOT_KEYS))})")
+    for key in ("name", "urdf", "arms", "capsules"):
+        if key not in doc:
+            raise ConfigError(f"{src}: {key} is required in a dual-arm robot file")
+    urdf = doc["urdf"]
+    if "package" in urdf:
+        urdf_path = package_file(urdf["package"], urdf["path"], src)
+    else:
+        urdf_path = (path.parent / urdf["path"]) if not Path(urdf["path"]).is_absolute() else Path(urdf["path"])
+        if not urdf_path.is_file():
+            raise ConfigError(f"{src}: urdf.path = {urdf['path']!r}: no such file")
+    package_dir = next((p for p in urdf_path.parents if p.name == "share"), urdf_path.parent)
+    arms = doc["arms"]
+    if sorted(arms) != ["left", "right"]:
+        raise ConfigError(f"{src}: arms must be exactly 'left' and 'right' (found {sorted(arms)})")
+    for side in ("left", "right"):
+        if len(arms[side].get("joints", [])) != 7 or "gripper" not in arms[side]:
+            raise ConfigError(f"{src}: arms.{side} needs 7 joints and a gripper frame")
+    groups = []
+    for part in ("left", "right", "body"):
+        for k, g in enumerate(doc["capsules"].get(part, [])):
+            if "name" not in g or not g.get("geometry"):
+                raise ConfigError(f"{src}: capsules.{part}[{k}] needs a name and a list of geometry")
+            groups.append(CapsuleGroup(g["name"], tuple(g["geometry"]), part))
+    names = [g.name for g in groups]
+    if len(set(names)) != len(names):
+        raise ConfigError(f"{src}: capsule names must be unique")
+    return DualArmDescription(doc["name"], urdf_path, package_dir, {s: tuple(arms[s]["joints"]) for s in arms},
+                              {s: arms[s]["gripper"] for s in arms}, {k: float(v) for k, v in doc.get("locked", {}).items()},
+                              tuple(groups), int(doc.get("body_skip", 0)), int(doc.get("hold", 0)),
+                              int(doc.get("self_gap", 2)))

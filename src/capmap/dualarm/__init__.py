@@ -1,0 +1,20 @@
+"""Method family 4: dual 7-DOF arms in a confined space. A safety envelope fitted to a point cloud,
+analytic swept-sphere distances, and augmented-Lagrangian DDP (Crocoddyl FDDP) of a satellite
+panel assembly.
+
+- :mod:`~capmap.dualarm.scene`       the scene's solids, the panel and its poses; a synthetic scan
+- :mod:`~capmap.dualarm.cloud`       swept triangles and capsules fitted to a cloud (coverage checked)
+- :mod:`~capmap.dualarm.primitives`  capsules, swept triangles, the minimum-volume capsule
+- :mod:`~capmap.dualarm.distance`    batched segment-segment and segment-triangle closest points (compiled)
+- :mod:`~capmap.dualarm.robot`       the two-arm robot (reduced Pinocchio model) and its capsules
+- :mod:`~capmap.dualarm.collision`   primitives on joints, pairs, safety distances and q-gradients
+- :mod:`~capmap.dualarm.task`        the task's equality constraints at a node
+- :mod:`~capmap.dualarm.assembly`    the problem put together; warm start; clearance of key poses
+- :mod:`~capmap.dualarm.settings`    cost weights and the AL loop's parameters
+- :mod:`~capmap.dualarm.ocp`         one Crocoddyl action model per node (AL terms or constraints)
+- :mod:`~capmap.dualarm.solver`      the augmented-Lagrangian loop around FDDP
+- :mod:`~capmap.dualarm.evaluate`    errors and safety of a solution, on the nodes and a finer grid
+"""
+
+__all__ = ["scene", "cloud", "primitives", "distance", "robot", "collision", "task", "assembly", "settings", "ocp",
+           "solver", "evaluate"]

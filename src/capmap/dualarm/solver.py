@@ -1,0 +1,201 @@
+"""Augmented-Lagrangian constrained DDP: an outer loop of multiplier and penalty updates around
+Crocoddyl's FDDP.
+
+Outer iteration: solve the augmented problem (FDDP from the previous solution, tight stop
+threshold) -> measure the violation (largest equality residual; largest shortfall of an
+inequality) -> lambda_eq <- lambda_eq + mu c, lambda_in <- max(0, lambda_in - mu g) -> mu <-
+10 mu when the violation has not dropped ``decrease`` times. Collision pairs are filtered per
+node by their distance on the warm start; after each outer iteration every candidate pair is
+re-checked on the solution and any within ``filter_m`` joins its node's set.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import crocoddyl
+import mim_solvers  # after crocoddyl: it needs crocoddyl's libraries loaded
+import numpy as np
+import pinocchio as pin
+
+from capmap.dualarm.assembly import Assembly
+from capmap.dualarm.collision import Pairs
+from capmap.dualarm.ocp import Context, NodeModel
+from capmap.dualarm.settings import ALSettings, Weights
+
+__all__ = ["OuterStats", "Solution", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs", "all_distances"]
+
+
+@dataclass(frozen=True)
+class OuterStats:
+    """One outer iteration: its penalty, FDDP iterations, cost, equality and inequality violation,
+    collision pairs in use, pairs added by the re-check, wall time."""
+
+    outer: int
+    mu: float
+    inner_iterations: int
+    cost: float
+    eq_violation: float
+    in_violation: float
+    pairs: int
+    added_pairs: int
+    time_s: float
+
+
+@dataclass(frozen=True)
+class Solution:
+    """xs (N + 1, 2 nq), us (N, nq); per outer iteration statistics; converged; a message."""
+
+    xs: np.ndarray
+    us: np.ndarray
+    stats: tuple[OuterStats, ...]
+    converged: bool
+    message: str
+
+
+def initial_guess(qs: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """States (N + 1, 2 nq) and controls (N, nq) from a joint path: central-difference velocities
+    (zero at both ends), accelerations as their forward differences."""
+    v = np.zeros_like(qs)
+    v[1:-1] = (qs[2:] - qs[:-2]) / (2 * dt)
+    return np.hstack([qs, v]), np.diff(v, axis=0) / dt
+
+
+def all_distances(asm: Assembly, qs: np.ndarray, pairs: Pairs) -> np.ndarray:
+    """Safety distances (K, P) of every pair at every configuration (K, nq)."""
+    data = asm.model.createData()
+    out = np.empty((len(qs), len(pairs)))
+    for k, q in enumerate(qs):
+        pin.forwardKinematics(asm.model, data, q)
+        out[k] = asm.collision.evaluate(data, pairs).distance
+    return out
+
+
+def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float) -> list[np.ndarray]:
+    """Per node, which candidate pairs are within filter_m (safety distance) on the path qs."""
+    d = all_distances(asm, qs, asm.pairs)
+    return [row < filter_m for row in d]
+
+
+def _violations(models: list[NodeModel], xs: np.ndarray) -> tuple[float, float, list, list]:
+    eq, ineq, cs, gs = 0.0, 0.0, [], []
+    for m, x in zip(models, xs):
+        d = m.createData()
+        nq = m.ctx.model.nq
+        q, v = x[:nq], x[nq:]
+        m._kinematics(d.pin, q, jac=False)
+        c, _ = m.equalities(d.pin, q, v, False)
+        g, _ = m.inequalities(d.pin, q, v, False)
+        cs.append(c)
+        gs.append(g)
+        eq = max(eq, float(np.abs(c).max()))
+        ineq = max(ineq, float(np.maximum(-g, 0).max(initial=0.0)))
+    return eq, ineq, cs, gs
+
+
+def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], settings: ALSettings,
+          xs0: np.ndarray, us0: np.ndarray, log=None, inequalities: bool = True) -> Solution:
+    """The augmented-Lagrangian loop (module docstring) from the initial guess xs0, us0;
+    ``inequalities=False``: the equality-only problem (no collision pairs, no limits)."""
+    st = settings
+    ctx = Context(asm.model, asm.task, asm.collision, weights, *limits, mu=st.mu0, with_limits=inequalities)
+    if not inequalities:
+        asm = replace(asm, pairs=Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int)))
+    N = asm.task.N
+    keep = node_pairs(asm, xs0[:, :asm.model.nq], st.filter_m)
+    models = [NodeModel(ctx, k, asm.pairs.subset(keep[k])) for k in range(N + 1)]
+    problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:N], models[N])
+    solver = crocoddyl.SolverFDDP(problem)
+    solver.th_stop = st.inner_stop
+    xs, us = list(xs0), list(us0)
+    stats, prev, converged, message = [], np.inf, False, ""
+    feasible = False
+    for outer in range(st.max_outer):
+        t0 = time.perf_counter()
+        solver.solve(xs, us, st.max_inner, feasible)
+        feasible = True
+        xs, us = list(solver.xs), list(solver.us)
+        X = np.array(xs)
+        eq, ineq, cs, gs = _violations(models, X)
+        # re-check every candidate pair on the solution; pairs that came near join their node
+        near = node_pairs(asm, X[:, :asm.model.nq], st.filter_m)
+        added = 0
+        for k in range(N + 1):
+            new = near[k] & ~keep[k]
+            if new.any():
+                keep[k] |= new
+                old = models[k]
+                m = NodeModel(ctx, k, asm.pairs.subset(keep[k]))
+                m.lam_eq = old.lam_eq
+                m.lam_in[:len(m.pairs)] = _carry(old.pairs, m.pairs, old.lam_in[:len(old.pairs)])
+                m.lam_in[len(m.pairs):] = old.lam_in[len(old.pairs):]
+                models[k] = m
+                if k < N:
+                    problem.updateModel(k, m)
+                else:
+                    problem.terminalModel = m
+                added += int(new.sum())
+        stats.append(OuterStats(outer, ctx.mu, int(solver.iter), float(solver.cost), eq, ineq,
+                                int(sum(len(m.pairs) for m in models)), added, time.perf_counter() - t0))
+        if log:
+            log(f"outer {outer}: mu {ctx.mu:.0e}, {solver.iter} FDDP iterations, cost {solver.cost:.6g}, equality "
+                f"violation {eq:.2e}, inequality {ineq:.2e}, {added} pairs added ({time.perf_counter() - t0:.1f} s)")
+        violation = max(eq, ineq)
+        if violation < st.tolerance and added == 0:
+            converged = True
+            break
+        for m, c, g in zip(models, cs, gs):
+            m.lam_eq = m.lam_eq + ctx.mu * c
+            if len(g) == len(m.lam_in):
+                m.lam_in = np.maximum(m.lam_in - ctx.mu * g, 0.0)
+        if violation > prev / st.decrease:
+            if ctx.mu >= st.mu_max:
+                message = f"the penalty reached mu = {st.mu_max:g} with the violation at {violation:.2e}"
+                break
+            ctx.mu = min(ctx.mu * st.mu_factor, st.mu_max)
+        prev = min(prev, violation)
+    else:
+        message = f"{st.max_outer} outer iterations without reaching the tolerance {st.tolerance:g}"
+    return Solution(np.array(xs), np.array(us), tuple(stats), converged, message)
+
+
+def _carry(old: Pairs, new: Pairs, lam: np.ndarray) -> np.ndarray:
+    """Multipliers of the old pair set moved to their places in the new (a superset)."""
+    out = np.zeros(len(new))
+    index = {("ss", tuple(p)): i for i, p in enumerate(new.ss)}
+    index.update({("st", tuple(p)): len(new.ss) + i for i, p in enumerate(new.st)})
+    for i, p in enumerate(old.ss):
+        out[index[("ss", tuple(p))]] = lam[i]
+    for i, p in enumerate(old.st):
+        out[index[("st", tuple(p))]] = lam[len(old.ss) + i]
+    return out
+
+
+def solve_csqp(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], xs0: np.ndarray,
+               us0: np.ndarray, iterations: int, tolerance: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """The equality-only problem (the same costs; the task constraints as the nodes' constraint rows,
+    bounds 0; no collisions or limits) by mim-solvers' CSQP from xs0, us0: (xs, us, iterations)."""
+    ctx = Context(asm.model, asm.task, asm.collision, weights, *limits, with_limits=False)
+    none = Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int))
+    models = [NodeModel(ctx, k, none, mode="constrained") for k in range(asm.task.N + 1)]
+    problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:-1], models[-1])
+    csqp = mim_solvers.SolverCSQP(problem)
+    csqp.max_qp_iters, csqp.eps_abs, csqp.eps_rel = 1000, 1e-9, 0.0
+    csqp.termination_tolerance = tolerance
+    csqp.solve(list(xs0), list(us0), iterations, False)
+    return np.array(csqp.xs), np.array(csqp.us), int(csqp.iter)
+
+
+def equality_cost(asm: Assembly, weights: Weights, xs: np.ndarray, us: np.ndarray) -> float:
+    """The cost of a trajectory without any constraint term (the objective both solvers share)."""
+    unused = np.zeros(asm.model.nq)  # no limits in the objective
+    ctx = Context(asm.model, asm.task, asm.collision, weights, unused, unused, unused, with_limits=False)
+    none = Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int))
+    total = 0.0
+    for k, x in enumerate(xs):
+        m = NodeModel(ctx, k, none, mode="constrained")
+        d = m.createData()
+        m.calc(d, x, us[k]) if k < len(us) else m.calc(d, x)
+        total += float(d.cost)
+    return total

@@ -1,0 +1,137 @@
+"""Figures of the dual-arm assembly: task-constraint errors, safety distances, joints and their
+velocities against the limits, the solver's convergence, and the 3D animation."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import meshcat.animation as ma
+import numpy as np
+import pandas as pd
+
+from capmap.plots.common import plt, save
+from capmap.plots.scene3d import cylinder, g, material, new_scene, write_html
+
+__all__ = ["constraint_errors", "distances", "joints", "convergence", "animation"]
+
+REQUIRED_M = 7e-7  # the paper's reported maximum closed-chain / path error
+
+
+def constraint_errors(traj: pd.DataFrame, out_png: str | Path) -> None:
+    """Closed-chain and path errors at the nodes (log scale), with the 7e-7 m reference."""
+    fig, axes = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    floor = 1e-16
+    axes[0].semilogy(traj.t_s, np.maximum(traj.closed_chain_pos_err_m, floor), label="closed chain (gripper to gripper)")
+    axes[0].semilogy(traj.t_s, np.maximum(traj.path_err_m, floor), label="path (panel on the pin axis, poses)")
+    axes[0].axhline(REQUIRED_M, color="tab:red", ls=":", label="7e-7 m (paper's maximum)")
+    axes[0].set(ylabel="position error [m]", title="Task constraints at the nodes (zero shown at 1e-16)")
+    axes[1].semilogy(traj.t_s, np.maximum(traj.closed_chain_rot_err_rad, floor), label="closed chain")
+    axes[1].semilogy(traj.t_s, np.maximum(traj.path_err_rad, floor), label="path (vertical axis, orientation, poses)")
+    axes[1].axhline(1e-6, color="tab:red", ls=":", label="1e-6 rad")
+    axes[1].set(ylabel="rotation error [rad]", xlabel="t [s]")
+    t_pre = traj.t_s[traj.phase == "pre_insertion"]
+    for ax in axes:
+        for tp in t_pre:
+            ax.axvline(tp, color="0.5", lw=0.8, ls="--")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8, loc="upper left")
+    axes[0].text(float(t_pre.iloc[0]) if len(t_pre) else 0, axes[0].get_ylim()[1], " pre-insertion", va="top", fontsize=8)
+    save(fig, out_png)
+
+
+def distances(traj: pd.DataFrame, fine: pd.DataFrame, margin_m: float, active: list, out_png: str | Path) -> None:
+    """The smallest safety distance over all pairs: at the nodes and on the finer grid."""
+    fig, ax = plt.subplots(figsize=(10, 4.8))
+    ax.plot(fine.t_s, 1e3 * fine.min_distance_m, color="tab:blue", lw=1, label="finer grid (between nodes too)")
+    ax.plot(traj.t_s, 1e3 * traj.min_distance_m, ".", color="black", ms=2, label="nodes")
+    ax.axhline(1e3 * margin_m, color="tab:orange", ls="--", label=f"margin kept at the nodes ({1e3 * margin_m:g} mm)")
+    ax.axhline(0.0, color="tab:red", lw=1, label="contact")
+    for name, d, tm, *_ in active[:3]:
+        ax.annotate(f"{name}\n{1e3 * d:.1f} mm", (tm, 1e3 * d), xytext=(10, 25), textcoords="offset points", fontsize=7,
+                    arrowprops={"arrowstyle": "->", "lw": 0.6})
+    ax.set(xlabel="t [s]", ylabel="smallest safety distance [mm]",
+           title="Closest pair of swept volumes (cores' distance minus radii) over the motion",
+           ylim=(min(-1.0, 1e3 * fine.min_distance_m.min() - 1), 1e3 * min(fine.min_distance_m.max(), 0.2) + 5))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, out_png)
+
+
+def joints(traj: pd.DataFrame, meta: dict, which: str, out_png: str | Path) -> None:
+    """Each joint's position (which='q', rad) or velocity (which='qd', rad/s) with its limits."""
+    names = meta["joints"]
+    lo = np.asarray(meta["q_lower"]) if which == "q" else -np.asarray(meta["v_max"])
+    hi = np.asarray(meta["q_upper"]) if which == "q" else np.asarray(meta["v_max"])
+    unit = "rad" if which == "q" else "rad_s"
+    fig, axes = plt.subplots(7, 2, figsize=(12, 14), sharex=True)
+    for c, name in enumerate(names):
+        ax = axes[c % 7, c // 7]
+        ax.plot(traj.t_s, traj[f"{which}_{name}_{unit}"], lw=1.2, color="tab:blue")
+        ax.axhline(lo[c], color="tab:red", ls=":", lw=1)
+        ax.axhline(hi[c], color="tab:red", ls=":", lw=1)
+        span = hi[c] - lo[c]
+        ax.set_ylim(lo[c] - 0.08 * span, hi[c] + 0.08 * span)
+        ax.set_ylabel(f"{name} [{'rad' if which == 'q' else 'rad/s'}]", fontsize=8)
+        ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.suptitle(f"Joint {'positions' if which == 'q' else 'velocities'} (left arm | right arm) and their limits "
+                 "(red dotted)")
+    save(fig, out_png)
+
+
+def convergence(outer: pd.DataFrame, out_png: str | Path) -> None:
+    """Violation and penalty per outer iteration of the augmented-Lagrangian loop."""
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    ax.semilogy(outer.outer, outer.eq_violation, "o-", label="equality violation [m or rad]")
+    ax.semilogy(outer.outer, np.maximum(outer.in_violation, 1e-16), "s-", label="inequality violation [m or rad]")
+    ax.semilogy(outer.outer, outer.mu, "^--", color="0.4", label="penalty mu")
+    ax.set(xlabel="outer iteration", ylabel="value (log scale)",
+           title=f"Augmented Lagrangian: {len(outer)} outer, {int(outer.inner_iterations.sum())} FDDP iterations")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    save(fig, out_png)
+
+
+def animation(capsules: list[tuple[str, int, np.ndarray, np.ndarray, float]], poses: np.ndarray, panel: tuple,
+              env_tri: np.ndarray, env_seg: list[tuple[np.ndarray, np.ndarray, float]], fps: float, title: str,
+              out_html: str | Path) -> None:
+    """MeshCat static HTML: capsules (name, body index, a, b in the body frame, r) moved by body poses
+    (F, B, 4, 4); the panel (body index, pose in that body, size); the environment's swept
+    triangles (T, 3, 3) (their cores, translucent) and capsules (static)."""
+    vis = new_scene(title)
+    for name, body, a, b, r in capsules:
+        geom, pose = cylinder(a, b, r)
+        node = vis[f"robot/body{body}/{name}"]
+        look = material(0x4070B0) if body else material(0x8090A0, 0.3)  # the static body translucent
+        node["core"].set_object(geom, look)
+        node["core"].set_transform(pose)
+        for k, end in enumerate((a, b)):
+            node[f"cap{k}"].set_object(g.Sphere(float(r)), look)
+            T = np.eye(4)
+            T[:3, 3] = end
+            node[f"cap{k}"].set_transform(T)
+    body, in_body, size = panel
+    vis[f"robot/body{body}/panel"].set_object(g.Box(list(size)), material(0xD0A030))
+    vis[f"robot/body{body}/panel"].set_transform(in_body)
+    if len(env_tri):
+        vis["environment/faces"].set_object(g.TriangularMeshGeometry(env_tri.reshape(-1, 3),
+                                                                     np.arange(3 * len(env_tri)).reshape(-1, 3)),
+                                            material(0x70A070, 0.35))
+    for k, (a, b, r) in enumerate(env_seg):
+        geom, pose = cylinder(a, b, r)
+        vis[f"environment/capsule{k}"].set_object(geom, material(0xA07050, 0.7))
+        vis[f"environment/capsule{k}"].set_transform(pose)
+    anim = ma.Animation(default_framerate=fps)
+    for f, frame in enumerate(poses):
+        with anim.at_frame(vis, f) as fv:
+            for b, T in enumerate(frame):
+                fv[f"robot/body{b}"].set_transform(T)
+    for b, T in enumerate(poses[0]):
+        vis[f"robot/body{b}"].set_transform(T)
+    vis.set_animation(anim, play=True, repetitions=0)
+    rig = np.eye(4)
+    rig[:3, 3] = [0.4, 0.0, 0.3]
+    vis["/Cameras/default"].set_transform(rig)
+    vis["/Cameras/default/rotated/<object>"].set_property("position", [1.6, 1.2, 1.9])  # front right, above
+    write_html(vis, out_html)

@@ -1,0 +1,55 @@
+"""Stages of the dual-arm family, for people: dualarm_plots and dualarm_animation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from capmap.config.dualarm import horizon
+from capmap.config.scene_file import load_scene
+from capmap.io import datasets
+from capmap.io.logs import stage_logger
+from capmap.plots.dualarm import animation, constraint_errors, convergence, distances, joints
+from capmap.stages.common import parse_slice
+from capmap.stages.dualarm import envelope_from
+from capmap.stages.dualarm_solve import setup
+
+__all__ = ["stage_dualarm_plots", "stage_dualarm_animation"]
+
+
+def stage_dualarm_plots(trajectory: str, fine: str, outer: str, out_errors: str, out_distances: str, out_joints: str,
+                        out_velocities: str, out_convergence: str) -> None:
+    """Constraint errors, safety distances, joints and velocities vs their limits, convergence."""
+    traj, fine_df, outer_df = datasets.read(trajectory), datasets.read(fine), datasets.read(outer)
+    meta = traj.attrs["capmap"]
+    constraint_errors(traj, out_errors)
+    distances(traj, fine_df, meta["margin_m"], meta["active"], out_distances)
+    joints(traj, meta, "q", out_joints)
+    joints(traj, meta, "qd", out_velocities)
+    convergence(outer_df, out_convergence)
+    stage_logger(__name__, "dualarm plots").info(f"-> {out_errors}, {out_distances}, {out_joints}, {out_velocities}, "
+                                                 f"{out_convergence}")
+
+
+def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, out_html: str, slice_json: str) -> None:
+    """MeshCat static HTML of the motion (capsules, the panel, the fitted environment)."""
+    d = parse_slice(slice_json)["dualarm"]
+    robot, asm = setup(d, environment, capsules, horizon(d))
+    traj = datasets.read(trajectory)
+    q = traj[[f"q_{j}_rad" for j in robot.joint_names]].to_numpy()
+    step = max(1, int(round(1.0 / (float(d.get("animation_fps", 25)) * asm.task.dt))))
+    model = asm.model
+    data = model.createData()
+    frames = []
+    for qk in q[::step]:
+        pin.forwardKinematics(model, data, qk)
+        frames.append([M.homogeneous for M in data.oMi])
+    jid = {name: model.getJointId(name) for name in robot.joint_names}
+    caps = [(c.name, jid.get(c.joint, 0), c.a, c.b, c.r) for c in robot.capsules]
+    fp = model.frames[asm.task.panel]
+    env, _ = envelope_from(datasets.read(environment))
+    scene = load_scene(d["scene"])
+    panel = (fp.parentJoint, fp.placement.homogeneous, scene.panel.size)
+    animation(caps, np.array(frames), panel, env.tri, [(a, b, r) for (a, b), r in zip(env.seg, env.seg_radius)],
+              1.0 / (step * asm.task.dt), f"{robot.description.name}: {scene.name}", out_html)
+    stage_logger(__name__, "dualarm animation").info(f"{len(frames)} frames -> {out_html}")

@@ -1,0 +1,44 @@
+"""The default config's dual-arm problem pieces (robot with fitted capsules, scene, envelope)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import yaml
+
+from capmap.config.dualarm import cloud_source, fit_settings, load_dual_arm_file
+from capmap.config.scene_file import load_scene
+from capmap.dualarm.assembly import assemble
+from capmap.dualarm.cloud import fit_envelope
+from capmap.dualarm.robot import build_dual_arm, fit_capsules
+from capmap.dualarm.scene import nearest_solid, scan
+from tests.scenario import ROOT
+
+SECTION = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["dualarm"]
+
+
+@pytest.fixture(scope="session")
+def robot():
+    return fit_capsules(build_dual_arm(load_dual_arm_file(ROOT / SECTION["robot"])))[0]
+
+
+@pytest.fixture(scope="session")
+def scene():
+    return load_scene(ROOT / SECTION["scene"])
+
+
+@pytest.fixture(scope="session")
+def envelope(scene):
+    _, settings, seed = cloud_source(SECTION)
+    fit, fit_seed = fit_settings(SECTION)
+    pts, _ = scan(scene, settings, np.random.default_rng(seed))
+    env = fit_envelope(pts, fit, np.random.default_rng(fit_seed))
+    labels = (nearest_solid(scene, env.tri.mean(axis=1)), nearest_solid(scene, env.seg.mean(axis=1)))
+    return env, labels
+
+
+@pytest.fixture(scope="session")
+def make_assembly(robot, scene, envelope):
+    def make(nodes=500, dt=0.02, pre=350):
+        return assemble(robot, scene, envelope[0], envelope[1], nodes, dt, pre)
+    return make

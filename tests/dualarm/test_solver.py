@@ -1,0 +1,50 @@
+"""The augmented-Lagrangian DDP on a coarse horizon: it converges onto every constraint, and on the
+equality-only problem it finds the optimum mim-solvers' CSQP finds (a second solver, another
+formulation: constraints, not penalties)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from capmap.dualarm.assembly import warm_start
+from capmap.dualarm.evaluate import fine_grid, node_errors, safety
+from capmap.dualarm.settings import ALSettings, Weights
+from capmap.dualarm.solver import equality_cost, initial_guess, solve, solve_csqp
+
+W = Weights(control=np.full(14, 1.0), velocity=1.0, panel=0.01, margin_m=0.005)
+
+
+@pytest.fixture(scope="module")
+def coarse(robot, make_assembly):
+    asm = make_assembly(40, 0.25, 28)
+    xs0, us0 = initial_guess(warm_start(asm), asm.task.dt)
+    return asm, (robot.q_lower, robot.q_upper, robot.v_max), xs0, us0
+
+
+def test_al_ddp_meets_every_constraint(coarse):
+    asm, limits, xs0, us0 = coarse
+    sol = solve(asm, W, limits, ALSettings(mu_max=1e12, tolerance=5e-8), xs0, us0)
+    assert sol.converged, sol.message
+    err = node_errors(asm, sol.xs)
+    assert err.closed_chain_pos.max() < 1e-7 and err.path_pos.max() < 1e-7 and err.path_rot.max() < 1e-7
+    nq = asm.model.nq
+    assert np.all(sol.xs[:, :nq] >= limits[0] - 1e-7) and np.all(sol.xs[:, :nq] <= limits[1] + 1e-7)
+    assert np.all(np.abs(sol.xs[:, nq:]) <= limits[2] + 1e-7)
+    assert safety(asm, sol.xs[:, :nq]).min_distance.min() >= W.margin_m - 1e-7  # every candidate pair, every node
+    assert np.abs(sol.xs[-1, nq:]).max() < 1e-7  # at rest at the end
+    _, q_fine, _ = fine_grid(sol.xs, sol.us, asm.task.dt, 5)
+    assert safety(asm, q_fine).min_distance.min() >= 0.0
+
+
+def test_equality_only_optimum_equals_csqp(coarse):
+    asm, limits, xs0, us0 = coarse
+    al = solve(asm, W, limits, ALSettings(mu_max=1e12, tolerance=1e-9, max_outer=40), xs0, us0, inequalities=False)
+    assert al.converged, al.message
+    xc, uc, _ = solve_csqp(asm, W, limits, xs0, us0, iterations=150, tolerance=1e-9)
+    nq = asm.model.nq
+    assert np.abs(al.xs[:, :nq] - xc[:, :nq]).max() < 1e-4  # rad
+    assert np.abs(al.xs[:, nq:] - xc[:, nq:]).max() < 1e-4  # rad/s
+    c_al, c_sqp = equality_cost(asm, W, al.xs, al.us), equality_cost(asm, W, xc, uc)
+    assert c_al == pytest.approx(c_sqp, rel=1e-4)
+    assert node_errors(asm, xc).closed_chain_pos.max() < 1e-6  # CSQP's own solution satisfies the constraints
