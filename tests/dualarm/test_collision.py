@@ -7,7 +7,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from tests.dualarm.test_distance import _capsule, _coal_distance
+from tests.reference.coal_shapes import capsule, distance
 
 
 def test_robot_capsule_pairs_equal_coal(robot, make_assembly):
@@ -26,8 +26,8 @@ def test_robot_capsule_pairs_equal_coal(robot, make_assembly):
             shapes = []
             for c in (caps[a], caps[b]):
                 M = data.oMi[model.getJointId(c.joint)] if c.joint != "universe" else pin.SE3.Identity()
-                shapes.append(_capsule(M.act(c.a), M.act(c.b), c.r))
-            assert ev.distance[i] == pytest.approx(_coal_distance(*shapes[0], *shapes[1]), abs=1e-9) or \
+                shapes.append(capsule(M.act(c.a), M.act(c.b), c.r))
+            assert ev.distance[i] == pytest.approx(distance(*shapes[0], *shapes[1]), abs=1e-9) or \
                 ev.distance[i] < 0
             checked += 1
     assert checked > 100

@@ -3,25 +3,11 @@ brute force on random and degenerate cases, and gradients against finite differe
 
 from __future__ import annotations
 
-import coal
 import numpy as np
 import pytest
 
 from capmap.dualarm.distance import point_triangle, segment_segment, segment_triangle
-
-
-def _capsule(a, b, r):
-    """A coal capsule spanning a -> b (its axis is z, centred)."""
-    d = b - a
-    L = np.linalg.norm(d)
-    z = d / L
-    x = np.cross(z, [1.0, 0, 0] if abs(z[0]) < 0.9 else [0, 1.0, 0])
-    x /= np.linalg.norm(x)
-    return coal.Capsule(r, L), coal.Transform3s(np.column_stack([x, np.cross(z, x), z]), (a + b) / 2)
-
-
-def _coal_distance(g1, T1, g2, T2):
-    return coal.distance(g1, T1, g2, T2, coal.DistanceRequest(), coal.DistanceResult())
+from tests.reference.coal_shapes import capsule, distance, triangle
 
 
 def _brute_segseg(p0, p1, q0, q1, n=401):
@@ -44,7 +30,7 @@ def test_capsule_capsule_equals_coal():
     r1, r2 = rng.uniform(0.005, 0.05, 300), rng.uniform(0.005, 0.05, 300)
     c = segment_segment(p0, p1, q0, q1)
     for i in range(300):
-        expect = _coal_distance(*_capsule(p0[i], p1[i], r1[i]), *_capsule(q0[i], q1[i], r2[i]))
+        expect = distance(*capsule(p0[i], p1[i], r1[i]), *capsule(q0[i], q1[i], r2[i]))
         if expect > 0:
             assert c.distance[i] - r1[i] - r2[i] == pytest.approx(expect, abs=1e-12)
         else:  # coal reports penetration depth its own way; ours is the cores' distance minus the radii
@@ -58,12 +44,8 @@ def test_capsule_triangle_equals_coal_one_triangle_bvh():
     c = segment_triangle(p0, p1, v0, v1, v2)
     n_checked = 0
     for i in range(300):
-        bvh = coal.BVHModelOBBRSS()
-        bvh.beginModel(1, 3)
-        bvh.addTriangle(v0[i], v1[i], v2[i])
-        bvh.endModel()
         r = 0.01
-        expect = _coal_distance(*_capsule(p0[i], p1[i], r), bvh, coal.Transform3s())
+        expect = distance(*capsule(p0[i], p1[i], r), *triangle(v0[i], v1[i], v2[i]))
         if c.distance[i] > r:
             assert c.distance[i] - r == pytest.approx(expect, abs=1e-12)
             n_checked += 1

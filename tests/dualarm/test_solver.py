@@ -41,7 +41,9 @@ def test_equality_only_optimum_equals_csqp(coarse):
     asm, limits, xs0, us0 = coarse
     al = solve(asm, W, limits, ALSettings(mu_max=1e12, tolerance=1e-9, max_outer=40), xs0, us0, inequalities=False)
     assert al.converged, al.message
-    xc, uc, _ = solve_csqp(asm, W, limits, xs0, us0, iterations=150, tolerance=1e-9)
+    csqp = solve_csqp(asm, W, limits, xs0, us0, iterations=150, tolerance=1e-6)
+    assert csqp.converged
+    xc, uc = csqp.xs, csqp.us
     nq = asm.model.nq
     assert np.abs(al.xs[:, :nq] - xc[:, :nq]).max() < 1e-4  # rad
     assert np.abs(al.xs[:, nq:] - xc[:, nq:]).max() < 1e-4  # rad/s

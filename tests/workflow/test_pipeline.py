@@ -26,6 +26,8 @@ def _config(tmp: Path, **changes) -> Path:
     doc["robot"] = str(ROOT / "config" / "robots" / "ssrms7.yaml")
     doc["follow"]["ground"]["robot"] = str(ROOT / "config" / "robots" / "ur5.yaml")
     doc["reconfig"]["robot"] = str(ROOT / "config" / "robots" / "reconfig3.yaml")
+    doc["dualarm"]["robot"] = str(ROOT / "config" / "robots" / "baxter_dual.yaml")
+    doc["dualarm"]["scene"] = str(ROOT / "config" / "scenes" / "satellite_panel.yaml")
     for dotted, value in changes.items():
         node = doc
         *head, last = dotted.split(".")
@@ -119,8 +121,9 @@ def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
     cat = pd.read_parquet(tmp / "results/catalogue.parquet")
     assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "voxels", "waypoints",
-                             "timeseries", "segments", "toppra", "nullspace", "pinv"}  # two 'points', three 'timeseries'
-    assert len(cat) == 15
+                             "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud", "environment",
+                             "robot_capsules", "trajectory", "fine", "outer"}  # two 'points', three 'timeseries'
+    assert len(cat) == 21
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256
@@ -169,6 +172,18 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     assert set(jobs) == {"reconfig_animation", "all"}
     jobs = _planned_jobs(tmp, _config(tmp_path, **{"reconfig.law.d_m": 0.2}))
     assert set(jobs) == reconfig and jobs["reconfig"] == 2
+    # the dual-arm family: a cost weight re-optimises, the scene and the capsules stay
+    motion = {"dualarm_optimise", "dualarm_check", "dualarm_plots", "dualarm_animation", "catalogue", "all"}
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.weights.velocity": 2.0}))
+    assert set(jobs) == motion
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.margin_m": 0.004}))
+    assert set(jobs) == motion - {"dualarm_check"}  # the check has no inequalities
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.check.max_iterations": 50}))
+    assert set(jobs) == {"dualarm_check", "all"}
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.animation_fps": 4}))
+    assert set(jobs) == {"dualarm_animation", "all"}
+    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.cloud.noise_m": 0.004}))
+    assert set(jobs) == {"dualarm_scan", "dualarm_envelope"} | motion
 
 
 def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
@@ -258,6 +273,33 @@ def test_reconfig_outputs(run_dir):
         assert (res / f"{png}.png").stat().st_size > 10_000
 
 
+def test_dualarm_outputs(run_dir):
+    tmp, _ = run_dir
+    res = tmp / "results" / "dualarm"
+    traj = pd.read_parquet(res / "trajectory.parquet")
+    joints = traj.attrs["capmap"]["joints"]
+    assert len(joints) == 14 and len(traj) == 101  # the tiny horizon: N = 100
+    for col in ("t_s", "closed_chain_pos_err_m", "closed_chain_rot_err_rad", "path_err_m", "min_distance_m",
+                "min_distance_pair", f"q_{joints[0]}_rad", f"qd_{joints[13]}_rad_s", f"u_{joints[6]}_rad_s2"):
+        assert col in traj.columns
+    assert traj.attrs["capmap"]["converged"]
+    assert traj.closed_chain_pos_err_m.max() < 7e-7 and traj.path_err_m.max() < 7e-7 and traj.path_err_rad.max() < 1e-6
+    fine = pd.read_parquet(res / "fine.parquet")
+    assert len(fine) == 3 * 100 + 1 and fine.min_distance_m.min() >= 0  # fine_factor 3
+    q = traj[[f"q_{j}_rad" for j in joints]].to_numpy()
+    meta = traj.attrs["capmap"]
+    assert np.all(q >= np.array(meta["q_lower"]) - 1e-9) and np.all(q <= np.array(meta["q_upper"]) + 1e-9)
+    env = pd.read_parquet(res / "environment.parquet")
+    caps = pd.read_parquet(res / "robot_capsules.parquet")
+    assert len(env) > 5 and {"kind", "radius_m"} <= set(env.columns) and len(caps) >= 14
+    check = pd.read_csv(res / "csqp_check.csv").set_index("solver")
+    assert check.converged.all() and check.loc["AL-FDDP", "max_q_diff_rad"] < 1e-3
+    html = (res / "animation.html").read_text()
+    assert len(html) > 100_000 and "MeshCat" in html
+    for png in ("constraint_errors", "distances", "joints", "velocities", "convergence"):
+        assert (res / f"{png}.png").stat().st_size > 10_000
+
+
 def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     tmp, _ = run_dir
     work = tmp_path / "w"
@@ -296,6 +338,10 @@ def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     ({"reconfig.configuration_deg.arm2": [0, 0, 0, 0, 0]}, "reconfig.configuration_deg.arm2 has 5 values but arm2 has 6"),
     ({"reconfig.configuration_deg.arm1": [0, 0, 0, 0, 0, 0]}, "reconfig.configuration_deg does not close capture"),
     ({"reconfig.joint_rate_limit_deg_s": [1, 2]}, "reconfig.joint_rate_limit_deg_s has 2 values; give one or 10"),
+    ({"dualarm.horizon.pre_insertion_node": 100}, "dualarm.horizon.pre_insertion_node = 100 must lie between 0 and"),
+    ({"dualarm.cloud.file": "scan.csv"}, "dualarm.cloud: give either file or a synthetic scan"),
+    ({"dualarm.weights.mass": 1}, "unknown key"),
+    ({"dualarm.scene": "nowhere.yaml"}, "nowhere.yaml"),
 ])
 def test_bad_config_is_one_line_before_any_job(tmp_path, changes, expect):
     res = _snakemake(tmp_path, _config(tmp_path, **changes), "-n")

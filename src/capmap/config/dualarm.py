@@ -21,7 +21,7 @@ from capmap.dualarm.scene import ScanSettings
 from capmap.dualarm.settings import ALSettings, Weights
 from capmap.errors import ConfigError
 
-__all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "check_horizon",
+__all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "CheckSettings", "check_settings",
            "weights", "DEFAULT_FINE_FACTOR", "DEFAULT_ANIMATION_FPS"]
 
 DEFAULT_FINE_FACTOR = 5
@@ -36,6 +36,18 @@ class Horizon:
     nodes: int
     dt_s: float
     pre_insertion_node: int
+
+
+@dataclass(frozen=True)
+class CheckSettings:
+    """The CSQP cross-check: its horizon, SQP iteration limit and KKT tolerance (CSQP's own
+    criterion, whose dual part is only as accurate as its inner ADMM QP solves), and the tighter
+    tolerance of the AL-FDDP solve it is compared with."""
+
+    horizon: Horizon
+    max_iterations: int = 100
+    tolerance: float = 1e-6
+    al_tolerance: float = 1e-9
 
 
 @dataclass(frozen=True)
@@ -54,8 +66,7 @@ class DualArmConfig:
     horizon: Horizon
     weights: Weights
     solver: ALSettings
-    check: Horizon
-    check_iterations: int
+    check: CheckSettings
     fine_factor: int = DEFAULT_FINE_FACTOR
     animation_fps: float = DEFAULT_ANIMATION_FPS
 
@@ -64,10 +75,9 @@ class DualArmConfig:
         """The whole section (every key a job might read; see the piece builders below)."""
         cloud_file, scan, scan_seed = cloud_source(d)
         fit, fit_seed = fit_settings(d)
-        check, iterations = check_horizon(d)
         return cls(robot=d["robot"], scene=d["scene"], cloud_file=cloud_file, scan=scan, scan_seed=scan_seed, fit=fit,
                    fit_seed=fit_seed, horizon=horizon(d), weights=weights(d), solver=ALSettings(**d["solver"]),
-                   check=check, check_iterations=iterations, fine_factor=int(d.get("fine_factor", DEFAULT_FINE_FACTOR)),
+                   check=check_settings(d), fine_factor=int(d.get("fine_factor", DEFAULT_FINE_FACTOR)),
                    animation_fps=float(d.get("animation_fps", DEFAULT_ANIMATION_FPS)))
 
 
@@ -109,11 +119,11 @@ def horizon(d: dict) -> Horizon:
     return _horizon("horizon", d["horizon"])
 
 
-def check_horizon(d: dict) -> tuple[Horizon, int]:
-    """``dualarm.check``: its horizon and the CSQP iteration limit."""
+def check_settings(d: dict) -> CheckSettings:
+    """``dualarm.check``."""
     c = dict(d["check"])
-    iterations = int(c.pop("max_iterations", 100))
-    return _horizon("check", c), iterations
+    iterations, tolerance = int(c.pop("max_iterations", 100)), float(c.pop("tolerance", 1e-6))
+    return CheckSettings(_horizon("check", c), iterations, tolerance, float(c.pop("al_tolerance", 1e-9)))
 
 
 def weights(d: dict) -> Weights:

@@ -93,9 +93,9 @@ def dualarm_slices(doc: dict) -> dict[str, dict]:
     scan = {"scene": da["scene"], "cloud": da["cloud"]}
     envelope = {**scan, "fit": da.get("fit", {})}
     capsules = {"robot": da["robot"]}
-    problem = {**envelope, **capsules, **{k: da[k] for k in ("weights", "margin_m", "solver")}}
-    motion = {**problem, "horizon": da["horizon"], "fine_factor": da.get("fine_factor", 5)}
-    check = {**problem, "check": da["check"]}  # the check has its own horizon
+    problem = {**envelope, **capsules, **{k: da[k] for k in ("weights", "solver")}}
+    motion = {**problem, "margin_m": da["margin_m"], "horizon": da["horizon"], "fine_factor": da.get("fine_factor", 5)}
+    check = {**problem, "check": da["check"]}  # its own horizon; no inequalities, so no margin
     return {"scan": {"dualarm": scan}, "envelope": {"dualarm": envelope}, "capsules": {"dualarm": capsules},
             "optimise": {"dualarm": motion}, "check": {"dualarm": check},
             "animation": {"dualarm": {**motion, "animation_fps": da.get("animation_fps", 25)}}}

@@ -24,7 +24,7 @@ from capmap.dualarm.collision import Pairs
 from capmap.dualarm.ocp import Context, NodeModel
 from capmap.dualarm.settings import ALSettings, Weights
 
-__all__ = ["OuterStats", "Solution", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs", "all_distances"]
+__all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs", "all_distances"]
 
 
 @dataclass(frozen=True)
@@ -172,19 +172,30 @@ def _carry(old: Pairs, new: Pairs, lam: np.ndarray) -> np.ndarray:
     return out
 
 
+@dataclass(frozen=True)
+class CSQPResult:
+    """xs (N + 1, 2 nq), us (N, nq); SQP iterations; converged (KKT residual below the tolerance)."""
+
+    xs: np.ndarray
+    us: np.ndarray
+    iterations: int
+    converged: bool
+
+
 def solve_csqp(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], xs0: np.ndarray,
-               us0: np.ndarray, iterations: int, tolerance: float) -> tuple[np.ndarray, np.ndarray, int]:
+               us0: np.ndarray, iterations: int, tolerance: float) -> CSQPResult:
     """The equality-only problem (the same costs; the task constraints as the nodes' constraint rows,
-    bounds 0; no collisions or limits) by mim-solvers' CSQP from xs0, us0: (xs, us, iterations)."""
+    bounds 0; no collisions or limits) by mim-solvers' CSQP from xs0, us0."""
     ctx = Context(asm.model, asm.task, asm.collision, weights, *limits, with_limits=False)
     none = Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int))
     models = [NodeModel(ctx, k, none, mode="constrained") for k in range(asm.task.N + 1)]
     problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:-1], models[-1])
     csqp = mim_solvers.SolverCSQP(problem)
     csqp.max_qp_iters, csqp.eps_abs, csqp.eps_rel = 1000, 1e-9, 0.0
+    csqp.reset_rho = True  # without it the ADMM penalty carried over stalls the KKT residual near 3e-4
     csqp.termination_tolerance = tolerance
-    csqp.solve(list(xs0), list(us0), iterations, False)
-    return np.array(csqp.xs), np.array(csqp.us), int(csqp.iter)
+    converged = csqp.solve(list(xs0), list(us0), iterations, False)
+    return CSQPResult(np.array(csqp.xs), np.array(csqp.us), int(csqp.iter), bool(converged))
 
 
 def equality_cost(asm: Assembly, weights: Weights, xs: np.ndarray, us: np.ndarray) -> float:

@@ -13,7 +13,7 @@ __all__ = ["write_table", "write_quantities"]
 def _fmt(v) -> str:
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, (float, np.floating)):
         return "" if v is None else str(v)
-    return "" if np.isnan(v) else f"{v:.1f}" if abs(v) >= 100 else f"{v:.4g}"
+    return "" if np.isnan(v) else f"{v:.1f}" if 100 <= abs(v) < 1e6 else f"{v:.4g}"
 
 
 def write_table(df: pd.DataFrame, out_csv: str | Path, out_md: str | Path) -> None:
@@ -32,6 +32,6 @@ def write_quantities(rows: list[tuple[str, object]], out_csv: str | Path, out_md
     table = pd.DataFrame(rows, columns=["quantity", "value"])
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(out_csv, index=False)
-    Path(out_md).write_text(table.to_markdown(index=False) + "\n")
+    Path(out_md).write_text(table.assign(value=table.value.map(_fmt)).to_markdown(index=False) + "\n")
     return table
 

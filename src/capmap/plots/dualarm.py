@@ -42,12 +42,15 @@ def constraint_errors(traj: pd.DataFrame, out_png: str | Path) -> None:
 def distances(traj: pd.DataFrame, fine: pd.DataFrame, margin_m: float, active: list, out_png: str | Path) -> None:
     """The smallest safety distance over all pairs: at the nodes and on the finer grid."""
     fig, ax = plt.subplots(figsize=(10, 4.8))
-    ax.plot(fine.t_s, 1e3 * fine.min_distance_m, color="tab:blue", lw=1, label="finer grid (between nodes too)")
-    ax.plot(traj.t_s, 1e3 * traj.min_distance_m, ".", color="black", ms=2, label="nodes")
+    ax.plot(fine.t_s, 1e3 * fine.min_distance_m, color="tab:blue", lw=3, alpha=0.5,
+            label="finer grid (between nodes too)")
+    ax.plot(traj.t_s, 1e3 * traj.min_distance_m, ".", color="black", ms=1.5, label="nodes")
     ax.axhline(1e3 * margin_m, color="tab:orange", ls="--", label=f"margin kept at the nodes ({1e3 * margin_m:g} mm)")
     ax.axhline(0.0, color="tab:red", lw=1, label="contact")
     for name, d, tm, *_ in active[:3]:
-        ax.annotate(f"{name}\n{1e3 * d:.1f} mm", (tm, 1e3 * d), xytext=(10, 25), textcoords="offset points", fontsize=7,
+        left = tm > 0.6 * fine.t_s.iloc[-1]  # keep the label inside the axes
+        ax.annotate(f"{name}\n{1e3 * d:.1f} mm", (tm, 1e3 * d), xytext=(-20 if left else 20, 30),
+                    textcoords="offset points", fontsize=8, ha="right" if left else "left",
                     arrowprops={"arrowstyle": "->", "lw": 0.6})
     ax.set(xlabel="t [s]", ylabel="smallest safety distance [mm]",
            title="Closest pair of swept volumes (cores' distance minus radii) over the motion",

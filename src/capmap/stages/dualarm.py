@@ -31,7 +31,12 @@ def _read_cloud(path: str) -> np.ndarray:
     missing = [c for c in XYZ if c not in df.columns]
     if missing:
         raise ConfigError(f"dualarm.cloud.file = {path!r}: no column {missing[0]} (need x_m, y_m, z_m)")
-    pts = df[XYZ].to_numpy(dtype=float)
+    try:
+        pts = df[XYZ].to_numpy(dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"dualarm.cloud.file = {path!r}: columns x_m, y_m, z_m must hold numbers only") from None
+    if len(pts) == 0:
+        raise ConfigError(f"dualarm.cloud.file = {path!r}: no points")
     if not np.isfinite(pts).all():
         raise ConfigError(f"dualarm.cloud.file = {path!r}: {int((~np.isfinite(pts)).any(axis=1).sum())} points are "
                           "not finite")

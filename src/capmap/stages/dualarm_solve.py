@@ -5,12 +5,12 @@ problem by AL-FDDP and by mim-solvers CSQP)."""
 from __future__ import annotations
 
 import time
-from dataclasses import asdict
+from dataclasses import asdict, replace
 
 import numpy as np
 import pandas as pd
 
-from capmap.config.dualarm import Horizon, check_horizon, horizon, weights
+from capmap.config.dualarm import Horizon, check_settings, horizon, weights
 from capmap.config.scene_file import load_scene
 from capmap.dualarm.assembly import Assembly, assemble, clearance_at, warm_start
 from capmap.dualarm.evaluate import active_pairs, fine_grid, node_errors, safety
@@ -97,7 +97,7 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
         ("converged", sol.converged), ("message", sol.message or "-"),
         ("solve time [s]", round(solve_s, 2)), ("warm start and key-pose checks [s]", round(t1 - t0, 2)),
         ("outer iterations", len(sol.stats)), ("FDDP iterations", int(outer.inner_iterations.sum())),
-        ("final penalty mu", sol.stats[-1].mu), ("final equality violation", sol.stats[-1].eq_violation),
+        ("final penalty mu", float(sol.stats[-1].mu)), ("final equality violation", sol.stats[-1].eq_violation),
         ("max closed-chain error at nodes [m]", err.closed_chain_pos.max()),
         ("max closed-chain error at nodes [rad]", err.closed_chain_rot.max()),
         ("max path error at nodes [m]", err.path_pos.max()), ("max path error at nodes [rad]", err.path_rot.max()),
@@ -133,25 +133,30 @@ def stage_dualarm_check(environment: str, capsules: str, out_csv: str, out_md: s
     deps = parse_slice(slice_json)
     d = deps["dualarm"]
     log = stage_logger(__name__, "dualarm check")
-    h, iterations = check_horizon(d)
-    robot, asm = setup(d, environment, capsules, h)
-    w, settings = weights(d), ALSettings(**d["solver"])
+    check = check_settings(d)
+    robot, asm = setup(d, environment, capsules, check.horizon)
+    w = weights({**d, "margin_m": 0.0})  # the equality-only problem has no safety constraints
+    settings = replace(ALSettings(**d["solver"]), tolerance=check.al_tolerance)
     xs0, us0 = initial_guess(warm_start(asm), asm.task.dt)
     limits = (robot.q_lower, robot.q_upper, robot.v_max)
     t0 = time.perf_counter()
     al = solve(asm, w, limits, settings, xs0, us0, inequalities=False)
     t_al = time.perf_counter() - t0
     t0 = time.perf_counter()
-    xc, uc, csqp_iterations = solve_csqp(asm, w, limits, xs0, us0, iterations, settings.tolerance)
+    csqp = solve_csqp(asm, w, limits, xs0, us0, check.max_iterations, check.tolerance)
     t_csqp = time.perf_counter() - t0
-    nq = asm.model.nq
+    nq, xc, uc = asm.model.nq, csqp.xs, csqp.us
+    cost_csqp = equality_cost(asm, w, xc, uc)
     rows = []
-    for name, xs, us, iters, secs in (("AL-FDDP", al.xs, al.us, sum(s.inner_iterations for s in al.stats), t_al),
-                                      ("CSQP", xc, uc, csqp_iterations, t_csqp)):
+    for name, xs, us, iters, ok, secs in (
+            ("AL-FDDP", al.xs, al.us, sum(s.inner_iterations for s in al.stats), al.converged, t_al),
+            ("CSQP", xc, uc, csqp.iterations, csqp.converged, t_csqp)):
         e = node_errors(asm, xs)
         cost = equality_cost(asm, w, xs, us)
-        rows.append({"solver": name, "horizon": f"N = {asm.task.N}, dt = {asm.task.dt:g} s", "iterations": int(iters),
-                     "time_s": secs, "cost": cost, "max_closed_chain_err_m": e.closed_chain_pos.max(),
+        rows.append({"solver": name, "horizon": f"N = {asm.task.N}, dt = {asm.task.dt:g} s", "converged": ok,
+                     "iterations": int(iters), "time_s": secs, "cost": cost,
+                     "cost_rel_diff_to_csqp": (cost - cost_csqp) / abs(cost_csqp),
+                     "max_closed_chain_err_m": e.closed_chain_pos.max(),
                      "max_path_err_m": e.path_pos.max(), "max_path_err_rad": e.path_rot.max(),
                      "max_q_diff_rad": float(np.abs(xs[:, :nq] - xc[:, :nq]).max()),
                      "max_qd_diff_rad_s": float(np.abs(xs[:, nq:] - xc[:, nq:]).max()),

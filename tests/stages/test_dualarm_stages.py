@@ -1,0 +1,64 @@
+"""The dual-arm scan and envelope stages on a user's cloud file (the documented format: CSV or
+Parquet with columns x_m, y_m, z_m in the robot base frame), and bad cloud files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from capmap.config.dualarm import cloud_source
+from capmap.config.scene_file import load_scene
+from capmap.dualarm.cloud import uncovered
+from capmap.dualarm.scene import scan
+from capmap.errors import ConfigError
+from capmap.io import datasets
+from capmap.stages.dualarm import envelope_from, stage_dualarm_envelope, stage_dualarm_scan
+from tests.dualarm.conftest import SECTION
+from tests.scenario import ROOT
+
+SCENE = str(ROOT / SECTION["scene"])
+
+
+def _slice(cloud: dict) -> str:
+    return json.dumps({"dualarm": {"scene": SCENE, "cloud": cloud}})
+
+
+@pytest.fixture(scope="module")
+def user_cloud(tmp_path_factory):
+    """A scan of the scene written as a user's CSV file (coarse, from the default viewpoints)."""
+    _, settings, _ = cloud_source(SECTION)
+    pts, _ = scan(load_scene(SCENE), settings, np.random.default_rng(5))
+    path = tmp_path_factory.mktemp("cloud") / "scan.csv"
+    pd.DataFrame(pts, columns=["x_m", "y_m", "z_m"]).assign(intensity=1.0).to_csv(path, index=False)
+    return path, pts
+
+
+def test_a_user_cloud_file_is_fitted_and_covered(user_cloud, tmp_path):
+    path, pts = user_cloud
+    stage_dualarm_scan(str(tmp_path / "cloud.parquet"), _slice({"file": str(path)}))
+    cloud = datasets.read(tmp_path / "cloud.parquet")
+    assert np.allclose(cloud[["x_m", "y_m", "z_m"]].to_numpy(), pts)  # the file's points, unchanged
+    assert cloud.attrs["capmap"]["source"] == f"file {path}"
+    stage_dualarm_envelope(str(tmp_path / "cloud.parquet"), str(tmp_path / "env.parquet"), _slice({"file": str(path)}))
+    env, labels = envelope_from(datasets.read(tmp_path / "env.parquet"))
+    assert len(uncovered(pts, env)) == 0  # independent of the stage's own check: re-read from Parquet
+    assert "bulkhead" in set(labels[0]) | set(labels[1])
+
+
+@pytest.mark.parametrize("content, expect", [
+    (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\xff\xfe", "cannot be read"),
+    (b"x,y,z\n0,0,0\n", "no column x_m"),
+    (b"x_m,y_m,z_m\n0,0,0\nnan,0,0\n", "1 points are not finite"),
+    (b"x_m,y_m,z_m\n0,0,0\n1,abc,0\n", "x_m, y_m, z_m"),
+])
+def test_bad_cloud_files_are_one_line_errors(tmp_path, content, expect):
+    bad = tmp_path / "bad.csv"
+    bad.write_bytes(content)
+    with pytest.raises(ConfigError) as err:
+        stage_dualarm_scan(str(tmp_path / "cloud.parquet"), _slice({"file": str(bad)}))
+    msg = str(err.value)
+    assert "dualarm.cloud.file" in msg and expect in msg and "\n" not in msg
+    assert not (tmp_path / "cloud.parquet").exists()
