@@ -10,6 +10,16 @@ min_version("8.0")
 # the default config only when no --configfile is given: a config file is complete on its own
 # (a deep merge over the default would leak keys such as directions.step_deg into other kinds)
 if not workflow.overwrite_configfiles:
+    import sys
+
+    from capmap.config.validation import load_yaml
+    from capmap.errors import CapmapError
+
+    try:  # a binary, empty or malformed default config: one line, not Snakemake's traceback
+        if not isinstance(load_yaml("config/config.yaml"), dict):
+            sys.exit("capmap: config/config.yaml: empty or not a mapping of keys")
+    except CapmapError as exc:
+        sys.exit(f"capmap: {exc}")
 
     configfile: "config/config.yaml"
 
@@ -19,6 +29,7 @@ include: "workflow/rules/capacity.smk"
 include: "workflow/rules/following.smk"
 include: "workflow/rules/reconfig.smk"
 include: "workflow/rules/dualarm.smk"
+include: "workflow/rules/atlas.smk"
 include: "workflow/rules/catalogue.smk"
 
 

@@ -23,6 +23,7 @@ ALLOWED = {
     "config": {"core", "capacity", "following", "reconfig", "dualarm", "io", "errors"},
     "plots": set(),
     "stages": {"core", "capacity", "following", "reconfig", "dualarm", "config", "io", "plots", "errors"},
+    "__main__": {"io", "errors"},  # the command line (python -m capmap check)
 }
 
 

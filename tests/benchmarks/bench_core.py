@@ -2,8 +2,8 @@
 
     python tests/benchmarks/bench_core.py [--points 20000] [--workers 2] [--step 10]
 
-Prints its figures; targets (issue 2): IK >= 1,000 points/s per core (all branches),
-capacity >= 1,000,000 states/s on this machine's 2 cores (state = configuration x direction).
+Prints its figures; targets: IK >= 1,000 points/s per core (all branches) for every locked
+joint, capacity >= 1,000,000 states/s on this machine's 2 cores (state = configuration x direction).
 """
 
 from __future__ import annotations
@@ -69,6 +69,19 @@ def main():
     dt = time.perf_counter() - t
     reach = sol.n_solutions > 0
     print(f"IK task orientation    : {args.points / dt:12,.0f} points/s/core  ({reach.mean():.1%} reachable)")
+
+    # every locked joint (where it stood in the scenario): the method and its speed on reachable poses
+    robot = load(ROBOT)
+    n_lock = max(args.points // 10, 200)
+    for joint, angle in enumerate([100, 124, 98, 130, 146, 174, 57], start=1):
+        arm_j = lock(robot, joint, np.deg2rad(angle))
+        Tj = arm_j.fk(rng.uniform(-np.pi, np.pi, (n_lock, 6)))
+        ik.solve(arm_j, Tj[:20, :3, 3], Tj[:20, :3, :3])  # compile the kernels once
+        t = time.perf_counter()
+        sol_j = ik.solve(arm_j, Tj[:, :3, 3], Tj[:, :3, :3])
+        dt = time.perf_counter() - t
+        print(f"IK joint {joint} locked      : {n_lock / dt:12,.0f} points/s/core  ({sol_j.method}, "
+              f"{sol_j.n_solutions.mean():.2f} branches per pose, max {sol_j.n_solutions.max()})")
 
     # capacity: the reachable points' configuration sets, split across workers
     q, n = sol.q[reach], sol.n_solutions[reach]

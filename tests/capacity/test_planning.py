@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from capmap.capacity.planning import astar, capacity_penalty, plan
-from capmap.capacity.voxels import Grid
+from capmap.capacity.voxels import Grid, capacity_volume
 from capmap.errors import CapmapError, NoPath
 from tests.reference.dijkstra import dijkstra_cost
 
@@ -87,3 +87,12 @@ def test_plan_errors_name_the_problem(where, change, expect, exc):
         own = own.replace(key, role)
     assert own in str(err.value)  # in its own terms
     assert "\n" not in str(err.value)
+
+
+def test_capacity_volume_counts_voxels_carrying_each_payload():
+    rng = np.random.default_rng(4)
+    cap = rng.uniform(0, 100, 500)
+    cap[rng.random(500) < 0.2] = np.nan  # unreachable voxels
+    payloads = np.array([-1.0, 0.0, 12.5, cap[~np.isnan(cap)][7], 99.9, 150.0])
+    brute = [sum(1 for c in cap if c == c and c >= m) * 0.5**3 for m in payloads]  # written out, NaN != NaN
+    assert np.allclose(capacity_volume(cap, 0.5, payloads), brute)

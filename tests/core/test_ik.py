@@ -85,16 +85,27 @@ def test_other_locks_closed_form(ssrms, joint, method):
     assert dp.max() <= RESIDUAL_TOL
 
 
-def test_numeric_fallback_finds_exact_solutions(ssrms):
-    arm = lock(ssrms, 4, 0.9)
+@pytest.mark.parametrize("joint, method", [(3, "semi_analytic"), (4, "semi_analytic"), (5, "semi_analytic")])
+def test_middle_locks_use_the_search(ssrms, joint, method):
+    assert method_for(lock(ssrms, joint, 0.4).chain) == method
+
+
+def test_numeric_fallback_finds_exact_solutions(tmp_path, caplog):
+    doc = yaml.safe_load(SSRMS_YAML.read_text())
+    doc["dh"]["rows"][3][0] = 10  # joints 3, 4, 5 no longer parallel: no closed form, no search
+    doc["dh"]["rows"][4][0] = 170
+    (tmp_path / "r.yaml").write_text(yaml.safe_dump(doc))
+    arm = lock(load(tmp_path / "r.yaml"), 1, 0.9)
     assert method_for(arm.chain) == "numeric"
     rng = np.random.default_rng(11)
     T = arm.fk(rng.uniform(-np.pi, np.pi, (5, 6)))
-    sol = solve(arm, T[:, :3, 3], T[:, :3, :3])
+    with caplog.at_level("WARNING", logger="capmap.core.ik"):
+        sol = solve(arm, T[:, :3, 3], T[:, :3, :3])
+    assert "may miss branches" in caplog.text
     assert np.all(sol.n_solutions >= 1)
     for i in range(5):
         q = sol.q[i, : sol.n_solutions[i]]
-        dp, _ = _pin_residual(ssrms, arm, q, T[i, :3, 3], T[i, :3, :3])
+        dp, _ = _pin_residual(arm.robot, arm, q, T[i, :3, 3], T[i, :3, :3])
         assert dp.max() <= RESIDUAL_TOL and _distinct(q)
 
 

@@ -3,78 +3,15 @@
 from __future__ import annotations
 
 import hashlib
-import re
 import shutil
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-import yaml
 
-from capmap.config.robot_file import load
-from capmap.core import ik
-from capmap.core.reduction import lock
-from tests.scenario import ROOT, TASK_R, X_DES, X_INI
-
-TINY = ROOT / "tests" / "data" / "tiny.yaml"
-
-
-def _config(tmp: Path, **changes) -> Path:
-    doc = yaml.safe_load(TINY.read_text())
-    doc["robot"] = str(ROOT / "config" / "robots" / "ssrms7.yaml")
-    doc["follow"]["ground"]["robot"] = str(ROOT / "config" / "robots" / "ur5.yaml")
-    doc["reconfig"]["robot"] = str(ROOT / "config" / "robots" / "reconfig3.yaml")
-    doc["dualarm"]["robot"] = str(ROOT / "config" / "robots" / "baxter_dual.yaml")
-    doc["dualarm"]["scene"] = str(ROOT / "config" / "scenes" / "satellite_panel.yaml")
-    for dotted, value in changes.items():
-        node = doc
-        *head, last = dotted.split(".")
-        for h in head:
-            node = node.setdefault(h, {})
-        node[last] = value
-    path = tmp / f"config_{abs(hash(repr(sorted(changes.items()))))}.yaml"
-    path.write_text(yaml.safe_dump(doc))
-    return path
-
-
-def _snakemake(workdir: Path, config: Path, *extra: str) -> subprocess.CompletedProcess:
-    cmd = ["snakemake", "all", "-s", str(ROOT / "Snakefile"), "-d", str(workdir), "--cores", "2", *extra,
-           "--configfile", str(config)]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-
-
-def _planned_jobs(workdir: Path, config: Path) -> dict[str, int]:
-    """Rules a dry run would execute, with counts (empty when nothing is to be done)."""
-    res = _snakemake(workdir, config, "-n")
-    assert res.returncode == 0, res.stderr[-2000:]
-    out = res.stdout + res.stderr
-    m = re.search(r"job\s+count\n-+\s+-+\n(.*?)\ntotal", out, re.S)
-    if not m:
-        assert "Nothing to be done" in out, out[-2000:]
-        return {}
-    return {line.split()[0]: int(line.split()[1]) for line in m.group(1).strip().splitlines()}
-
-
-def _q_ini_locked(joint: int, angle_deg: float) -> list[float]:
-    """An exact start configuration with ``joint`` locked at angle_deg (the branch nearest the scenario's)."""
-    arm = lock(load(ROOT / "config/robots/ssrms7.yaml"), joint, np.deg2rad(angle_deg))
-    sol = ik.solve(arm, X_INI[None], TASK_R)
-    q = sol.q[0, : sol.n_solutions[0]]
-    ref = np.deg2rad(np.delete([100, 124, 98, 130, 146, 174, 57.0], joint - 1))
-    best = np.rad2deg(q[np.argmin(np.abs(q - ref).max(axis=1))]).tolist()
-    return best[: joint - 1] + [float(angle_deg)] + best[joint - 1:]
-
-
-@pytest.fixture(scope="module")
-def run_dir(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("pipeline")
-    cfg = _config(tmp)
-    res = _snakemake(tmp, cfg)
-    assert res.returncode == 0, res.stderr[-3000:]
-    return tmp, cfg
-
+from tests.scenario import ROOT, X_DES, X_INI
+from tests.workflow.runs import config_file, planned_jobs, planned_jobs_of, snakemake_run
 
 def test_outputs_and_provenance(run_dir):
     tmp, _ = run_dir
@@ -135,66 +72,68 @@ def test_catalogue_lists_every_dataset(run_dir):
 
 def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     tmp, cfg = run_dir
-    assert _planned_jobs(tmp, cfg) == {}
+    assert planned_jobs(tmp, cfg) == {}
     after_payload = {"plan", "verify", "verify_plots", "verify_summary", "catalogue", "all"}
     follow = {"follow", "follow_plots", "follow_summary"}
     downstream_of_capacity = {"capacity", "voxels", "summary"} | after_payload | follow
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"limits.joint_torque_nm": 650}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"limits.joint_torque_nm": 650}))
     assert set(jobs) == downstream_of_capacity and jobs["capacity"] == 2
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"limits.base_moment_nm": 450}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"limits.base_moment_nm": 450}))
     assert set(jobs) == downstream_of_capacity
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.angle_deg": 95, "task.q_ini_deg": _q_ini_locked(1, 95)}))
+    # the failure in one edit: another angle, or another joint locked where it stood
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"lock.angle_deg": 95}))
     assert set(jobs) == {"sample"} | downstream_of_capacity
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"lock.joint": 7, "lock.angle_deg": 57,
-                                                   "task.q_ini_deg": _q_ini_locked(7, 57)}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"lock.joint": 7}))
     assert set(jobs) == {"sample"} | downstream_of_capacity
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": 900, "follow.space.payload_kg": 900}))
+    # the lock angle written out as it stood, or the start written out as FK(q_ini): the same run
+    assert planned_jobs(tmp, config_file(tmp_path, **{"lock.angle_deg": None})) == {}
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"task.payload_kg": 900, "follow.space.payload_kg": 900}))
     assert set(jobs) == after_payload | follow and jobs["follow"] == 1  # the space case follows the new plan
     # a second payload: one new plan/verify/plots job each, nothing for the first payload (nor its follower)
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.payload_kg": [1500, 900]}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"task.payload_kg": [1500, 900]}))
     assert set(jobs) == after_payload and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"verification.dt_s": 0.2}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"verification.dt_s": 0.2}))
     assert set(jobs) == after_payload - {"plan"}  # the follower does not sample at dt_s
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.q_ini_deg": [100, 124.5, 98, 130, 146, 174, 57]}))
-    assert set(jobs) == (after_payload - {"plan"}) | follow and jobs["follow"] == 1  # its start branch
+    # q_ini matters through the start branch it selects: rounded differently, nothing reruns
+    assert planned_jobs(tmp, config_file(tmp_path, **{"task.q_ini_deg": [100, 124.5, 98, 130, 146, 174, 57]})) == {}
     # the follower's own settings: only that case
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"follow.ground.joint_torque_nm": 15}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"follow.ground.joint_torque_nm": 15}))
     assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == jobs["follow_plots"] == 1
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"follow.period_s": 0.002}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"follow.period_s": 0.002}))
     assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == 2
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"task.v_max_mps": 0.1}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"task.v_max_mps": 0.1}))
     assert set(jobs) == downstream_of_capacity
     # the reconfiguration family: kappa0 is the null-space method's only; the frame rate the animation's
     reconfig = {"reconfig", "reconfig_summary", "reconfig_plots", "reconfig_animation", "catalogue", "all"}
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"reconfig.kappa0": 0.0003}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"reconfig.kappa0": 0.0003}))
     assert set(jobs) == reconfig and jobs["reconfig"] == 1
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"reconfig.animation_fps": 4}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"reconfig.animation_fps": 4}))
     assert set(jobs) == {"reconfig_animation", "all"}
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"reconfig.law.d_m": 0.2}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"reconfig.law.d_m": 0.2}))
     assert set(jobs) == reconfig and jobs["reconfig"] == 2
     # the dual-arm family: a cost weight re-optimises, the scene and the capsules stay
     motion = {"dualarm_optimise", "dualarm_check", "dualarm_plots", "dualarm_animation", "catalogue", "all"}
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.weights.velocity": 2.0}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.weights.velocity": 2.0}))
     assert set(jobs) == motion
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.margin_m": 0.004}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.margin_m": 0.004}))
     assert set(jobs) == motion - {"dualarm_check"}  # the check has no inequalities
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.check.max_iterations": 50}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.check.max_iterations": 50}))
     assert set(jobs) == {"dualarm_check", "all"}
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.animation_fps": 4}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.animation_fps": 4}))
     assert set(jobs) == {"dualarm_animation", "all"}
-    jobs = _planned_jobs(tmp, _config(tmp_path, **{"dualarm.cloud.noise_m": 0.004}))
+    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.cloud.noise_m": 0.004}))
     assert set(jobs) == {"dualarm_scan", "dualarm_envelope"} | motion
 
 
 def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
     tmp, _ = run_dir
-    cfg3 = _config(tmp_path, shards=3)
-    jobs = _planned_jobs(tmp, cfg3)
+    cfg3 = config_file(tmp_path, shards=3)
+    jobs = planned_jobs(tmp, cfg3)
     assert jobs.get("capacity") == 3 and "sample" not in jobs and "model" not in jobs
     before = pd.read_parquet(tmp / "results/voxels/voxels.parquet")
     work3 = tmp_path / "w3"
     work3.mkdir()
-    res = _snakemake(work3, cfg3)
+    res = snakemake_run(work3, cfg3)
     assert res.returncode == 0, res.stderr[-2000:]
     after = pd.read_parquet(work3 / "results/voxels/voxels.parquet")
     pd.testing.assert_series_equal(before.capacity_kg, after.capacity_kg)
@@ -300,11 +239,39 @@ def test_dualarm_outputs(run_dir):
         assert (res / f"{png}.png").stat().st_size > 10_000
 
 
+def test_atlas_maps_agree_with_the_main_run_and_rerun_alone(run_dir, tmp_path):
+    tmp, cfg = run_dir
+    res = subprocess.run(["snakemake", "atlas", "-s", str(ROOT / "Snakefile"), "-d", str(tmp), "--cores", "2",
+                          "--configfile", str(cfg)], capture_output=True, text=True, timeout=900)
+    assert res.returncode == 0, res.stderr[-3000:]
+    atlas = pd.read_parquet(tmp / "results/atlas/atlas.parquet")
+    assert len(atlas) == 2 * 2 * 1 and set(atlas.joint) == {1, 4} and set(atlas.angle_deg) == {100.0, 130.0}
+    # joint 1 at 100 deg is the main run's lock: the same start, so the same direct-line capacity
+    row = atlas[(atlas.joint == 1) & (atlas.angle_deg == 100)].iloc[0]
+    summ = pd.read_csv(tmp / "results/verify/summary.csv").set_index(["payload_kg", "path"])
+    assert row.start_reachable and row.direct_capacity_kg == pytest.approx(summ.loc[(1500, "direct"), "capacity_kg"],
+                                                                           rel=1e-12)
+    assert row.start_branch_offset_deg == pytest.approx(0.54, abs=0.01)
+    # every map's summary agrees with its own voxels (reachable volume, volume carrying the payload)
+    for _, r in atlas.iterrows():
+        vox = pd.read_parquet(tmp / f"results/atlas/joint{r.joint}_angle{r.angle_deg:g}/voxels.parquet")
+        reach = vox[vox.n_reachable > 0]
+        assert r.reachable_volume_m3 == pytest.approx(len(reach) * 27.0)
+        assert r.volume_carrying_payload_m3 == pytest.approx((reach.capacity_kg >= r.payload_kg).sum() * 27.0)
+    curves = pd.read_parquet(tmp / "results/atlas/curves.parquet")
+    assert len(curves) == 4 * 101 and (curves.groupby(["joint", "angle_deg"]).volume_m3.diff().dropna() <= 0).all()
+    cat = pd.read_parquet(tmp / "results/atlas/catalogue.parquet")
+    assert len(cat) == 4 * 2 + 2
+    # another angle: one new map and the table; nothing of the main run
+    jobs = planned_jobs_of(tmp, config_file(tmp_path, **{"atlas.angles_deg": [100, 130, 160]}), "atlas")
+    assert jobs == {"atlas_map": 2, "atlas_tables": 1, "atlas_catalogue": 1, "atlas": 1}
+
+
 def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     tmp, _ = run_dir
     work = tmp_path / "w"
     shutil.copytree(tmp, work, symlinks=True)
-    res = _snakemake(work, _config(tmp_path, **{"task.payload_kg": [1500, 90000]}))
+    res = snakemake_run(work, config_file(tmp_path, **{"task.payload_kg": [1500, 90000]}))
     assert res.returncode == 0, res.stderr[-2000:]
     wp = pd.read_parquet(work / "results/plan/payload_90000kg/waypoints.parquet")
     assert len(wp) == 0 and wp.attrs["capmap"]["status"] == "no_path"
@@ -313,40 +280,3 @@ def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     assert "below task.payload_kg = 90000" in summ.loc[(90000, "planned"), "planner"]
     direct = summ.loc[(90000, "direct")]
     assert not direct.loads_ok and not direct.feasible and direct.limits_exceeded_at_payload
-
-
-@pytest.mark.parametrize("changes, expect", [
-    ({"limts": 3}, "unknown key limts"),
-    ({"lock.joint": 9}, "lock.joint = 9 is out of range"),
-    ({"limits.joint_torque_nm": -5}, "limits.joint_torque_nm"),
-    ({"limits.joint_torque_nm": [700, 700]}, "limits.joint_torque_nm has 2 values"),
-    ({"directions.n": 0}, "directions.n"),
-    ({"task.q_ini_deg": [90, 124, 98, 130, 146, 174, 57]}, "must equal lock.angle_deg"),
-    ({"task.goal_m": [30, 0, 0]}, "task.goal_m = [30, 0, 0] is not reachable"),
-    ({"task.q_ini_deg": [100, 124, 98, 140, 146, 174, 57]}, "task.q_ini_deg is 9.97 deg from the nearest"),
-    ({"task.payload_kg": [1500, 1500]}, "task.payload_kg"),
-    ({"verification.dt_s": 0}, "verification.dt_s"),
-    ({"follow.space.payload_kg": 1234}, "follow.space.payload_kg = 1234 is not one of task.payload_kg"),
-    ({"follow.ground.joint_torque_nm": [14, 150]}, "follow.ground.joint_torque_nm has 2 values; give one or 6"),
-    ({"follow.ground.q_start_deg": [0, 0]}, "follow.ground.q_start_deg has 2 values"),
-    ({"follow.ground.speed": 1}, "unknown key"),
-    ({"follow.ground.line_m": [0, 3, 0]}, "follow.ground.line_m = [0, 3, 0] ends at"),
-    ({"reconfig.unlock": "arm1.J3"}, "arm1.J3 is a revolute joint, not a passive one"),
-    ({"reconfig.unlock": "arm3.P1"}, "arm3.P1 is not on the closed chain through capture arm1_arm2"),
-    ({"reconfig.capture": "arm1_arm9"}, "reconfig.capture = 'arm1_arm9': reconfig3 has no capture 'arm1_arm9'"),
-    ({"reconfig.law.d_m": 2.0}, "reconfig.law takes arm1.P1's d to 2 m, outside its range [-0.5, 0.8] m"),
-    ({"reconfig.configuration_deg.arm2": [0, 0, 0, 0, 0]}, "reconfig.configuration_deg.arm2 has 5 values but arm2 has 6"),
-    ({"reconfig.configuration_deg.arm1": [0, 0, 0, 0, 0, 0]}, "reconfig.configuration_deg does not close capture"),
-    ({"reconfig.joint_rate_limit_deg_s": [1, 2]}, "reconfig.joint_rate_limit_deg_s has 2 values; give one or 10"),
-    ({"dualarm.horizon.pre_insertion_node": 100}, "dualarm.horizon.pre_insertion_node = 100 must lie between 0 and"),
-    ({"dualarm.cloud.file": "scan.csv"}, "dualarm.cloud: give either file or a synthetic scan"),
-    ({"dualarm.weights.mass": 1}, "unknown key"),
-    ({"dualarm.scene": "nowhere.yaml"}, "nowhere.yaml"),
-])
-def test_bad_config_is_one_line_before_any_job(tmp_path, changes, expect):
-    res = _snakemake(tmp_path, _config(tmp_path, **changes), "-n")
-    assert res.returncode != 0
-    err = [line for line in (res.stdout + res.stderr).splitlines() if line.startswith("capmap:")]
-    assert len(err) == 1 and expect in err[0], res.stdout + res.stderr
-    assert "Traceback" not in res.stdout + res.stderr
-    assert not (tmp_path / "results").exists()

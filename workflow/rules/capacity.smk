@@ -8,7 +8,7 @@ rule model:
     output:
         "results/model/joints.parquet",
     params:
-        slice=slice_json("model"),
+        slice=with_code(slice_json("model"), "model"),
     log:
         "results/logs/model.log",
     script:
@@ -22,7 +22,7 @@ rule sample:
     output:
         "results/sample/points.parquet",
     params:
-        slice=slice_json("sample"),
+        slice=with_code(slice_json("sample"), "sample"),
     log:
         "results/logs/sample.log",
     script:
@@ -36,7 +36,7 @@ rule capacity:
     output:
         "results/capacity/shard_{k}_of_{n}.parquet",
     params:
-        slice=slice_json("capacity"),
+        slice=with_code(slice_json("capacity"), "capacity"),
     log:
         "results/logs/capacity/shard_{k}_of_{n}.log",
     wildcard_constraints:
@@ -54,7 +54,7 @@ rule voxels:
         voxels="results/voxels/voxels.parquet",
         points="results/voxels/points.parquet",
     params:
-        slice=slice_json("voxels"),
+        slice=with_code(slice_json("voxels"), "voxels"),
     log:
         "results/logs/voxels.log",
     script:
@@ -71,7 +71,7 @@ rule summary:
         md="results/summary/capacity_summary.md",
         png=report("results/summary/capacity_map.png", category="Capacity map", caption="../report/capacity_map.rst"),
     params:
-        slice=slice_json("voxels"),
+        slice=with_code(slice_json("voxels"), "summary"),
     log:
         "results/logs/summary.log",
     script:
@@ -85,7 +85,7 @@ rule plan:
     output:
         "results/plan/payload_{payload}kg/waypoints.parquet",
     params:
-        slice=lambda w: slice_json("plan", w.payload),
+        slice=lambda w: with_code(slice_json("plan", w.payload), "plan"),
     log:
         "results/logs/plan/payload_{payload}kg.log",
     wildcard_constraints:
@@ -104,7 +104,7 @@ rule verify:
         csv="results/verify/payload_{payload}kg/summary.csv",
         md="results/verify/payload_{payload}kg/summary.md",
     params:
-        slice=lambda w: slice_json("verify", w.payload),
+        slice=lambda w: with_code(slice_json("verify", w.payload), "verify"),
     log:
         "results/logs/verify/payload_{payload}kg.log",
     wildcard_constraints:
@@ -128,7 +128,7 @@ rule verify_plots:
         moment=report("results/verify/payload_{payload}kg/base_moment.png", category="Verification",
                       subcategory="{payload} kg", caption="../report/loads.rst"),
     params:
-        slice=lambda w: slice_json("verify", w.payload),
+        slice=lambda w: with_code(slice_json("verify", w.payload), "verify_plots"),
     log:
         "results/logs/verify/plots_payload_{payload}kg.log",
     wildcard_constraints:
@@ -144,6 +144,8 @@ rule verify_summary:
     output:
         csv=report("results/verify/summary.csv", category="Verification", caption="../report/verify_summary.rst"),
         md="results/verify/summary.md",
+    params:
+        code=with_code("{}", "verify_summary"),
     log:
         "results/logs/verify/summary.log",
     script:

@@ -19,6 +19,8 @@ rule catalogue:
         DATASETS,
     output:
         report("results/catalogue.parquet", category="Catalogue"),
+    params:
+        code=with_code("{}", "catalogue"),
     log:
         "results/logs/catalogue.log",
     script:

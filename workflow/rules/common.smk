@@ -1,19 +1,25 @@
 # Validation and config slices: run once, before any job (snakemake-workflows' common.smk).
+import json
 import sys
+from pathlib import Path
 
-from capmap.config import (canonical, check_run_config, dualarm_slices, follow_slices, payload_label, reconfig_slices,
-                           stage_slices)
+from capmap.config import (atlas_slices, canonical, check_run_config, dualarm_slices, follow_slices, payload_label,
+                           reconfig_slices, resolved_doc, stage_slices)
 from capmap.errors import CapmapError
+from capmap.io.fingerprint import script_fingerprint
 
 # validate once, before any job: schema, robot file, locked joint, limits, task poses, follow cases
 try:
-    RUN = check_run_config(config)
+    RUN = check_run_config(config, ", ".join(map(str, workflow.overwrite_configfiles)) or "config/config.yaml")
 except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
-SLICES = stage_slices(config)
+print(f"capmap: {RUN.failure.describe()}", file=sys.stderr)
+print(f"capmap: estimate: {RUN.estimate.describe(RUN.voxel_edge_m)}", file=sys.stderr)
+DOC = resolved_doc(config, RUN.failure)  # lock angle, start and start configuration resolved
+SLICES = stage_slices(DOC)
 SHARDS = RUN.shards
 PAYLOADS = [payload_label(m) for m in RUN.task.payload_kg]  # wildcard values, e.g. "1500"
-FOLLOW_SLICES = follow_slices(config)
+FOLLOW_SLICES = follow_slices(DOC)
 FOLLOW_CASES = list(FOLLOW_SLICES)  # "space", "ground": those configured under follow
 PAYLOAD_RE = "|".join(p.replace(".", r"\.") for p in PAYLOADS)
 
@@ -23,4 +29,12 @@ def slice_json(stage, payload=None):
     plan/verify jobs handle one payload each and depend on that payload only."""
     if payload is None:
         return canonical(SLICES[stage]["upstream"])
-    return canonical(stage_slices(config, float(payload))[stage]["upstream"])
+    return canonical(stage_slices(DOC, float(payload))[stage]["upstream"])
+
+
+def with_code(slice_json_text, script):
+    """A rule's params: its config slice plus the fingerprint of the code it runs (the script's
+    syntax tree and every capmap module it imports; see capmap.io.fingerprint), so that a change
+    of the numerics reruns it and a comment does not. Recorded in the outputs' provenance."""
+    path = Path(workflow.basedir) / "workflow" / "scripts" / f"{script}.py"
+    return canonical({**json.loads(slice_json_text), "code": script_fingerprint(path)})

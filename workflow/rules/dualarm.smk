@@ -20,7 +20,7 @@ rule dualarm_scan:
     output:
         "results/dualarm/cloud.parquet",
     params:
-        slice=lambda w: dualarm_json("scan"),
+        slice=lambda w: with_code(dualarm_json("scan"), "dualarm_scan"),
     log:
         "results/logs/dualarm/scan.log",
     script:
@@ -35,7 +35,7 @@ rule dualarm_envelope:
     output:
         "results/dualarm/environment.parquet",
     params:
-        slice=lambda w: dualarm_json("envelope"),
+        slice=lambda w: with_code(dualarm_json("envelope"), "dualarm_envelope"),
     log:
         "results/logs/dualarm/envelope.log",
     script:
@@ -49,7 +49,7 @@ rule dualarm_capsules:
     output:
         "results/dualarm/robot_capsules.parquet",
     params:
-        slice=lambda w: dualarm_json("capsules"),
+        slice=lambda w: with_code(dualarm_json("capsules"), "dualarm_capsules"),
     log:
         "results/logs/dualarm/capsules.log",
     script:
@@ -69,7 +69,7 @@ rule dualarm_optimise:
         csv=report("results/dualarm/summary.csv", category="Dual-arm assembly", caption="../report/dualarm_summary.rst"),
         md="results/dualarm/summary.md",
     params:
-        slice=lambda w: dualarm_json("optimise"),
+        slice=lambda w: with_code(dualarm_json("optimise"), "dualarm_optimise"),
     log:
         "results/logs/dualarm/optimise.log",
     script:
@@ -86,7 +86,7 @@ rule dualarm_check:
         csv=report("results/dualarm/csqp_check.csv", category="Dual-arm assembly", caption="../report/dualarm_check.rst"),
         md="results/dualarm/csqp_check.md",
     params:
-        slice=lambda w: dualarm_json("check"),
+        slice=lambda w: with_code(dualarm_json("check"), "dualarm_check"),
     log:
         "results/logs/dualarm/check.log",
     script:
@@ -109,6 +109,8 @@ rule dualarm_plots:
                           caption="../report/dualarm_joints.rst"),
         convergence=report("results/dualarm/convergence.png", category="Dual-arm assembly",
                            caption="../report/dualarm_convergence.rst"),
+    params:
+        code=with_code("{}", "dualarm_plots"),
     log:
         "results/logs/dualarm/plots.log",
     script:
@@ -124,7 +126,7 @@ rule dualarm_animation:
     output:
         report("results/dualarm/animation.html", category="Dual-arm assembly", caption="../report/dualarm_animation.rst"),
     params:
-        slice=lambda w: dualarm_json("animation"),
+        slice=lambda w: with_code(dualarm_json("animation"), "dualarm_animation"),
     log:
         "results/logs/dualarm/animation.log",
     script:

@@ -18,7 +18,7 @@ rule follow:
         csv="results/follow/{case}/summary.csv",
         md="results/follow/{case}/summary.md",
     params:
-        slice=lambda w: canonical(FOLLOW_SLICES[w.case]),
+        slice=lambda w: with_code(canonical(FOLLOW_SLICES[w.case]), "follow"),
     log:
         "results/logs/follow/{case}.log",
     wildcard_constraints:
@@ -38,7 +38,7 @@ rule follow_plots:
         torques=report("results/follow/{case}/torques.png", category="Following", subcategory="{case}",
                        caption="../report/follow_torques.rst"),
     params:
-        slice=lambda w: canonical(FOLLOW_SLICES[w.case]),
+        slice=lambda w: with_code(canonical(FOLLOW_SLICES[w.case]), "follow_plots"),
     log:
         "results/logs/follow/plots_{case}.log",
     wildcard_constraints:
@@ -54,6 +54,8 @@ rule follow_summary:
     output:
         csv=report("results/follow/summary.csv", category="Following", caption="../report/follow_summary.rst"),
         md="results/follow/summary.md",
+    params:
+        code=with_code("{}", "follow_summary"),
     log:
         "results/logs/follow/summary.log",
     script:

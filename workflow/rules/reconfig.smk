@@ -11,7 +11,7 @@ rule reconfig:
         table="results/reconfig/{method}.parquet",
         timing="results/reconfig/{method}_timing.json",
     params:
-        slice=lambda w: canonical(RECONFIG_SLICES[w.method]),
+        slice=lambda w: with_code(canonical(RECONFIG_SLICES[w.method]), "reconfig"),
     log:
         "results/logs/reconfig/{method}.log",
     wildcard_constraints:
@@ -28,6 +28,8 @@ rule reconfig_summary:
     output:
         csv=report("results/reconfig/summary.csv", category="Reconfiguration", caption="../report/reconfig_summary.rst"),
         md="results/reconfig/summary.md",
+    params:
+        code=with_code("{}", "reconfig_summary"),
     log:
         "results/logs/reconfig/summary.log",
     script:
@@ -45,6 +47,8 @@ rule reconfig_plots:
                      caption="../report/reconfig_rates.rst"),
         passive=report("results/reconfig/passive_joint.png", category="Reconfiguration",
                        caption="../report/reconfig_passive.rst"),
+    params:
+        code=with_code("{}", "reconfig_plots"),
     log:
         "results/logs/reconfig/plots.log",
     script:
@@ -60,7 +64,7 @@ rule reconfig_animation:
         report("results/reconfig/animation.html", category="Reconfiguration",
                caption="../report/reconfig_animation.rst"),
     params:
-        slice=lambda w: canonical(RECONFIG_SLICES["animation"]),
+        slice=lambda w: with_code(canonical(RECONFIG_SLICES["animation"]), "reconfig_animation"),
     log:
         "results/logs/reconfig/animation.log",
     script:

@@ -15,7 +15,7 @@ import numpy as np
 
 from capmap.errors import CapmapError
 
-__all__ = ["Grid", "VoxelMap", "voxelise"]
+__all__ = ["Grid", "VoxelMap", "voxelise", "capacity_volume"]
 
 
 @dataclass(frozen=True)
@@ -89,3 +89,11 @@ def voxelise(grid: Grid, points: np.ndarray, capacity_kg: np.ndarray, reachable:
     worst[flat[r][hit]] = ids[hit]
     cap[n_reach == 0] = np.nan
     return VoxelMap(grid=grid, n_points=n_points, n_reachable=n_reach, capacity_kg=cap, worst_point=worst)
+
+
+def capacity_volume(capacity_kg: np.ndarray, edge_m: float, payloads_kg: np.ndarray) -> np.ndarray:
+    """Volume (P,) m^3 of the voxels that carry at least each payload (P,) kg: the capacity-volume
+    curve of a map whose reachable voxels have capacities (V,) kg (NaN: unreachable, ignored)."""
+    cap = np.sort(np.asarray(capacity_kg, dtype=float)[np.isfinite(capacity_kg)])
+    count = len(cap) - np.searchsorted(cap, np.asarray(payloads_kg, dtype=float), side="left")
+    return count * edge_m**3

@@ -10,12 +10,15 @@
 - :mod:`~capmap.config.platform_file` platform robot files (arms of revolute and passive joints)
 - :mod:`~capmap.config.run`         the whole run configuration
 - :mod:`~capmap.config.slices`      what each stage depends on (rule params, provenance)
+- :mod:`~capmap.config.failure`     the failure in one edit: lock angle, start, start configuration
 - :mod:`~capmap.config.checks`      checks that need the robot, with errors naming config keys
 """
 
 from capmap.config.checks import check_run_config
+from capmap.config.failure import Failure, resolve_failure, resolved_doc
 from capmap.config.run import RunConfig, load_config, parse_config
 from capmap.config.slices import (
+    atlas_slices,
     canonical,
     config_hash,
     dualarm_slices,
@@ -25,5 +28,6 @@ from capmap.config.slices import (
     stage_slices,
 )
 
-__all__ = ["RunConfig", "parse_config", "load_config", "check_run_config", "canonical", "config_hash",
-           "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices"]
+__all__ = ["RunConfig", "parse_config", "load_config", "check_run_config", "Failure", "resolve_failure",
+           "resolved_doc", "canonical", "config_hash",
+           "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices", "atlas_slices"]

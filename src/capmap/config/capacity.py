@@ -11,11 +11,11 @@ import pinocchio as pin
 from capmap.capacity import directions
 from capmap.capacity.directions import Directions
 from capmap.capacity.engine import LoadLimits, Motion
-from capmap.config.validation import as_tuple
+from capmap.config.validation import as_tuple, per_item
 from capmap.errors import ConfigError
 
 __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "DirectionsConfig", "VerificationConfig",
-           "per_item", "rotation_from_rpy", "DEFAULT_DT_S"]
+           "rotation_from_rpy", "DEFAULT_DT_S"]
 
 DEFAULT_DT_S = 0.1  # verification.dt_s when not given
 
@@ -25,22 +25,13 @@ def rotation_from_rpy(rpy_deg) -> np.ndarray:
     return pin.rpy.rpyToMatrix(*np.deg2rad(np.asarray(rpy_deg, dtype=float)))
 
 
-def per_item(value, n: int, key: str) -> np.ndarray:
-    """One value for all n items, or exactly n values (else a one-line error naming key)."""
-    v = np.atleast_1d(np.asarray(value, dtype=float))
-    if len(v) == 1:
-        return np.full(n, v[0])
-    if len(v) != n:
-        raise ConfigError(f"{key} has {len(v)} values; give one or {n}")
-    return v
-
-
 @dataclass(frozen=True)
 class LockConfig:
-    """``lock``: the failed joint (1-based) and the angle it is locked at."""
+    """``lock``: the failed joint (1-based) and the angle it is locked at (None: where it stood,
+    see :mod:`capmap.config.failure`)."""
 
     joint: int
-    angle_deg: float
+    angle_deg: float | None = None
 
     @classmethod
     def from_doc(cls, d: dict) -> "LockConfig":
@@ -50,15 +41,16 @@ class LockConfig:
 @dataclass(frozen=True)
 class TaskConfig:
     """``task``: the fixed end-effector orientation, straight-line speed and acceleration limits,
-    the payloads to plan and verify, start and goal positions, and the start configuration."""
+    the payloads to plan and verify, start and goal positions (start None: where the end
+    effector stood at q_ini), and the configuration when the joint failed."""
 
     orientation_rpy_deg: tuple[float, float, float]
     v_max_mps: float
     a_max_mps2: float
     payload_kg: tuple[float, ...]
-    start_m: tuple[float, float, float]
     goal_m: tuple[float, float, float]
     q_ini_deg: tuple[float, ...]
+    start_m: tuple[float, float, float] | None = None
 
     @classmethod
     def from_doc(cls, d: dict) -> "TaskConfig":

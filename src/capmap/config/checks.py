@@ -5,67 +5,78 @@ here their messages are re-worded with the config keys (:meth:`CapmapError.in_te
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from capmap.config.capacity import TaskConfig, per_item
+from capmap.config.atlas import AtlasConfig
+from capmap.config.capacity import TaskConfig
+from capmap.config.validation import per_item
 from capmap.config.dualarm import load_dual_arm_file
+from capmap.config.estimate import estimate_map
+from capmap.config.failure import Failure, locked_arm, resolve_failure
 from capmap.config.following import FollowConfig
 from capmap.config.reconfig import rate_limits, reconfig_problem
 from capmap.config.robot_file import load
 from capmap.config.scene_file import load_scene
 from capmap.config.run import RunConfig, parse_config
 from capmap.core import ik
-from capmap.core.reduction import LockedArm, free, lock
-from capmap.core.tracking import start_branch
-from capmap.errors import CapmapError, ConfigError
+from capmap.core.profiles import MIN_PHASE_INTERVALS
+from capmap.core.reduction import LockedArm, free
+from capmap.core.robot import Robot
+from capmap.errors import ConfigError
 
-__all__ = ["check_run_config", "check_task_poses", "check_follow", "locked_arm"]
-
-
-def locked_arm(robot, joint: int, angle_deg: float) -> LockedArm:
-    """:func:`capmap.core.reduction.lock` with its errors in config terms."""
-    try:
-        return lock(robot, joint, np.deg2rad(angle_deg))
-    except CapmapError as exc:
-        raise ConfigError(exc.in_terms(joint="lock.joint", angle="lock.angle_deg")) from None
+__all__ = ["check_run_config", "check_goal", "check_dt", "check_follow", "check_atlas"]
 
 
 def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     """Everything that can be checked before any job: schema, robot file, lock, limits, directions."""
     cfg = parse_config(doc, source)
     robot = load(cfg.robot)
-    arm = locked_arm(robot, cfg.lock.joint, cfg.lock.angle_deg)
-    cfg.limits.resolve(robot.n_joints).for_arm(arm)
-    cfg.directions.build()
-    if len(cfg.task.q_ini_deg) != robot.n_joints:
-        raise ConfigError(f"{source}: task.q_ini_deg has {len(cfg.task.q_ini_deg)} values but {robot.name} has "
-                          f"{robot.n_joints} joints")
-    locked = cfg.task.q_ini_deg[cfg.lock.joint - 1]
-    if abs(locked - cfg.lock.angle_deg) > 1e-9:
-        raise ConfigError(f"{source}: task.q_ini_deg[{cfg.lock.joint - 1}] = {locked:g} must equal lock.angle_deg = "
-                          f"{cfg.lock.angle_deg:g} (joint {cfg.lock.joint} is locked)")
-    check_task_poses(arm, cfg.task, source)
+    failure = resolve_failure(robot, cfg.lock, cfg.task, source)
+    arm = locked_arm(robot, failure.joint, failure.angle_deg)
+    limits = cfg.limits.resolve(robot.n_joints).for_arm(arm)
+    dirs = cfg.directions.build()
+    check_goal(arm, cfg.task, failure, source)
+    check_dt(cfg, source)
+    keys = {"n_points": "sampling.n_points", "edge_m": "voxels.edge_m"}
+    try:
+        estimate = estimate_map(arm, cfg.sampling, cfg.voxel_edge_m, len(dirs), len(limits.names), cfg.shards, keys)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
     if cfg.follow is not None:
         check_follow(cfg.follow, cfg, source)
     if cfg.reconfig is not None:
         rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
+    if cfg.atlas is not None:
+        check_atlas(cfg.atlas, robot, source)
+        keys = {"n_points": "atlas.sampling.n_points", "edge_m": "atlas.edge_m"}
+        try:
+            estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(cfg.atlas.directions.build()),
+                         len(limits.names), 1, keys)
+        except ConfigError as exc:
+            raise ConfigError(f"{source}: {exc}") from None
     if cfg.dualarm is not None:
         load_dual_arm_file(cfg.dualarm.robot)
         load_scene(cfg.dualarm.scene)
-    return cfg
+    return replace(cfg, failure=failure, estimate=estimate)
 
 
-def check_task_poses(arm: LockedArm, task: TaskConfig, source: str = "config") -> None:
-    """Start and goal reachable at the task orientation; q_ini an IK solution at the start."""
-    sol = ik.solve(arm, np.array([task.start_m, task.goal_m]), task.rotation)
-    for key, n, x in zip(("start_m", "goal_m"), sol.n_solutions, (task.start_m, task.goal_m)):
-        if n == 0:
-            raise ConfigError(f"{source}: task.{key} = [{', '.join(f'{v:g}' for v in x)}] is not reachable by the "
-                              f"locked arm at task.orientation_rpy_deg = {list(task.orientation_rpy_deg)}")
-    try:
-        start_branch(arm, np.asarray(task.start_m), task.rotation, np.deg2rad(np.asarray(task.q_ini_deg))[arm.active])
-    except CapmapError as exc:
-        raise ConfigError(f"{source}: {exc.in_terms(q_ini='task.q_ini_deg', start='task.start_m')}") from None
+def check_dt(cfg: RunConfig, source: str = "config") -> None:
+    """verification.dt_s resolves the motion: at most a tenth of the acceleration phase (v/a)."""
+    t_acc = cfg.task.v_max_mps / cfg.task.a_max_mps2
+    if cfg.verification.dt_s > t_acc / MIN_PHASE_INTERVALS:
+        raise ConfigError(f"{source}: verification.dt_s = {cfg.verification.dt_s:g} s is too coarse for the motion: its "
+                          f"acceleration phase lasts task.v_max_mps / task.a_max_mps2 = {t_acc:.3g} s; use at most "
+                          f"{t_acc / MIN_PHASE_INTERVALS:.3g} s ({MIN_PHASE_INTERVALS} samples per phase)")
+
+
+def check_goal(arm: LockedArm, task: TaskConfig, failure: Failure, source: str = "config") -> None:
+    """The goal reachable at the task orientation by the locked arm (the start is, by resolution)."""
+    if ik.solve(arm, np.asarray(task.goal_m)[None], task.rotation).n_solutions[0] == 0:
+        raise ConfigError(f"{source}: task.goal_m = [{', '.join(f'{v:g}' for v in task.goal_m)}] is not reachable "
+                          f"at task.orientation_rpy_deg = {list(task.orientation_rpy_deg)} with joint {failure.joint} "
+                          f"locked at {failure.angle_deg:g} deg")
 
 
 def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> None:
@@ -90,3 +101,15 @@ def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> N
         raise ConfigError(f"{source}: follow.ground.line_m = {list(g.line_m)} ends at "
                           f"[{', '.join(f'{v:.4g}' for v in end)}], which {robot.name} cannot reach at the "
                           f"start orientation")
+
+
+def check_atlas(at: AtlasConfig, robot: Robot, source: str = "config") -> None:
+    """Every atlas joint exists and every angle is inside every listed joint's range."""
+    for j in at.joints:
+        if not 1 <= j <= robot.n_joints:
+            raise ConfigError(f"{source}: atlas.joints: joint {j} is out of range: {robot.name} has joints "
+                              f"1..{robot.n_joints}")
+        lo, hi = np.rad2deg(robot.q_lower[j - 1]), np.rad2deg(robot.q_upper[j - 1])
+        for a in at.angles_deg:
+            if not lo - 1e-9 <= a <= hi + 1e-9:
+                raise ConfigError(f"{source}: atlas.angles_deg: {a:g} is outside joint {j}'s range [{lo:g}, {hi:g}] deg")

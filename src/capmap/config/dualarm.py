@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from capmap.config.robot_file import package_file
+from capmap.config.robot_file import check_urdf, package_file
 from capmap.config.validation import load_yaml
 from capmap.dualarm.cloud import FitSettings
 from capmap.dualarm.robot import CapsuleGroup, DualArmDescription
@@ -153,6 +153,7 @@ def load_dual_arm_file(path: str | Path) -> DualArmDescription:
         urdf_path = (path.parent / urdf["path"]) if not Path(urdf["path"]).is_absolute() else Path(urdf["path"])
         if not urdf_path.is_file():
             raise ConfigError(f"{src}: urdf.path = {urdf['path']!r}: no such file")
+    check_urdf(urdf_path, src)
     package_dir = next((p for p in urdf_path.parents if p.name == "share"), urdf_path.parent)
     arms = doc["arms"]
     if sorted(arms) != ["left", "right"]:

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.config.capacity import per_item
+from capmap.config.validation import per_item
 from capmap.config.platform_file import load_platform
 from capmap.config.validation import as_tuple
 from capmap.errors import CapmapError, ConfigError

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from importlib import metadata
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pinocchio as pin
@@ -18,7 +19,7 @@ from capmap.config.validation import load_yaml, validate
 from capmap.core.robot import LinkInertia, Robot, RobotDescription, build_robot
 from capmap.errors import ConfigError
 
-__all__ = ["parse_robot", "load_robot", "load", "package_file", "transform"]
+__all__ = ["parse_robot", "load_robot", "load", "package_file", "transform", "referenced_files", "check_urdf"]
 
 
 def _inertia_matrix(values: list[float], where: str) -> np.ndarray:
@@ -61,6 +62,19 @@ def package_file(package: str, path: str, source: str) -> Path:
     return Path(dist.locate_file(hits[0]))
 
 
+def check_urdf(path: Path, source: str) -> None:
+    """A URDF is well-formed XML with a <robot> root and links (before Pinocchio's C++ parser
+    sees it and prints its own noise): else one :class:`ConfigError` line naming the file."""
+    try:
+        root = ElementTree.parse(path).getroot()
+    except ElementTree.ParseError as exc:
+        raise ConfigError(f"{source}: urdf {path}: not valid XML ({exc})") from None
+    except OSError as exc:
+        raise ConfigError(f"{source}: urdf {path}: cannot read ({exc.strerror})") from None
+    if root.tag != "robot" or root.find("link") is None:
+        raise ConfigError(f"{source}: urdf {path}: not a URDF (root <{root.tag}>, needs <robot> with <link>s)")
+
+
 def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> RobotDescription:
     """Validate a robot document (already parsed YAML) and convert it to SI / radians."""
     if not isinstance(doc, dict):
@@ -99,6 +113,7 @@ def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> Robot
                 path = base_dir / path
         if not path.is_file():
             raise ConfigError(f"{source}: urdf.path = {doc['urdf']['path']!r}: no such file")
+        check_urdf(path, source)
         return RobotDescription(convention=None, dh=None, links=(), joint_range_rad=ranges,
                                 urdf_path=path, urdf_ee_frame=doc["urdf"]["ee_frame"], **common)
     if "links" not in doc:
@@ -137,3 +152,24 @@ def load_robot(path: str | Path) -> RobotDescription:
 def load(path: str | Path) -> Robot:
     """Read, validate and build a robot file in one step."""
     return build_robot(load_robot(path))
+
+
+def referenced_files(path: str | Path) -> list[Path]:
+    """A robot, dual-arm or platform file and the URDF it names (if any): what its content hash
+    must cover. Unreadable or malformed files are left to the loaders' one-line errors."""
+    path = Path(path)
+    out = [path]
+    try:
+        doc = load_yaml(path)
+    except ConfigError:
+        return out
+    urdf = doc.get("urdf") if isinstance(doc, dict) else None
+    if isinstance(urdf, dict) and isinstance(urdf.get("path"), str):
+        try:
+            target = (package_file(urdf["package"], urdf["path"], str(path)) if "package" in urdf
+                      else (path.parent / urdf["path"]))
+        except ConfigError:
+            return out
+        if target.is_file():
+            out.append(target)
+    return out

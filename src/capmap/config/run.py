@@ -13,7 +13,10 @@ from capmap.config.capacity import (
     TaskConfig,
     VerificationConfig,
 )
+from capmap.config.atlas import AtlasConfig
 from capmap.config.dualarm import DualArmConfig
+from capmap.config.estimate import Estimate
+from capmap.config.failure import Failure
 from capmap.config.following import FollowConfig
 from capmap.config.reconfig import ReconfigConfig
 from capmap.config.slices import payload_label
@@ -25,7 +28,9 @@ __all__ = ["RunConfig", "parse_config", "load_config"]
 
 @dataclass(frozen=True)
 class RunConfig:
-    """A whole run: the robot file and every section (``follow``, ``reconfig``, ``dualarm``: None when absent)."""
+    """A whole run: the robot file and every section (``follow``, ``reconfig``, ``dualarm``: None when
+    absent). ``failure`` (the resolved lock and start) and ``estimate`` (the map's size) are set by
+    :func:`capmap.config.check_run_config`."""
 
     robot: str
     lock: LockConfig
@@ -39,6 +44,9 @@ class RunConfig:
     follow: FollowConfig | None = None
     reconfig: ReconfigConfig | None = None
     dualarm: DualArmConfig | None = None
+    atlas: AtlasConfig | None = None
+    failure: Failure | None = None
+    estimate: Estimate | None = None
 
 
 def parse_config(doc: object, source: str = "config") -> RunConfig:
@@ -49,6 +57,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
     try:
         directions = DirectionsConfig.from_doc(doc["directions"])
         dualarm = DualArmConfig.from_doc(doc["dualarm"]) if "dualarm" in doc else None
+        atlas = AtlasConfig.from_doc(doc["atlas"]) if "atlas" in doc else None
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
     task = TaskConfig.from_doc(doc["task"])
@@ -68,6 +77,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         follow=FollowConfig.from_doc(doc["follow"]) if "follow" in doc else None,
         reconfig=ReconfigConfig.from_doc(doc["reconfig"]) if "reconfig" in doc else None,
         dualarm=dualarm,
+        atlas=atlas,
     )
 
 

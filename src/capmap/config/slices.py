@@ -7,9 +7,12 @@ the affected stages) and into each output's provenance.
 from __future__ import annotations
 
 from capmap.config.capacity import DEFAULT_DT_S
+from capmap.config.robot_file import referenced_files
 from capmap.io.datasets import canonical, config_hash
+from capmap.io.fingerprint import file_fingerprints
 
-__all__ = ["canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices", "STAGES"]
+__all__ = ["canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices",
+           "atlas_slices", "STAGES"]
 
 STAGES = ("model", "sample", "capacity", "voxels", "plan", "verify")  # the capacity family, in order
 
@@ -17,6 +20,18 @@ STAGES = ("model", "sample", "capacity", "voxels", "plan", "verify")  # the capa
 def payload_label(payload_kg: float) -> str:
     """File-name label of a payload: 1500 -> '1500', 1250.5 -> '1250.5'."""
     return f"{float(payload_kg):g}"
+
+
+def files_of(*paths) -> dict[str, str]:
+    """Content fingerprints of the given robot/scene/cloud files and the URDFs they name (the
+    part of a slice that makes an edited file rerun its stages even with an old date)."""
+    return file_fingerprints([f for p in paths if p for f in referenced_files(p) if f.is_file()])
+
+
+def per_item_canonical(section: dict) -> dict:
+    """A section of one-or-per-item values (limits) with a list of equal values written as the
+    one value: ``[700] * 7`` and ``700`` are the same limits, so the same slice."""
+    return {k: (v[0] if isinstance(v, list) and v and all(x == v[0] for x in v) else v) for k, v in section.items()}
 
 
 def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
@@ -29,7 +44,11 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     capacity: task orientation/speed/acceleration, limits, directions
     voxels:   voxels
     plan:     task payload/start/goal
-    verify:   task payload/start/goal/q_ini, verification
+    verify:   task payload/start/goal/start configuration, verification
+
+    ``doc`` is the resolved document (:func:`capmap.config.failure.resolved_doc`): the lock angle
+    and the start filled in, the start configuration as ``task.q_start_deg``. So a change of
+    ``task.q_ini_deg`` reruns only what its resolution changes.
 
     ``payload_kg``: the one payload a plan/verify job handles (the config may list several;
     each job depends on its own only, so adding a payload reruns nothing else).
@@ -38,14 +57,14 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     if payload_kg is not None:
         task["payload_kg"] = float(payload_kg)
     own = {
-        "model": {"robot": doc["robot"]},
+        "model": {"robot": doc["robot"], "files": files_of(doc["robot"])},
         "sample": {"lock": doc["lock"], "sampling": doc["sampling"],
                    **({"voxels": doc["voxels"]} if doc["sampling"]["mode"] == "voxel_fill" else {})},
         "capacity": {"task": {k: task[k] for k in ("orientation_rpy_deg", "v_max_mps", "a_max_mps2")},
-                     "limits": doc["limits"], "directions": doc["directions"]},
+                     "limits": per_item_canonical(doc["limits"]), "directions": doc["directions"]},
         "voxels": {"voxels": doc["voxels"]},
         "plan": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m")}},
-        "verify": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m", "q_ini_deg")},
+        "verify": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m", "q_start_deg")},
                    "verification": {"dt_s": doc.get("verification", {}).get("dt_s", DEFAULT_DT_S)}},
     }
     out, acc = {}, {}
@@ -63,10 +82,11 @@ def follow_slices(doc: dict) -> dict[str, dict]:
     out = {}
     if "space" in fol:
         up = dict(stage_slices(doc, fol["space"]["payload_kg"])["verify"]["upstream"])
-        up["verify"] = {"task": up["verify"]["task"]}  # q_ini, start, goal; not verification.dt_s
+        up["verify"] = {"task": up["verify"]["task"]}  # start configuration, start, goal; not verification.dt_s
         out["space"] = {**up, "follow": {"period_s": fol["period_s"], "space": fol["space"]}}
     if "ground" in fol:
-        out["ground"] = {"follow": {"period_s": fol["period_s"], "ground": fol["ground"]}}
+        out["ground"] = {"follow": {"period_s": fol["period_s"], "ground": fol["ground"]},
+                         "files": files_of(fol["ground"]["robot"])}
     return out
 
 
@@ -77,9 +97,10 @@ def reconfig_slices(doc: dict) -> dict[str, dict]:
     if rc is None:
         return {}
     plan = {k: v for k, v in rc.items() if k != "animation_fps"}
-    return {"nullspace": {"reconfig": plan},
-            "pinv": {"reconfig": {k: v for k, v in plan.items() if k != "kappa0"}},
-            "animation": {"reconfig": rc}}
+    files = files_of(rc["robot"])
+    return {"nullspace": {"reconfig": plan, "files": files},
+            "pinv": {"reconfig": {k: v for k, v in plan.items() if k != "kappa0"}, "files": files},
+            "animation": {"reconfig": rc, "files": files}}
 
 
 def dualarm_slices(doc: dict) -> dict[str, dict]:
@@ -90,12 +111,29 @@ def dualarm_slices(doc: dict) -> dict[str, dict]:
     da = doc.get("dualarm")
     if da is None:
         return {}
-    scan = {"scene": da["scene"], "cloud": da["cloud"]}
+    scan = {"scene": da["scene"], "cloud": da["cloud"], "scene_files": files_of(da["scene"], da["cloud"].get("file"))}
     envelope = {**scan, "fit": da.get("fit", {})}
-    capsules = {"robot": da["robot"]}
+    capsules = {"robot": da["robot"], "robot_files": files_of(da["robot"])}
     problem = {**envelope, **capsules, **{k: da[k] for k in ("weights", "solver")}}
     motion = {**problem, "margin_m": da["margin_m"], "horizon": da["horizon"], "fine_factor": da.get("fine_factor", 5)}
     check = {**problem, "check": da["check"]}  # its own horizon; no inequalities, so no margin
     return {"scan": {"dualarm": scan}, "envelope": {"dualarm": envelope}, "capsules": {"dualarm": capsules},
             "optimise": {"dualarm": motion}, "check": {"dualarm": check},
             "animation": {"dualarm": {**motion, "animation_fps": da.get("animation_fps", 25)}}}
+
+
+def atlas_slices(doc: dict) -> dict[str, dict]:
+    """Config slice of the atlas rules (``doc`` resolved): a map depends on the robot, the task
+    (its start resolved for each lock in the job), the limits, the atlas' sampling, directions and
+    voxel edge, and verification.dt_s (its direct line), not on which joints and angles the atlas
+    lists; the atlas table on all of that and the lists. Empty without an atlas section."""
+    at = doc.get("atlas")
+    if at is None:
+        return {}
+    task = {k: doc["task"][k] for k in ("orientation_rpy_deg", "v_max_mps", "a_max_mps2", "payload_kg", "start_m",
+                                        "goal_m", "q_ini_deg")}
+    one = {"model": {"robot": doc["robot"], "files": files_of(doc["robot"])}, "task": task,
+           "limits": per_item_canonical(doc["limits"]),
+           "verification": {"dt_s": doc.get("verification", {}).get("dt_s", DEFAULT_DT_S)},
+           "atlas": {k: at[k] for k in ("sampling", "directions", "edge_m")}}
+    return {"map": one, "atlas": {**one, "atlas": at}}

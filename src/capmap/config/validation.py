@@ -3,17 +3,20 @@
 from __future__ import annotations
 
 import json
+import math
+import re
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import jsonschema
+import numpy as np
 import yaml
 
 from capmap.errors import ConfigError
 
-__all__ = ["schema", "key_path", "validate", "load_yaml", "as_tuple"]
+__all__ = ["schema", "key_path", "validate", "load_yaml", "as_tuple", "check_finite", "per_item"]
 
 
 @lru_cache(maxsize=None)
@@ -31,13 +34,48 @@ def key_path(parts) -> str:
     return out or "<top level>"
 
 
+def check_finite(doc: Any, source: str, path: tuple = ()) -> None:
+    """Every number in the document is finite (YAML's .nan and .inf are refused, naming the key)."""
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            check_finite(v, source, path + (k,))
+    elif isinstance(doc, list):
+        for i, v in enumerate(doc):
+            check_finite(v, source, path + (i,))
+    elif isinstance(doc, float) and not math.isfinite(doc):
+        raise ConfigError(f"{source}: {key_path(path)} = {doc} is not a finite number")
+
+
+def _as_number(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _admits_numbers(sub: dict, root: dict) -> bool:
+    """Whether a (sub)schema accepts numbers somewhere (following local $refs)."""
+    text = json.dumps(sub)
+    for ref in re.findall(r'"\$ref": "#/([^"]+)"', text):
+        node = root
+        for part in ref.split("/"):
+            node = node[part]
+        text += json.dumps(node)
+    return '"number"' in text or '"integer"' in text
+
+
 def validate(doc: Any, schema_name: str, source: str) -> None:
     """Validate ``doc`` against a packaged schema; raise one :class:`ConfigError` line on failure."""
+    check_finite(doc, source)
     validator = jsonschema.Draft202012Validator(schema(schema_name))
     error = jsonschema.exceptions.best_match(validator.iter_errors(doc))
     if error is None:
         return
     where = key_path(error.absolute_path)
+    if isinstance(error.instance, str) and _as_number(error.instance) is not None and \
+            _admits_numbers(error.schema, schema(schema_name)):
+        raise ConfigError(f"{source}: {where} = '{error.instance}' is text, not a number: YAML reads a number "
+                          f"written like 1e-4 (no decimal point) as a string; write {float(error.instance)!r}")
     if error.validator == "additionalProperties":
         extra = sorted(set(error.instance) - set(error.schema.get("properties", {})))
         raise ConfigError(f"{source}: unknown key {where + '.' if error.absolute_path else ''}{extra[0]} "
@@ -49,9 +87,13 @@ def load_yaml(path: str | Path) -> Any:
     """Parse a YAML file; malformed YAML or a missing file is one :class:`ConfigError` line."""
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not a text (UTF-8) file: byte {exc.start} is 0x{exc.object[exc.start]:02x}") from None
+    if "\x00" in text:
+        raise ConfigError(f"{path}: not a text file (it contains NUL bytes)")
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as exc:
@@ -64,3 +106,13 @@ def load_yaml(path: str | Path) -> Any:
 def as_tuple(value):
     """Lists of a parsed document as tuples (hashable, immutable), anything else unchanged."""
     return tuple(value) if isinstance(value, list) else value
+
+
+def per_item(value, n: int, key: str) -> np.ndarray:
+    """One value for all n items, or exactly n values (else a one-line error naming key)."""
+    v = np.atleast_1d(np.asarray(value, dtype=float))
+    if len(v) == 1:
+        return np.full(n, v[0])
+    if len(v) != n:
+        raise ConfigError(f"{key} has {len(v)} values; give one or {n}")
+    return v

@@ -16,27 +16,52 @@ transforms, so it does not assume any particular link lengths:
 3. The parallel group is a planar 3R with known end rotation and known point w:
    law of cosines -> two q2, then q1 and q3.
 
+Semi-analytical (complete) for chains of the shape
+
+    joint 0 | joint 1 | joints 2, 3 with parallel axes | joints 4, 5 with intersecting axes
+
+(the SSRMS-type arm with joint 3, 4 or 5 locked: two parallel joints left), and reversed:
+a 1-D search over joint 0 (Xu, She, Xu, Acta Astronautica 105, 2014). For a fixed q0 steps
+1-3 above give joints 1, 4, 5 in closed form (2 x 2 branches) and leave the planar 2R group
+one condition too many: the wrist point must lie at the 2R's reach, a residual f(q0) in
+metres that is continuous along each branch. Its roots are bracketed on a fine periodic grid
+(``SEARCH_STEPS`` over 360 deg; where a branch ends, the interval is subdivided and finally
+closed at the end point found by bisection, so roots next to the fold are kept), refined by
+Illinois false position and polished by Newton on the full pose. Two roots closer than a
+grid step leave no sign change, and f can swing steeply near a wrist singularity: every
+interval whose end values are small against the local change of f is subdivided (8 x, up
+to 4 levels), and what stays suspect at the finest level is a Newton start (a double
+root). Every root returned is an exact solution.
+
 Every solution is polished by two Newton steps, checked by forward kinematics
 (position and orientation residual <= ``tol``), put inside the joint ranges and
-de-duplicated. Other chain shapes use a multi-start Newton solver (a deterministic Sobol
-set of starts): found solutions are exact, but completeness is not guaranteed.
+de-duplicated. Other chain shapes use a multi-start Newton solver (a deterministic Halton
+set of starts): found solutions are exact, but completeness is not guaranteed (a
+warning is logged once per chain).
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import qmc
 
+from capmap.core import ik_semi
 from capmap.core.kinematics import Chain, inverse_transform, pose_error
 from capmap.core.reduction import LockedArm
 
-__all__ = ["IKSolutions", "solve", "newton", "wrap_to_range", "method_for", "closed_form_shape", "RESIDUAL_TOL"]
+__all__ = ["IKSolutions", "solve", "newton", "wrap_to_range", "method_for", "closed_form_shape",
+           "semi_analytic_shape", "COMPLETE_METHODS", "RESIDUAL_TOL", "SEARCH_STEPS"]
+
+log = logging.getLogger(__name__)
 
 RESIDUAL_TOL = 1e-9  # m and rad
 DUPLICATE_TOL = 1e-6  # rad: two solutions closer than this (wrapped) are one
 _GEOM_TOL = 1e-9
+COMPLETE_METHODS = ("closed_form", "closed_form_reversed", "semi_analytic", "semi_analytic_reversed")
+_CHUNK_EVALS = 400_000  # (target, grid point) pairs per batch of the search: bounds memory (~0.1 GB)
+SEARCH_STEPS = ik_semi.SEARCH_STEPS
 
 
 @dataclass(frozen=True)
@@ -74,12 +99,23 @@ def closed_form_shape(chain: Chain) -> bool:
             and not _parallel(X[4]) and _intersecting(X[5]))
 
 
+def semi_analytic_shape(chain: Chain) -> bool:
+    """True when the chain is ``0 | 1 | 2 3 parallel | 4 5 intersecting`` (joint 0 searched)."""
+    X = chain.X
+    return (chain.n == 6 and not _parallel(X[2]) and _parallel(X[3]) and np.hypot(*X[3][:2, 3]) > _GEOM_TOL
+            and not _parallel(X[4]) and _intersecting(X[5]))
+
+
 def method_for(chain: Chain) -> str:
     """Which solver :func:`solve` uses for this chain."""
     if closed_form_shape(chain):
         return "closed_form"
     if chain.n == 6 and closed_form_shape(chain.reversed()):
         return "closed_form_reversed"
+    if semi_analytic_shape(chain):
+        return "semi_analytic"
+    if chain.n == 6 and semi_analytic_shape(chain.reversed()):
+        return "semi_analytic_reversed"
     return "numeric"
 
 
@@ -164,6 +200,26 @@ def _closed_form(chain: Chain, T_target: np.ndarray) -> tuple[np.ndarray, np.nda
     return theta.reshape(N, 8, 6), ok.reshape(N, 8)
 
 
+# --------------------------------------------------------------------------- semi-analytical
+
+
+def _semi_analytic(chain: Chain, T_target: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate solutions (N, K, 6) and validity (N, K) by the 1-D search over joint 0."""
+    N = len(T_target)
+    per = max(1, _CHUNK_EVALS // steps)
+    parts = []
+    for s in range(0, N, per):
+        theta, ok, seed = ik_semi.search(chain, T_target[s:s + per], steps)
+        theta[seed] = newton(chain, theta[seed], np.repeat(T_target[s:s + per], seed.shape[1], 0)[seed.ravel()], iters=8)
+        parts.append((theta, ok))
+    K = max(1, max(p[0].shape[1] for p in parts))
+    theta = np.zeros((N, K, 6))
+    ok = np.zeros((N, K), dtype=bool)
+    for s, (th, o) in zip(range(0, N, per), parts):
+        theta[s:s + len(th), :th.shape[1]], ok[s:s + len(th), :th.shape[1]] = th, o
+    return theta, ok
+
+
 # --------------------------------------------------------------------------- numeric
 
 
@@ -182,11 +238,25 @@ def newton(chain: Chain, theta: np.ndarray, T_target: np.ndarray, iters: int, da
     return theta
 
 
+def _halton(n: int, d: int) -> np.ndarray:
+    """The first n points (n, d) of the Halton sequence in [0, 1)^d (bases: the first d primes)."""
+    primes = [p for p in range(2, 200) if all(p % q for q in range(2, int(p**0.5) + 1))][:d]
+    out = np.zeros((n, d))
+    for j, b in enumerate(primes):
+        i = np.arange(1, n + 1)
+        f = 1.0
+        while np.any(i > 0):
+            f /= b
+            out[:, j] += f * (i % b)
+            i //= b
+    return out
+
+
 def _numeric(chain: Chain, T_target: np.ndarray, lower: np.ndarray, upper: np.ndarray,
              n_starts: int = 64) -> tuple[np.ndarray, np.ndarray]:
-    """Multi-start damped Newton from a deterministic Sobol set of starts: (N, n_starts, n)."""
+    """Multi-start damped Newton from a deterministic Halton set of starts: (N, n_starts, n)."""
     N, n = len(T_target), chain.n
-    starts = lower + (upper - lower) * qmc.Sobol(d=n, scramble=False).random(n_starts)
+    starts = lower + (upper - lower) * _halton(n_starts, n)
     theta = np.broadcast_to(starts, (N, n_starts, n)).reshape(-1, n).copy()
     targets = np.repeat(T_target, n_starts, axis=0)
     theta = newton(chain, theta, targets, iters=40, damping=1e-2)
@@ -195,6 +265,16 @@ def _numeric(chain: Chain, T_target: np.ndarray, lower: np.ndarray, upper: np.nd
 
 
 # --------------------------------------------------------------------------- driver
+
+_WARNED: set[bytes] = set()
+
+
+def _warn_incomplete(chain: Chain) -> None:
+    key = chain.X.tobytes()
+    if key not in _WARNED:
+        _WARNED.add(key)
+        log.warning("IK: this chain has no closed-form or semi-analytical solver; multi-start Newton finds exact "
+                    "solutions but may miss branches (capacity can be optimistic)")
 
 
 def wrap_to_range(theta: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -235,7 +315,7 @@ def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarra
     q = np.take_along_axis(wrapped, order[..., None], axis=1)
     count = keep.sum(axis=1)
     q[np.arange(K)[None, :] >= count[:, None]] = np.nan
-    width = max(int(count.max(initial=0)), 1) if method == "numeric" else K
+    width = K if method.startswith("closed_form") else max(int(count.max(initial=0)), 1)
     return IKSolutions(q=q[:, :width], n_solutions=count, method=method)
 
 
@@ -258,6 +338,12 @@ def solve(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, tol: floa
     elif method == "closed_form_reversed":
         theta_r, ok = _closed_form(chain.reversed(), inverse_transform(T))
         theta = -theta_r[..., ::-1]
+    elif method == "semi_analytic":
+        theta, ok = _semi_analytic(chain, T)
+    elif method == "semi_analytic_reversed":
+        theta_r, ok = _semi_analytic(chain.reversed(), inverse_transform(T))
+        theta = -theta_r[..., ::-1]
     else:
+        _warn_incomplete(chain)
         theta, ok = _numeric(chain, T, lower, upper)
     return _finish(chain, theta, ok, T, lower, upper, tol, method)

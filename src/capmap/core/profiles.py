@@ -16,7 +16,7 @@ import numpy as np
 
 from capmap.errors import CapmapError
 
-__all__ = ["PHASES", "Trapezoid", "trapezoid", "Timeline", "sample_segments", "SCurve", "scurve"]
+__all__ = ["PHASES", "Trapezoid", "trapezoid", "Timeline", "sample_segments", "SCurve", "scurve", "MIN_PHASE_INTERVALS"]
 
 PHASES = ("accelerate", "cruise", "decelerate")
 
@@ -88,8 +88,12 @@ class Timeline:
         return len(self.t_s)
 
 
+MIN_PHASE_INTERVALS = 10  # a phase is never sampled coarser than this: a verdict never comes from two samples
+
+
 def sample_segments(waypoints: np.ndarray, v_max_mps: float, a_max_mps2: float, dt_s: float) -> Timeline:
-    """Rest-to-rest trapezoidal motion through waypoints (W, 3) m, sampled every <= dt_s in each phase."""
+    """Rest-to-rest trapezoidal motion through waypoints (W, 3) m, sampled every <= dt_s in each
+    phase and at least ``MIN_PHASE_INTERVALS`` intervals per phase (short phases of short segments)."""
     waypoints = np.asarray(waypoints, dtype=float)
     if len(waypoints) < 2:
         raise CapmapError("a path needs at least two distinct waypoints")
@@ -111,7 +115,7 @@ def sample_segments(waypoints: np.ndarray, v_max_mps: float, a_max_mps2: float, 
             T = bounds[ph + 1] - bounds[ph]
             if T <= 0:
                 continue
-            t = np.linspace(bounds[ph], bounds[ph + 1], max(2, math.ceil(T / dt_s - 1e-9) + 1))
+            t = np.linspace(bounds[ph], bounds[ph + 1], max(MIN_PHASE_INTERVALS, math.ceil(T / dt_s - 1e-9)) + 1)
             s, sd, sdd = prof.phase_state(ph, t)
             n = len(t)
             parts["t"].append(t0 + t)

@@ -14,8 +14,11 @@ from pathlib import Path
 import pandas as pd
 
 import capmap
+from capmap.errors import DataError
+from capmap.io.fingerprint import file_sha256
 
-__all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "read", "sha256", "catalogue"]
+__all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "read", "catalogue",
+           "verify_catalogue"]
 
 UNITS = [("_deg", "deg"), ("_rad", "rad"), ("_kg", "kg"), ("_nm", "N m"), ("_n", "N"), ("_mps2", "m/s^2"),
          ("_mps", "m/s"), ("_m", "m"), ("_s", "s"), ("_pct", "%"), ("_rad_s", "rad/s"), ("_rad_s2", "rad/s^2"),
@@ -30,9 +33,21 @@ def column_unit(name: str) -> str:
     return ""
 
 
+def _plain_numbers(obj):
+    """Integral floats as ints (700.0 -> 700), recursively: the same number is written one way."""
+    if isinstance(obj, dict):
+        return {k: _plain_numbers(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_plain_numbers(v) for v in obj]
+    if isinstance(obj, float) and obj.is_integer() and abs(obj) < 2**53:
+        return int(obj)
+    return obj
+
+
 def canonical(obj) -> str:
-    """Canonical JSON (sorted keys, no spaces): equal configs give equal strings."""
-    return json.dumps(obj, sort_keys=True, separators=(",", ":"))
+    """Canonical JSON (sorted keys, no spaces, integral floats as ints): equal configs give equal
+    strings, however their numbers were typed."""
+    return json.dumps(_plain_numbers(obj), sort_keys=True, separators=(",", ":"))
 
 
 def config_hash(obj) -> str:
@@ -41,8 +56,10 @@ def config_hash(obj) -> str:
 
 
 def provenance(stage: str, config_slice: dict, seed: int | None = None, **extra) -> dict:
+    """A dataset's provenance: stage, config slice (with the fingerprint of the code that ran,
+    ``code``, when the rule's params carry it), its hash, the seed, the package version."""
     return {"stage": stage, "config": config_slice, "config_hash": config_hash(config_slice), "seed": seed,
-            "capmap_version": capmap.__version__, **extra}
+            "code": config_slice.get("code", ""), "capmap_version": capmap.__version__, **extra}
 
 
 def write(df: pd.DataFrame, path: str | Path, prov: dict) -> None:
@@ -57,15 +74,16 @@ def write(df: pd.DataFrame, path: str | Path, prov: dict) -> None:
 
 
 def read(path: str | Path) -> pd.DataFrame:
-    return pd.read_parquet(path)
-
-
-def sha256(path: str | Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+    """Read a dataset; a missing, truncated or foreign file is one :class:`DataError` line naming it
+    and the command that rebuilds it."""
+    rebuild = f"rebuild it with: snakemake --cores 2 all --forcerun {path}"
+    try:
+        return pd.read_parquet(path)
+    except FileNotFoundError:
+        raise DataError(f"{path} is missing; {rebuild}") from None
+    except Exception as exc:  # pyarrow raises several types for a damaged file
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise DataError(f"{path} is not a readable Parquet dataset ({first}); {rebuild}") from None
 
 
 def catalogue(paths: list[str | Path]) -> pd.DataFrame:
@@ -80,8 +98,27 @@ def catalogue(paths: list[str | Path]) -> pd.DataFrame:
             "stage": meta.get("stage", ""),
             "rows": len(df),
             "columns": [f"{c} [{column_unit(c)}]" if column_unit(c) else c for c in df.columns],
-            "sha256": sha256(p),
+            "sha256": file_sha256(p),
             "config_hash": meta.get("config_hash", ""),
             "capmap_version": meta.get("capmap_version", ""),
         })
     return pd.DataFrame(rows)
+
+
+def verify_catalogue(catalogue_path: str | Path, root: str | Path = ".") -> list[str]:
+    """Problems (one line each) of the datasets a catalogue lists: missing, unreadable, or not the
+    catalogued sha256 or row count. Empty when every dataset is as catalogued."""
+    cat = read(catalogue_path)
+    problems = []
+    for row in cat.itertuples():
+        path = Path(root) / row.path
+        if not path.is_file():
+            problems.append(f"{row.path}: missing (catalogued with {row.rows} rows)")
+            continue
+        if file_sha256(path) != row.sha256:
+            try:
+                n = len(read(path))
+                problems.append(f"{row.path}: content differs from the catalogue ({n} rows, catalogued {row.rows})")
+            except DataError as exc:
+                problems.append(str(exc))
+    return problems

@@ -9,7 +9,9 @@ into one ``capmap:`` line on stderr and in the log, and exit status 1.
 from __future__ import annotations
 
 import logging
+import resource
 import sys
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -72,6 +74,12 @@ def one_line_errors(log_path: str | Path | None = None) -> Iterator[None]:
 
 
 def call(fn, log: str | None = None, **kwargs) -> None:
-    """Entry for the thin Snakemake scripts: ``fn(**kwargs)`` with logging to ``log`` and one-line errors."""
+    """Entry for the thin Snakemake scripts: ``fn(**kwargs)`` with logging to ``log`` and one-line
+    errors; the job's wall time and peak memory (resident set) are logged at the end (the sizes
+    the cluster profile's per-rule resources are set from)."""
+    t0 = time.perf_counter()
     with one_line_errors(log), logging_to(log):
         fn(**kwargs)
+        peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # Linux: kB
+        logging.getLogger(f"{ROOT}.job").info(f"job {fn.__name__}: {time.perf_counter() - t0:.1f} s wall, "
+                                              f"peak memory {peak_mb:.0f} MB")

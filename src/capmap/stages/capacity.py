@@ -26,10 +26,11 @@ from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
 from capmap.plots.capacity import capacity_map
-from capmap.stages.common import arm_from, parse_slice
+from capmap.stages.arm import arm_from
+from capmap.stages.common import parse_slice
 
-__all__ = ["model_table", "stage_model", "stage_sample", "capacity_table", "stage_capacity", "stage_voxels",
-           "stage_summary"]
+__all__ = ["model_table", "stage_model", "sample_table", "stage_sample", "capacity_table", "stage_capacity",
+           "voxel_table", "grid_meta", "grid_of", "stage_voxels", "stage_summary"]
 
 
 # --------------------------------------------------------------------------- model
@@ -69,23 +70,29 @@ def stage_model(robot_yaml: str, out: str, slice_json: str) -> None:
 # --------------------------------------------------------------------------- sample
 
 
-def stage_sample(out: str, slice_json: str) -> None:
-    deps = parse_slice(slice_json)
-    log = stage_logger(__name__, "sample")
-    _, arm = arm_from(deps)
-    sc = SamplingConfig.from_doc(deps["sample"]["sampling"])
+def sample_table(arm: LockedArm, sc: SamplingConfig, edge_m: float | None, log) -> pd.DataFrame:
+    """The sampled points of the locked arm: joint-space Monte Carlo (seeded), plus for
+    ``voxel_fill`` every voxel (of edge_m) of their bounding box."""
     rng = np.random.default_rng(sc.seed)
     _, pos = sampling.joint_samples(arm, sc.n_points, rng)
     source = np.zeros(len(pos), dtype=int)
     if sc.mode == "voxel_fill":
-        grid = Grid.covering(pos, deps["sample"]["voxels"]["edge_m"])
+        grid = Grid.covering(pos, edge_m)
         fill, kind = sampling.voxel_fill(grid, sc.jitter_per_voxel, rng)
         pos = np.concatenate([pos, fill])
         source = np.concatenate([source, kind + 1])
         log.info(f"voxel_fill: grid {grid.shape} of {grid.edge_m} m = {grid.n_voxels} voxels, "
                  f"+{len(fill)} points (centre + {sc.jitter_per_voxel} jittered each)")
-    df = pd.DataFrame({"point_id": np.arange(len(pos)), "x_m": pos[:, 0], "y_m": pos[:, 1], "z_m": pos[:, 2],
-                       "source": pd.Categorical.from_codes(source, ["joint_sample", "voxel_centre", "voxel_jitter"])})
+    return pd.DataFrame({"point_id": np.arange(len(pos)), "x_m": pos[:, 0], "y_m": pos[:, 1], "z_m": pos[:, 2],
+                         "source": pd.Categorical.from_codes(source, ["joint_sample", "voxel_centre", "voxel_jitter"])})
+
+
+def stage_sample(out: str, slice_json: str) -> None:
+    deps = parse_slice(slice_json)
+    log = stage_logger(__name__, "sample")
+    _, arm = arm_from(deps)
+    sc = SamplingConfig.from_doc(deps["sample"]["sampling"])
+    df = sample_table(arm, sc, deps["sample"].get("voxels", {}).get("edge_m"), log)
     datasets.write(df, out, datasets.provenance("sample", deps, seed=sc.seed))
     log.info(f"{len(df)} points ({sc.n_points} joint samples, mode {sc.mode}, seed {sc.seed}) -> {out}")
 
@@ -160,11 +167,11 @@ def stage_capacity(points: str, out: str, slice_json: str, shard: int, shards: i
 # --------------------------------------------------------------------------- voxels
 
 
-def stage_voxels(shards: list[str], out_voxels: str, out_points: str, slice_json: str) -> None:
-    deps = parse_slice(slice_json)
-    pts = pd.concat([datasets.read(p) for p in shards], ignore_index=True).sort_values("point_id", ignore_index=True)
+def voxel_table(pts: pd.DataFrame, edge_m: float) -> tuple[pd.DataFrame, Grid]:
+    """Voxels of edge_m covering the capacity points (each voxel: the minimum over its points);
+    adds the voxel indices i, j, k to ``pts``."""
     xyz = pts[["x_m", "y_m", "z_m"]].to_numpy()
-    grid = Grid.covering(xyz, deps["voxels"]["voxels"]["edge_m"])
+    grid = Grid.covering(xyz, edge_m)
     vm = voxelise(grid, xyz, pts.capacity_kg.to_numpy(), pts.reachable.to_numpy())
     idx = grid.all_indices()
     centres = grid.centres(idx)
@@ -177,10 +184,22 @@ def stage_voxels(shards: list[str], out_voxels: str, out_points: str, slice_json
                         "worst_point_id": np.where(worst >= 0, pts.point_id.to_numpy()[np.maximum(worst, 0)], -1)})
     pidx = grid.index(xyz)
     pts["i"], pts["j"], pts["k"] = pidx[:, 0], pidx[:, 1], pidx[:, 2]
-    grid_meta = {"lower_m": grid.lower.tolist(), "shape": list(grid.shape), "edge_m": grid.edge_m}
+    return vox, grid
+
+
+def grid_meta(grid: Grid) -> dict:
+    """The grid as recorded in a voxels dataset's provenance (read back by :func:`grid_of`)."""
+    return {"lower_m": grid.lower.tolist(), "shape": list(grid.shape), "edge_m": grid.edge_m}
+
+
+def stage_voxels(shards: list[str], out_voxels: str, out_points: str, slice_json: str) -> None:
+    deps = parse_slice(slice_json)
+    pts = pd.concat([datasets.read(p) for p in shards], ignore_index=True).sort_values("point_id", ignore_index=True)
+    vox, grid = voxel_table(pts, deps["voxels"]["voxels"]["edge_m"])
+    meta = grid_meta(grid)
     seed = deps["sample"]["sampling"]["seed"]
-    datasets.write(vox, out_voxels, datasets.provenance("voxels", deps, seed=seed, grid=grid_meta))
-    datasets.write(pts, out_points, datasets.provenance("voxels", deps, seed=seed, grid=grid_meta))
+    datasets.write(vox, out_voxels, datasets.provenance("voxels", deps, seed=seed, grid=meta))
+    datasets.write(pts, out_points, datasets.provenance("voxels", deps, seed=seed, grid=meta))
     reach = vox.n_reachable > 0
     stage_logger(__name__, "voxels").info(
         f"grid {grid.shape} x {grid.edge_m} m: {int(reach.sum())} reachable voxels of {grid.n_voxels}; "

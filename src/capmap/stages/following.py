@@ -10,7 +10,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
-from capmap.config.capacity import per_item, rotation_from_rpy
+from capmap.config.capacity import rotation_from_rpy
+from capmap.config.validation import per_item
 from capmap.config.following import FollowConfig
 from capmap.config.robot_file import load
 from capmap.core.reduction import LockedArm, free
@@ -21,7 +22,8 @@ from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
 from capmap.plots.following import follow_progress, follow_torques
-from capmap.stages.common import arm_from, parse_slice
+from capmap.stages.arm import arm_from
+from capmap.stages.common import parse_slice
 
 __all__ = ["FollowCase", "follow_case", "stage_follow", "stage_follow_plots"]
 
@@ -55,7 +57,7 @@ def follow_case(case: str, deps: dict, waypoints: str | None) -> FollowCase:
         tau = per_item(sp.joint_torque_nm, robot.n_joints, "follow.space.joint_torque_nm")[arm.active]
         settings = FollowSettings(float(sp.payload_kg), tau, task["v_max_mps"], task["a_max_mps2"], sp.j_max_mps3,
                                   fol.period_s, sp.catch_up_hz)
-        q0 = np.deg2rad(np.asarray(vt["q_ini_deg"], dtype=float))[arm.active]
+        q0 = np.deg2rad(np.asarray(vt["q_start_deg"], dtype=float))[arm.active]
         return FollowCase(arm, pts, rotation_from_rpy(task["orientation_rpy_deg"]), q0, settings, label)
     g = fol.ground
     robot = load(g.robot)

@@ -22,7 +22,8 @@ from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
 from capmap.plots.capacity import load_series, workspace_paths
 from capmap.stages.capacity import grid_of
-from capmap.stages.common import arm_from, parse_slice
+from capmap.stages.arm import arm_from
+from capmap.stages.common import parse_slice
 
 __all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "stage_verify", "stage_verify_plots"]
 
@@ -96,7 +97,7 @@ def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv
     log = stage_logger(__name__, f"verify {payload:g} kg")
     rotation = rotation_from_rpy(cs["orientation_rpy_deg"])
     limits = LimitsConfig.from_doc(deps["capacity"]["limits"]).resolve(robot.n_joints).for_arm(arm)
-    q_ini = np.deg2rad(np.asarray(vt["q_ini_deg"], dtype=float))[arm.active]
+    q_start = np.deg2rad(np.asarray(vt["q_start_deg"], dtype=float))[arm.active]
     motion = Motion(cs["v_max_mps"], cs["a_max_mps2"])
     dt = float(deps["verify"]["verification"]["dt_s"])
     wp = datasets.read(waypoints)
@@ -106,7 +107,7 @@ def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv
         paths["planned"] = wp[["x_m", "y_m", "z_m"]].to_numpy()
     ts_parts, seg_parts, rows = [], [], []
     for name, pts in paths.items():
-        res = verify_path(dyn, pts, rotation, q_ini, motion, dt, limits)
+        res = verify_path(dyn, pts, rotation, q_start, motion, dt, limits)
         planner = "straight line" if name == "direct" else f"A*, {len(pts)} waypoints"
         ts, seg, row = path_tables(name, res, arm, limits, payload, planner)
         ts_parts.append(ts)

@@ -1,0 +1,89 @@
+"""Size estimates before any job: how many voxels, points, motion states and how much memory
+a run asks for, so that what cannot fit on this machine is refused with one line naming the
+key (before a stage deletes a good output and dies in numpy), and what will run is announced.
+
+The memory model is per job and deliberately simple (measured on the default run: a Python
+process with Pinocchio imported holds ~350 MB; a capacity shard holds one chunk of 500 points x
+IK branches x directions x limit outputs in a few float64 arrays; the voxels stage holds every
+point of the map in a table of ~40 columns)."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.capacity.sampling import joint_samples
+from capmap.capacity.voxels import Grid
+from capmap.config.capacity import SamplingConfig
+from capmap.core.reduction import LockedArm
+from capmap.errors import ConfigError
+
+__all__ = ["Estimate", "estimate_map", "available_memory_mb", "BASE_MB"]
+
+BASE_MB = 350.0  # a job's Python with numpy, pandas and Pinocchio imported
+_CHUNK = 500  # points per capacity chunk (capmap.stages.capacity.capacity_table)
+_MAX_BRANCHES = 16
+_POINT_BYTES = 700  # one point in the voxels stage's tables, with pandas' overhead
+_MAX_SAMPLES = 20_000_000
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A capacity map's size: grid shape, voxels, points, motion states (upper bound: every point
+    reachable with 8 branches), peak memory of its largest job (MB)."""
+
+    grid_shape: tuple[int, int, int]
+    voxels: int
+    points: int
+    states: float
+    peak_mb: float
+
+    def describe(self, edge_m: float) -> str:
+        g = "x".join(map(str, self.grid_shape))
+        return (f"grid {g} = {self.voxels:,} voxels of {edge_m:g} m, {self.points:,} points, <= {self.states:.2g} "
+                f"motion states, peak memory ~{self.peak_mb / 1024:.1f} GB per job")
+
+
+def available_memory_mb() -> float:
+    """MemAvailable of this machine (MB); the physical memory when /proc/meminfo is missing."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**20
+
+
+def estimate_map(arm: LockedArm, sampling: SamplingConfig, edge_m: float, n_directions: int, n_outputs: int,
+                 shards: int, keys: dict[str, str]) -> Estimate:
+    """The size of one capacity map: the grid from the same seeded joint samples the sample stage
+    draws (exact), the points voxel_fill adds, the states and the memory of its largest job.
+    ``keys``: the config keys of n_points, edge_m and jitter (named when the map is refused)."""
+    if sampling.n_points > _MAX_SAMPLES:
+        raise ConfigError(f"{keys['n_points']} = {sampling.n_points:,} joint samples is more than this workflow "
+                          f"handles ({_MAX_SAMPLES:,})")
+    _, pos = joint_samples(arm, sampling.n_points, np.random.default_rng(sampling.seed))
+    span = np.ptp(pos, axis=0) / edge_m + 1
+    shape = tuple(int(v) for v in np.floor(span) + 1)
+    voxels = int(np.prod(np.asarray(shape, dtype=float)))
+    if sampling.mode == "voxel_fill":
+        shape = Grid.covering(pos, edge_m).shape if voxels < 1e9 else shape
+        voxels = int(np.prod(np.asarray(shape, dtype=float)))
+    fill = voxels * (1 + sampling.jitter_per_voxel) if sampling.mode == "voxel_fill" else 0
+    points = sampling.n_points + fill
+    states = points * 8.0 * n_directions
+    chunk_mb = _CHUNK * _MAX_BRANCHES * n_directions * n_outputs * 8 * 3 / 2**20
+    shard_mb = points / max(shards, 1) * _POINT_BYTES / 2**20
+    voxel_mb = points * _POINT_BYTES / 2**20 + voxels * 200 / 2**20
+    peak = BASE_MB + max(chunk_mb + shard_mb, voxel_mb)
+    est = Estimate(grid_shape=shape, voxels=voxels, points=points, states=states, peak_mb=peak)
+    free = available_memory_mb()
+    if peak > 0.8 * free:
+        key = keys["edge_m"] if sampling.mode == "voxel_fill" and fill > sampling.n_points else keys["n_points"]
+        raise ConfigError(f"{key}: this map needs {est.describe(edge_m)}; this machine has "
+                          f"{free / 1024:.1f} GB available: coarsen {key}")
+    return est

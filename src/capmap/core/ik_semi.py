@@ -1,0 +1,211 @@
+"""The 1-D search of the semi-analytical IK (see :mod:`capmap.core.ik`): for a chain of the shape
+``0 | 1 | 2 3 parallel | 4 5 intersecting`` and a batch of targets, the roots in q0 of the
+planar 2R residual f on each of the four branches of joints 1, 4, 5. The residual itself is
+the compiled kernel :mod:`capmap.core.ik_kernels`; here are the grid, the refinement of
+suspect intervals, the branch ends and the root polishing (all batched over targets)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.core import ik_kernels
+from capmap.core.kinematics import Chain, inverse_transform
+
+__all__ = ["search", "SEARCH_STEPS"]
+
+SEARCH_STEPS = 720  # grid of the 1-D search over joint 0 (0.5 deg)
+
+
+@dataclass(frozen=True)
+class _SemiConstants:
+    """Fixed quantities of a ``semi_analytic_shape`` chain (used by :mod:`capmap.core.ik_kernels`)."""
+
+    s_star: float  # axis 5 meets axis 4 at (0, 0, s*) in frame 5
+    wc: np.ndarray  # (3,) that point in the link of joint 3
+    h: float  # its coordinate along the parallel axes (frame 2)
+    n1: np.ndarray  # (3,) axis of joint 2 in frame 1
+    t1: np.ndarray  # (3,) origin of frame 2 in frame 1
+    sigma: float  # +-1: axis 3 along or against axis 2
+    a: np.ndarray  # (3,) the parallel axis in frame 4 coordinates
+    reach: float  # m, in-plane distance from axis 2 to axis 3
+
+    def packed(self, chain: Chain) -> np.ndarray:
+        """The kernel's constant array (:func:`capmap.core.ik_kernels.pack`)."""
+        u = (inverse_transform(chain.X[6]) @ np.array([0, 0, self.s_star, 1.0]))[:3]
+        return ik_kernels.pack(chain.X, u, self.wc, self.n1, self.t1, self.a, self.h, self.sigma, self.reach)
+
+    @classmethod
+    def of(cls, chain: Chain) -> "_SemiConstants":
+        X = chain.X
+        p5, d5 = X[5][:3, 3], X[5][:3, 2]
+        s_star = -(p5[:2] @ d5[:2]) / (d5[:2] @ d5[:2])
+        wc = (X[4] @ np.array([0, 0, p5[2] + s_star * d5[2], 1.0]))[:3]
+        return cls(s_star=float(s_star), wc=wc, h=float((X[3] @ np.append(wc, 1.0))[2]), n1=X[2][:3, 2],
+                   t1=X[2][:3, 3], sigma=float(X[3][2, 2]), a=X[4][2, :3], reach=float(np.hypot(*X[3][:2, 3])))
+
+
+def _residual(c: np.ndarray, T: np.ndarray, target: np.ndarray, q0: np.ndarray, branch: np.ndarray):
+    """Validity (M,) and residual f (M,) m of branch ``branch`` (M,) of targets T[target] at q0 (M,)."""
+    ok, f = np.empty(len(q0), dtype=np.bool_), np.empty(len(q0))
+    ik_kernels.evaluate_branch(c, T, np.ascontiguousarray(target, dtype=np.int64), np.ascontiguousarray(q0, dtype=float),
+                               np.ascontiguousarray(branch, dtype=np.int64), ok, f)
+    return ok, f
+
+
+def _semi_curve(c: np.ndarray, T: np.ndarray, q0: np.ndarray, curve: np.ndarray):
+    """Branch ``curve`` (M,) at targets T (M, 4, 4), joint-0 angles q0 (M,): theta (M, 6), ok (M,), f (M,) m."""
+    M = len(q0)
+    theta, ok, f = np.empty((M, 4, 6)), np.empty((M, 4), dtype=np.bool_), np.empty((M, 4))
+    ik_kernels.evaluate(c, np.ascontiguousarray(T), np.ascontiguousarray(q0, dtype=float), theta, ok, f)
+    i = np.arange(M)
+    return theta[i, curve], ok[i, curve], f[i, curve]
+
+
+def search(chain: Chain, T: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate solutions (N, K, 6) rad for targets T (N, 4, 4), their validity (N, K), and which
+    of them are starts at a (near-)double root that still need Newton steps (N, K)."""
+    k = _SemiConstants.of(chain)
+    c = k.packed(chain)
+    T = np.ascontiguousarray(T)
+    N = len(T)
+    step = 2 * np.pi / steps
+    grid = -np.pi + step * np.arange(-1, steps + 1)  # one point beyond each end: every wrap-around triple
+    ok, f = np.empty((N, steps + 2, 4), dtype=np.bool_), np.empty((N, steps + 2, 4))
+    ik_kernels.evaluate_grid(c, T, grid, ok, f)
+    seq = lambda a: np.moveaxis(a, 2, 1).reshape(N * 4, -1)  # noqa: E731 - one sequence per (target, branch)
+    tgt, crv = np.repeat(np.arange(N), 4), np.tile(np.arange(4), N)
+    x, ok, f = np.broadcast_to(grid, (N * 4, steps + 2)), seq(ok), seq(f)
+    brackets, seeds, edges = [], [], []
+    for level in range(_REFINE_LEVELS + 1):
+        br, refine, edge = _scan(tgt, crv, x, ok, f)
+        brackets.append(br)
+        if level == _REFINE_LEVELS or not len(refine[0]):
+            seeds.append(refine)  # what is still suspect at the finest level: a (near-)double root
+            edges.append(edge)
+            break
+        # subdivide suspect intervals and intervals where the branch ends
+        tgt = np.concatenate([refine[0], edge[0]])
+        crv = np.concatenate([refine[1], edge[1]])
+        lo, hi = np.concatenate([refine[2], edge[2]]), np.concatenate([refine[3], edge[3]])
+        x = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, _SUBDIVIDE + 1)
+        ok, f = _residual(c, T, np.repeat(tgt, _SUBDIVIDE + 1), x.ravel(), np.repeat(crv, _SUBDIVIDE + 1))
+        ok, f = ok.reshape(x.shape), f.reshape(x.shape)
+    br = _Brackets.joined(brackets)
+    # where a branch ends inside a finest interval: find the end point (bisection on validity);
+    # the branch joins its partner there, so bracket [valid end, end point] on every branch
+    e_n, e_c, e_v, e_z = (np.concatenate(v) for v in zip(*edges))
+    if len(e_n):
+        a, z = e_v.copy(), e_z.copy()
+        for _ in range(30):
+            m = 0.5 * (a + z)
+            okm, _ = _residual(c, T, e_n, m, e_c)
+            a, z = np.where(okm, m, a), np.where(okm, z, m)
+        ok_v, f_v = np.empty((len(a), 4), dtype=np.bool_), np.empty((len(a), 4))
+        ok_a, f_a = np.empty((len(a), 4), dtype=np.bool_), np.empty((len(a), 4))
+        ik_kernels.evaluate(c, T[e_n], e_v, np.empty((len(a), 4, 6)), ok_v, f_v)
+        ik_kernels.evaluate(c, T[e_n], a, np.empty((len(a), 4, 6)), ok_a, f_a)
+        i, cc = np.nonzero(ok_v & ok_a & (f_v * f_a <= 0))
+        br = _Brackets.joined([br, _Brackets(e_n[i], cc, e_v[i], a[i], f_v[i, cc], f_a[i, cc])])
+    # Illinois false position on every bracket; Newton from what stays suspect at the finest level
+    x = br.solve(c, T)
+    theta_r, ok_r, _ = _semi_curve(c, T[br.target], x, br.curve)
+    s_n, s_c, s_lo, s_hi = (np.concatenate(v) for v in zip(*seeds))
+    theta_t, ok_t, _ = _semi_curve(c, T[s_n], 0.5 * (s_lo + s_hi), s_c)
+    seed = np.r_[np.zeros(len(br.target), dtype=bool), np.ones(len(s_n), dtype=bool)]
+    return _pack(np.concatenate([br.target, s_n]), np.concatenate([theta_r, theta_t]),
+                 np.concatenate([ok_r, ok_t]), seed, N)
+
+
+_REFINE_LEVELS = 4  # subdivisions of a suspect grid interval (0.5 deg / 8^4 at the finest)
+_SUBDIVIDE = 8
+_SUSPECT = 1.5  # an interval is suspect when min |f| at its ends < this x the local change of f
+
+
+def _scan(tgt, crv, x, ok, f):
+    """Sampled residual sequences f (B, S) at increasing angles x (B, S) on branch crv (B,) of
+    target tgt (B,), valid where ok (B, S). Returns
+
+    - :class:`_Brackets` at every sign change between valid neighbours;
+    - suspect intervals (tgt, crv, lo, hi): same sign at both ends, but |f| there is small
+      against the local change of f (the largest |f step| over the interval and its
+      neighbours, x ``_SUSPECT``): two roots (or a narrow spike of f) may hide inside;
+    - intervals where the branch ends (tgt, crv, valid end, invalid end).
+    """
+    both = ok[:, :-1] & ok[:, 1:]
+    prod = f[:, :-1] * f[:, 1:]
+    b_i, j_i = np.nonzero(both & (prod <= 0))
+    br = _Brackets(tgt[b_i], crv[b_i], x[b_i, j_i], x[b_i, j_i + 1], f[b_i, j_i], f[b_i, j_i + 1])
+    df = np.where(both, np.abs(np.diff(f, axis=1)), 0.0)
+    pad = np.zeros((len(df), 1))
+    local = np.maximum(df, np.maximum(np.concatenate([pad, df[:, :-1]], 1), np.concatenate([df[:, 1:], pad], 1)))
+    small = np.minimum(np.abs(f[:, :-1]), np.abs(f[:, 1:]))
+    b_s, j_s = np.nonzero(both & (prod > 0) & (small < _SUSPECT * local))
+    suspect = (tgt[b_s], crv[b_s], x[b_s, j_s], x[b_s, j_s + 1])
+    b_e, j_e = np.nonzero(ok[:, :-1] != ok[:, 1:])
+    first = ok[b_e, j_e]
+    edge = (tgt[b_e], crv[b_e], np.where(first, x[b_e, j_e], x[b_e, j_e + 1]),
+            np.where(first, x[b_e, j_e + 1], x[b_e, j_e]))
+    return br, suspect, edge
+
+
+@dataclass(frozen=True)
+class _Brackets:
+    """Root brackets [lo, hi] of branch ``curve`` at target ``target``, with f at both ends (arrays (B,))."""
+
+    target: np.ndarray
+    curve: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    f_lo: np.ndarray
+    f_hi: np.ndarray
+
+    @classmethod
+    def joined(cls, parts: list["_Brackets"]) -> "_Brackets":
+        return cls(*(np.concatenate([getattr(p, n) for p in parts]) for n in
+                     ("target", "curve", "lo", "hi", "f_lo", "f_hi")))
+
+    def solve(self, c: np.ndarray, T: np.ndarray, iters: int = 90) -> np.ndarray:
+        """The root in each bracket (B,) rad: the Illinois variant of false position, with a
+        bisection every third step (f can be steep near a wrist singularity, where false
+        position alone crawls); stops at |f| <= 1e-13 m or a bracket narrower than 1e-14 rad."""
+        lo, hi, f_lo, f_hi = self.lo.copy(), self.hi.copy(), self.f_lo.copy(), self.f_hi.copy()
+        side = np.zeros(len(lo), dtype=int)
+        x = np.where(np.abs(f_lo) <= np.abs(f_hi), lo, hi)
+        live = np.ones(len(lo), dtype=bool)
+        for it in range(iters):
+            idx = np.flatnonzero(live)
+            if not len(idx):
+                break
+            l, h, fl, fh = lo[idx], hi[idx], f_lo[idx], f_hi[idx]
+            d = fh - fl
+            xi = np.where(d != 0, h - fh * (h - l) / np.where(d != 0, d, 1.0), 0.5 * (l + h))
+            xi = np.clip(xi, np.minimum(l, h), np.maximum(l, h))
+            if it % 3 == 2:
+                xi = 0.5 * (l + h)
+            okx, fx = _residual(c, T, self.target[idx], xi, self.curve[idx])
+            fx = np.where(okx, fx, 0.0)  # a hole inside the bracket: stop there (Newton decides)
+            left = fx * fl > 0  # the root is in [x, hi]
+            fh = np.where(~left & (side[idx] == -1), 0.5 * fh, fh)
+            fl = np.where(left & (side[idx] == 1), 0.5 * fl, fl)
+            lo[idx], f_lo[idx] = np.where(left, xi, l), np.where(left, fx, fl)
+            hi[idx], f_hi[idx] = np.where(left, h, xi), np.where(left, fh, fx)
+            side[idx] = np.where(left, 1, -1)
+            x[idx] = xi
+            live[idx] = (np.abs(hi[idx] - lo[idx]) > 1e-14) & (np.abs(fx) > 1e-13)
+        return x
+
+
+def _pack(target, theta, ok, seed, N):
+    """Rows (B, 6) belonging to targets ``target`` (B,) -> (N, K, 6), validity and seed flags (N, K)."""
+    count = np.bincount(target, minlength=N)
+    K = int(count.max(initial=0))
+    order = np.argsort(target, kind="stable")
+    slot = np.arange(len(target)) - np.repeat(np.cumsum(count) - count, count)
+    out = np.zeros((N, K, 6))
+    ok_out, seed_out = np.zeros((N, K), dtype=bool), np.zeros((N, K), dtype=bool)
+    out[target[order], slot] = theta[order]
+    ok_out[target[order], slot] = ok[order]
+    seed_out[target[order], slot] = seed[order]
+    return out, ok_out, seed_out

@@ -1,0 +1,201 @@
+"""Bad input never costs a good output: a table of bad configs and robot files, each run as
+``snakemake all`` over a finished tiny run. Each must exit with status 1 and exactly one stderr
+line starting ``capmap:`` that names the key or file, before any job runs, and leave every file
+under results/ byte-identical. (The cases run in parallel: each only parses the workflow.)"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import subprocess
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+import yaml
+
+from tests.scenario import ROOT, SSRMS_YAML
+from tests.workflow.runs import config_file
+
+NAN, INF = math.nan, math.inf
+
+CONFIG_CASES = [
+    ({"limts": 3}, "unknown key limts"),
+    ({"lock.joint": 9}, "lock.joint = 9 is out of range"),
+    ({"limits.joint_torque_nm": -5}, "limits.joint_torque_nm"),
+    ({"limits.joint_torque_nm": [700, 700]}, "limits.joint_torque_nm has 2 values"),
+    ({"directions.n": 0}, "directions.n"),
+    ({"lock.angle_deg": 400}, "lock.angle_deg = 400 is outside joint 1's range"),
+    ({"lock.joint": 2, "lock.angle_deg": None, "task.q_ini_deg": [100, 200, 98, 130, 146, 174, 57]},
+     "task.q_ini_deg[1] = 200 is outside"),
+    ({"task.q_ini_deg": [100, 124, 98]}, "task.q_ini_deg has 3 values but ssrms7 has 7 joints"),
+    ({"task.goal_m": [30, 0, 0]}, "task.goal_m = [30, 0, 0] is not reachable"),
+    ({"lock.joint": 4, "lock.angle_deg": 40}, "task.start_m [0.379, 4.843, 1.888] m is not reachable at "
+                                                "task.orientation_rpy_deg = [90, 0, 90] with joint 4 locked at 40 deg"),
+    ({"task.payload_kg": [1500, 1500]}, "task.payload_kg"),
+    ({"verification.dt_s": 0}, "verification.dt_s"),
+    ({"follow.space.payload_kg": 1234}, "follow.space.payload_kg = 1234 is not one of task.payload_kg"),
+    ({"follow.ground.joint_torque_nm": [14, 150]}, "follow.ground.joint_torque_nm has 2 values; give one or 6"),
+    ({"follow.ground.q_start_deg": [0, 0]}, "follow.ground.q_start_deg has 2 values"),
+    ({"follow.ground.speed": 1}, "unknown key"),
+    ({"follow.ground.line_m": [0, 3, 0]}, "follow.ground.line_m = [0, 3, 0] ends at"),
+    ({"reconfig.unlock": "arm1.J3"}, "arm1.J3 is a revolute joint, not a passive one"),
+    ({"reconfig.unlock": "arm3.P1"}, "arm3.P1 is not on the closed chain through capture arm1_arm2"),
+    ({"reconfig.capture": "arm1_arm9"}, "reconfig.capture = 'arm1_arm9': reconfig3 has no capture 'arm1_arm9'"),
+    ({"reconfig.law.d_m": 2.0}, "reconfig.law takes arm1.P1's d to 2 m, outside its range [-0.5, 0.8] m"),
+    ({"reconfig.configuration_deg.arm2": [0, 0, 0, 0, 0]}, "reconfig.configuration_deg.arm2 has 5 values but arm2 has 6"),
+    ({"reconfig.configuration_deg.arm1": [0, 0, 0, 0, 0, 0]}, "reconfig.configuration_deg does not close capture"),
+    ({"reconfig.joint_rate_limit_deg_s": [1, 2]}, "reconfig.joint_rate_limit_deg_s has 2 values; give one or 10"),
+    ({"dualarm.horizon.pre_insertion_node": 100}, "dualarm.horizon.pre_insertion_node = 100 must lie between 0 and"),
+    ({"dualarm.cloud.file": "scan.csv"}, "dualarm.cloud: give either file or a synthetic scan"),
+    ({"dualarm.weights.mass": 1}, "unknown key"),
+    ({"dualarm.scene": "nowhere.yaml"}, "nowhere.yaml"),
+    # numbers that are not numbers
+    ({"task.v_max_mps": NAN}, "task.v_max_mps = nan is not a finite number"),
+    ({"task.a_max_mps2": INF}, "task.a_max_mps2 = inf is not a finite number"),
+    ({"task.payload_kg": [1500, NAN]}, "task.payload_kg[1] = nan is not a finite number"),
+    ({"task.payload_kg": 1e300}, "task.payload_kg"),
+    ({"limits.joint_torque_nm": INF}, "limits.joint_torque_nm = inf is not a finite number"),
+    ({"limits.base_force_n": [200, NAN, 200]}, "limits.base_force_n[1] = nan"),
+    ({"limits.base_moment_nm": -INF}, "limits.base_moment_nm = -inf"),
+    ({"task.orientation_rpy_deg": [90, NAN, 90]}, "task.orientation_rpy_deg[1] = nan"),
+    ({"task.start_m": [NAN, 4.8, 1.9]}, "task.start_m[0] = nan"),
+    ({"task.goal_m": [2.6, INF, 4.9]}, "task.goal_m[1] = inf"),
+    ({"task.q_ini_deg": [100, 124, NAN, 130, 146, 174, 57]}, "task.q_ini_deg[2] = nan"),
+    ({"lock.angle_deg": NAN}, "lock.angle_deg = nan"),
+    ({"voxels.edge_m": NAN}, "voxels.edge_m = nan"),
+    ({"follow.period_s": INF}, "follow.period_s = inf"),
+    ({"follow.space.j_max_mps3": NAN}, "follow.space.j_max_mps3 = nan"),
+    ({"follow.ground.v_max_mps": INF}, "follow.ground.v_max_mps = inf"),
+    ({"reconfig.dt_s": NAN}, "reconfig.dt_s = nan"),
+    ({"dualarm.margin_m": INF}, "dualarm.margin_m = inf"),
+    ({"atlas.edge_m": NAN}, "atlas.edge_m = nan"),
+    # numbers typed as text
+    ({"task.v_max_mps": "1e-1"}, "task.v_max_mps = '1e-1' is text, not a number"),
+    ({"limits.base_force_n": "2e2"}, "limits.base_force_n = '2e2' is text, not a number"),
+    # impossible or unaffordable sizes, verdicts from under-sampling
+    ({"verification.dt_s": 5}, "verification.dt_s = 5 s is too coarse"),
+    ({"voxels.edge_m": 0.05}, "voxels.edge_m: this map needs"),
+    ({"sampling.n_points": 100_000_000}, "sampling.n_points = 100,000,000 joint samples"),
+    ({"atlas.edge_m": 0.02}, "atlas.edge_m: this map needs"),
+    ({"atlas.joints": [1, 9]}, "atlas.joints: joint 9 is out of range"),
+    ({"atlas.angles_deg": [0, 400]}, "atlas.angles_deg: 400 is outside joint 1's range"),
+    ({"atlas.directions.kind": "sphere", "atlas.directions.n": None}, "atlas.directions.n is required"),
+    ({"voxels.edge_m": -1}, "voxels.edge_m"),
+    ({"shards": 0}, "shards"),
+    ({"sampling.seed": -1}, "sampling.seed"),
+    ({"task.payload_kg": -5}, "task.payload_kg"),
+    ({"limits.base_moment_nm": [500, 500]}, "limits.base_moment_nm has 2 values"),
+]
+
+
+def _robot_doc():
+    return yaml.safe_load(SSRMS_YAML.read_text())
+
+
+def _robot(tmp: Path, name: str, edit=None, text: str | None = None, data: bytes | None = None) -> str:
+    path = tmp / name
+    if data is not None:
+        path.write_bytes(data)
+    elif text is not None:
+        path.write_text(text)
+    else:
+        doc = _robot_doc()
+        edit(doc)
+        path.write_text(yaml.safe_dump(doc))
+    return str(path)
+
+
+def _urdf_robot(tmp: Path, name: str, urdf_text: str) -> str:
+    (tmp / f"{name}.urdf").write_text(urdf_text)
+    doc = {"name": name, "urdf": {"path": f"{name}.urdf", "ee_frame": "tool0"}}
+    (tmp / f"{name}.yaml").write_text(yaml.safe_dump(doc))
+    return str(tmp / f"{name}.yaml")
+
+
+def _set(path, value):
+    def edit(doc):
+        node = doc
+        for k in path[:-1]:
+            node = node[k]
+        node[path[-1]] = value
+    return edit
+
+
+ROBOT_CASES = [  # (file maker, expected text in the one line); the file's name is checked too
+    (lambda t: _robot(t, "binary.yaml", data=bytes(range(256)) * 4), "not a text"),
+    (lambda t: _robot(t, "latin1.yaml", data="name: r\u00f6bot\n".encode("latin-1")), "not a text (UTF-8) file"),
+    (lambda t: _robot(t, "empty.yaml", text=""), "a robot file must be a mapping"),
+    (lambda t: _robot(t, "malformed.yaml", text="name: [a, b\ndh: {"), "malformed YAML"),
+    (lambda t: _robot(t, "nan_dh.yaml", _set(["dh", "rows", 2, 1], NAN)), "dh.rows[2][1] = nan is not a finite number"),
+    (lambda t: _robot(t, "inf_mass.yaml", _set(["links", 0, "mass_kg"], INF)), "links[0].mass_kg = inf"),
+    (lambda t: _robot(t, "nan_com.yaml", _set(["links", 3, "com_m"], [0, NAN, 0])), "links[3].com_m[1] = nan"),
+    (lambda t: _robot(t, "nan_gravity.yaml", _set(["gravity_mps2"], [0, 0, NAN])), "gravity_mps2[2] = nan"),
+    (lambda t: _robot(t, "inf_base.yaml", _set(["base_com_m"], [INF, 0, 0])), "base_com_m[0] = inf"),
+    (lambda t: _robot(t, "nan_tool.yaml", _set(["tool", "rpy_deg"], [0, NAN, 0])), "tool.rpy_deg[1] = nan"),
+    (lambda t: _robot(t, "nan_range.yaml", _set(["joint_range_deg", 0], [NAN, 180])), "joint_range_deg[0][0] = nan"),
+    (lambda t: _robot(t, "text_dh.yaml", _set(["dh", "rows", 1, 3], "5e-1")), "is text, not a number"),
+    (lambda t: _robot(t, "short_row.yaml", _set(["dh", "rows", 0], [0, 0, 0])), "dh.rows[0]"),
+    (lambda t: _robot(t, "inverted.yaml", _set(["joint_range_deg", 2], [90, -90])), "lower must be < upper"),
+    (lambda t: _robot(t, "neg_mass.yaml", _set(["links", 1, "mass_kg"], -3)), "links[1].mass_kg"),
+    (lambda t: _robot(t, "not_pd.yaml", _set(["links", 2, "inertia_kgm2"], [1, 1, -1])), "links[2].inertia_kgm2"),
+    (lambda t: _robot(t, "unknown_key.yaml", _set(["colour"], "red")), "unknown key colour"),
+    (lambda t: _robot(t, "few_links.yaml", lambda d: d["links"].pop()), "links has 6 entries but dh.rows has 7"),
+    (lambda t: str(t / "missing.yaml"), "cannot read"),
+    (lambda t: _urdf_robot(t, "garbage", "<robot><link name='a'></robot"), "not valid XML"),
+    (lambda t: _urdf_robot(t, "notrobot", "<html><body/></html>"), "not a URDF"),
+    (lambda t: _urdf_robot(t, "binaryurdf", "\x00\x01garbage"), "not valid XML"),
+]
+
+
+def _tree_digest(root: Path) -> dict[str, str]:
+    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def _run(workdir: Path, config: Path):
+    cmd = ["snakemake", "all", "-s", str(ROOT / "Snakefile"), "-d", str(workdir), "--cores", "1", "--nolock",
+           "--configfile", str(config)]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+
+
+def _check(res, expect: str, name: str | None) -> str | None:
+    """None when the run failed as it should, else what went wrong."""
+    lines = [ln for ln in res.stderr.splitlines() if ln.startswith("capmap:")]
+    if res.returncode != 1:
+        return f"exit status {res.returncode}"
+    if len(lines) != 1:
+        return f"{len(lines)} capmap lines: {lines}; stderr tail: {res.stderr[-800:]}"
+    if expect not in lines[0] or (name and name not in lines[0]):
+        return f"line does not name {expect!r}{f' and {name!r}' if name else ''}: {lines[0]}"
+    if "Traceback" in res.stdout + res.stderr:
+        return "a traceback was printed"
+    return None
+
+
+def test_bad_inputs_are_one_line_and_cost_no_output(run_dir, tmp_path):
+    work, _ = run_dir
+    before = _tree_digest(work / "results")
+    jobs = []
+    for i, (changes, expect) in enumerate(CONFIG_CASES):
+        jobs.append((config_file(tmp_path, **changes), expect, None, f"config {changes}"))
+    for make, expect in ROBOT_CASES:
+        robot = make(tmp_path)
+        jobs.append((config_file(tmp_path, robot=robot), expect, Path(robot).name, f"robot file {Path(robot).name}"))
+    assert len(jobs) >= 60
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        results = list(pool.map(lambda j: (j, _run(work, j[0])), jobs))
+    failures = [f"{j[3]}: {err}" for j, res in results if (err := _check(res, j[1], j[2]))]
+    assert not failures, "\n".join(failures)
+    assert _tree_digest(work / "results") == before  # every existing output byte-identical
+
+
+@pytest.mark.parametrize("text", ["", "\x00\x01\x02 binary", "robot: [unclosed"])
+def test_a_bad_default_config_is_one_line(tmp_path, text):
+    """The default config (no --configfile) is read by capmap before Snakemake sees it."""
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "config.yaml").write_text(text)
+    res = subprocess.run(["snakemake", "all", "-s", str(ROOT / "Snakefile"), "-d", str(tmp_path), "--cores", "1"],
+                         capture_output=True, text=True, timeout=300)
+    lines = [ln for ln in res.stderr.splitlines() if ln.startswith("capmap:")]
+    assert res.returncode == 1 and len(lines) == 1 and "config/config.yaml" in lines[0], res.stderr[-1500:]
