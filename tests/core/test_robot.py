@@ -1,11 +1,9 @@
 import numpy as np
 import pinocchio as pin
-import pytest
 import yaml
 
-from capmap.config.robot_file import load, load_robot, parse_robot
+from capmap.config.robot_file import load, parse_robot
 from capmap.core.robot import build_robot
-from capmap.errors import CapmapError
 from tests.reference.newton_euler import craig_fk, craig_step, spec_table
 from tests.scenario import Q_INI_DEG, SSRMS_YAML, X_INI, rpy_matrix
 

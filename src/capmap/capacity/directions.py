@@ -10,12 +10,13 @@ near-uniform (Fibonacci) set of any size.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from capmap.errors import CapmapError
 
-__all__ = ["Directions", "paper_grid", "sphere"]
+__all__ = ["Directions", "paper_grid", "sphere", "antipodal_pairs"]
 
 
 @dataclass(frozen=True)
@@ -29,6 +30,34 @@ class Directions:
 
     def __len__(self) -> int:
         return len(self.u)
+
+    @cached_property
+    def pairs(self) -> np.ndarray:
+        """(P, 2): each direction once with the index of its antipode in the set (-1: none)."""
+        return antipodal_pairs(self.u)
+
+
+def antipodal_pairs(u: np.ndarray) -> np.ndarray:
+    """(P, 2) int: each direction of u (D, 3) once, with the index of -u in the set (or -1)."""
+    D = len(u)
+    dots = u @ u.T
+    partner = np.full(D, -1)
+    for d in range(D):
+        hit = np.flatnonzero(dots[d] < -1 + 1e-12)
+        if len(hit):
+            partner[d] = hit[0]
+    rows, seen = [], np.zeros(D, dtype=bool)
+    for d in range(D):
+        if seen[d]:
+            continue
+        e = partner[d]
+        seen[d] = True
+        if e >= 0 and not seen[e]:
+            seen[e] = True
+            rows.append((d, e))
+        else:
+            rows.append((d, -1))
+    return np.array(rows, dtype=np.int64).reshape(-1, 2)
 
 
 def paper_grid(step_deg: float) -> Directions:

@@ -17,12 +17,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.directions import Directions
+from capmap.capacity.sweep import min_over_directions
 from capmap.core.dynamics import ArmDynamics, output_names
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
 from capmap.errors import CapmapError
 
-__all__ = ["LoadLimits", "Motion", "Coefficients", "coefficients", "state_affine", "joint_state_affine",
+__all__ = ["LoadLimits", "Motion", "Coefficients", "coefficients", "coefficients_pinocchio", "state_affine", "joint_state_affine",
            "state_capacity", "direction_features", "affine_over_directions", "capacity_over_directions",
            "PointCapacity", "point_capacity", "margin_pct", "SINGULAR"]
 
@@ -102,12 +103,23 @@ class Coefficients:
 
 
 def coefficients(dyn: ArmDynamics, q_active: np.ndarray) -> Coefficients:
-    """Coefficients for configurations q_active (B, n_active) rad."""
-    rows = [dyn.coefficients(q) for q in np.atleast_2d(q_active)]
-    if not rows:
+    """Coefficients for configurations q_active (B, n_active) rad, the whole batch at once
+    (:class:`capmap.core.batch_dynamics.BatchDynamics`; equal to the per-configuration Pinocchio
+    computation :func:`coefficients_pinocchio` to ~1e-12)."""
+    q_active = np.atleast_2d(q_active)
+    if not len(q_active):
         n = dyn.n_out
         return Coefficients(np.zeros((0, n)), np.zeros((0, n, 3)), np.zeros((0, n, 6)), np.zeros((0, n, 3)),
                             np.zeros(0, dtype=bool))
+    return Coefficients(*dyn.batch.coefficients(q_active))
+
+
+def coefficients_pinocchio(dyn: ArmDynamics, q_active: np.ndarray) -> Coefficients:
+    """The reference path: :meth:`ArmDynamics.coefficients` (16 RNEA + 6 drift calls of Pinocchio)
+    configuration by configuration."""
+    rows = [dyn.coefficients(q) for q in np.atleast_2d(q_active)]
+    if not rows:
+        return coefficients(dyn, np.zeros((0, dyn.arm.n_active)))
     return Coefficients(*(np.array([r[k] for r in rows]) for k in ("c0", "L", "Q", "S", "singular")))
 
 
@@ -170,14 +182,14 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
     pts, brs = np.nonzero(valid)
     if len(pts):
         coef = coefficients(dyn, q_sets[pts, brs])
-        y0, s = affine_over_directions(coef, directions.u, motion, dyn.gravity)  # (M, n_out, D)
-        bound = limits.upper_from_zero(y0, s, axis=1)
-        c = bound.min(axis=1)  # (M, D)
-        c[coef.singular] = 0.0
-        worst_dir = np.argmin(c, axis=1)
-        rows = np.arange(len(c))
-        c_cfg = c[rows, worst_dir]
-        b_cfg = np.where(coef.singular, len(limits), np.argmin(bound[rows, :, worst_dir], axis=1))
+        v, a = motion.v_max_mps, motion.a_max_mps2
+        u = directions.u
+        phi = np.concatenate([np.ones((len(u), 1)), a * u, v**2 * direction_features(u)], axis=1)  # (D, 10)
+        C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (M, n_out, 10)
+        c_cfg, worst_dir, b_cfg = min_over_directions(C, coef.S, phi, a * u, dyn.gravity, limits.limit,
+                                                      directions.pairs)
+        c_cfg[coef.singular] = 0.0
+        b_cfg[coef.singular] = len(limits)
         # min over each point's configurations
         order = np.lexsort((c_cfg, pts))
         first = np.ones(len(order), dtype=bool)

@@ -53,6 +53,10 @@ def _as_number(text: str) -> float | None:
         return None
 
 
+def _plain(x: float) -> str:
+    return str(int(x)) if x.is_integer() and abs(x) < 1e15 else repr(x)
+
+
 def _admits_numbers(sub: dict, root: dict) -> bool:
     """Whether a (sub)schema accepts numbers somewhere (following local $refs)."""
     text = json.dumps(sub)
@@ -75,7 +79,7 @@ def validate(doc: Any, schema_name: str, source: str) -> None:
     if isinstance(error.instance, str) and _as_number(error.instance) is not None and \
             _admits_numbers(error.schema, schema(schema_name)):
         raise ConfigError(f"{source}: {where} = '{error.instance}' is text, not a number: YAML reads a number "
-                          f"written like 1e-4 (no decimal point) as a string; write {float(error.instance)!r}")
+                          f"written like 1e-4 (no decimal point) as a string; write {_plain(float(error.instance))}")
     if error.validator == "additionalProperties":
         extra = sorted(set(error.instance) - set(error.schema.get("properties", {})))
         raise ConfigError(f"{source}: unknown key {where + '.' if error.absolute_path else ''}{extra[0]} "

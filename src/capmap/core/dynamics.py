@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from capmap.core.batch_dynamics import BatchDynamics
 from capmap.core.reduction import LockedArm
 
 __all__ = ["ArmDynamics", "output_names", "torque_names", "payload_models", "BASE_OUTPUTS"]
@@ -81,6 +82,7 @@ class ArmDynamics:
         self._fext = pin.StdVec_Force()
         for _ in range(self.model.njoints):
             self._fext.append(pin.Force.Zero())
+        self.batch = BatchDynamics(arm)  # the same coefficients for a batch, compiled
 
     # ------------------------------------------------------------------ primitives
     def _payload_fext(self, data: pin.Data, p_ee: np.ndarray, force: np.ndarray) -> pin.StdVec_Force:
