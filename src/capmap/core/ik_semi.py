@@ -81,7 +81,7 @@ def search(chain: Chain, T: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.n
     for level in range(_REFINE_LEVELS + 1):
         br, refine, edge = _scan(tgt, crv, x, ok, f)
         brackets.append(br)
-        if level == _REFINE_LEVELS or not len(refine[0]):
+        if level == _REFINE_LEVELS or not (len(refine[0]) or len(edge[0])):
             seeds.append(refine)  # what is still suspect at the finest level: a (near-)double root
             edges.append(edge)
             break
@@ -120,7 +120,7 @@ def search(chain: Chain, T: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.n
 
 _REFINE_LEVELS = 4  # subdivisions of a suspect grid interval (0.5 deg / 8^4 at the finest)
 _SUBDIVIDE = 8
-_SUSPECT = 1.5  # an interval is suspect when min |f| at its ends < this x the local change of f
+_SUSPECT = 3.0  # an interval is suspect when min |f| at its ends < this x the local change of f
 
 
 def _scan(tgt, crv, x, ok, f):
