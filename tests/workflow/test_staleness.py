@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import subprocess
 
@@ -88,3 +89,20 @@ def test_a_damaged_shard_is_one_line_and_check_finds_it(run_dir, tmp_path):
     assert any("shard_1_of_2.parquet: missing" in ln for ln in lines)
     ok = subprocess.run(["python", "-m", "capmap", "check", str(work / "results")], capture_output=True, text=True)
     assert ok.returncode == 0, ok.stderr
+
+
+def test_a_deleted_intermediate_is_named_with_the_command_that_rebuilds_it(run_dir, tmp_path):
+    work, cfg = run_dir
+    copy = tmp_path / "run"
+    shutil.copytree(work, copy, ignore=shutil.ignore_patterns("locks", "incomplete"))
+    assert planned_jobs(copy, cfg) == {}
+    (copy / "results" / "capacity" / "shard_1_of_2.parquet").unlink()
+    res = subprocess.run(["snakemake", "all", "-n", "-s", str(ROOT / "Snakefile"), "-d", str(copy), "--configfile",
+                          str(cfg)], capture_output=True, text=True, timeout=600)
+    warn = [ln for ln in res.stderr.splitlines() if "shard_1_of_2.parquet is in the catalogue but missing" in ln]
+    assert res.returncode == 0 and len(warn) >= 1
+    assert "snakemake --cores 2 all --forcerun results/capacity/shard_1_of_2.parquet" in warn[0]
+    res = subprocess.run(["snakemake", "all", "-n", "-s", str(ROOT / "Snakefile"), "-d", str(copy), "--configfile",
+                          str(cfg), "--forcerun", "results/capacity/shard_1_of_2.parquet"],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0 and re.search(r"(?m)^capacity\s+1$", res.stdout + res.stderr), res.stdout[-2000:]

@@ -6,6 +6,7 @@ from pathlib import Path
 from capmap.config import (atlas_slices, canonical, check_run_config, dualarm_slices, follow_slices, payload_label,
                            reconfig_slices, resolved_doc, stage_slices)
 from capmap.errors import CapmapError
+from capmap.io.datasets import missing_catalogued
 from capmap.io.fingerprint import script_fingerprint
 
 # validate once, before any job: schema, robot file, locked joint, limits, task poses, follow cases
@@ -15,6 +16,10 @@ except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
 print(f"capmap: {RUN.failure.describe()}", file=sys.stderr)
 print(f"capmap: estimate: {RUN.estimate.describe(RUN.voxel_edge_m)}", file=sys.stderr)
+for _path in missing_catalogued("results/catalogue.parquet") + missing_catalogued("results/atlas/catalogue.parquet"):
+    # Snakemake would not rebuild it by itself (its consumers are up to date): say so, with the command
+    print(f"capmap: warning: {_path} is in the catalogue but missing; rebuild it and what depends on it with: "
+          f"snakemake --cores 2 all --forcerun {_path}", file=sys.stderr)
 DOC = resolved_doc(config, RUN.failure)  # lock angle, start and start configuration resolved
 SLICES = stage_slices(DOC)
 SHARDS = RUN.shards

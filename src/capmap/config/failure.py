@@ -72,7 +72,8 @@ class Failure:
 
 def resolve_failure(robot: Robot, lock: LockConfig, task: TaskConfig, source: str = "config") -> Failure:
     """Resolve the lock angle, the start position and the start configuration (one-line
-    :class:`ConfigError` naming the key when the start is unreachable or q_ini inconsistent)."""
+    :class:`ConfigError` naming the key for a wrong q_ini length, a lock angle outside the joint's
+    range, or a start the locked arm cannot reach at the task orientation)."""
     q_ini_deg = np.asarray(task.q_ini_deg, dtype=float)
     if len(q_ini_deg) != robot.n_joints:
         raise ConfigError(f"{source}: task.q_ini_deg has {len(q_ini_deg)} values but {robot.name} has "

@@ -18,7 +18,7 @@ from capmap.errors import DataError
 from capmap.io.fingerprint import file_sha256
 
 __all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "read", "catalogue",
-           "verify_catalogue"]
+           "verify_catalogue", "missing_catalogued"]
 
 UNITS = [("_deg", "deg"), ("_rad", "rad"), ("_kg", "kg"), ("_nm", "N m"), ("_n", "N"), ("_mps2", "m/s^2"),
          ("_mps", "m/s"), ("_m", "m"), ("_s", "s"), ("_pct", "%"), ("_rad_s", "rad/s"), ("_rad_s2", "rad/s^2"),
@@ -122,3 +122,14 @@ def verify_catalogue(catalogue_path: str | Path, root: str | Path = ".") -> list
             except DataError as exc:
                 problems.append(str(exc))
     return problems
+
+
+def missing_catalogued(catalogue_path: str | Path, root: str | Path = ".") -> list[str]:
+    """Paths a catalogue lists that are no longer on disk (cheap: no hashing; [] without a
+    readable catalogue). Snakemake does not rebuild a deleted intermediate whose consumers are up
+    to date, so the workflow names these before it says "Nothing to be done"."""
+    try:
+        cat = pd.read_parquet(catalogue_path, columns=["path"])
+    except Exception:  # no catalogue yet, or a damaged one (python -m capmap check reports it)
+        return []
+    return [p for p in cat.path if not (Path(root) / p).is_file()]
