@@ -28,7 +28,7 @@ from capmap.core import ik
 from capmap.core.kinematics import rotation_log
 from capmap.core.reduction import LockedArm, lock as lock_joint
 from capmap.core.robot import Robot
-from capmap.core.tracking import nearest_turn
+from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError, ConfigError
 
 __all__ = ["Failure", "resolve_failure", "resolved_doc", "locked_arm"]
@@ -99,14 +99,12 @@ def resolve_failure(robot: Robot, lock: LockConfig, task: TaskConfig, source: st
         raise ConfigError(f"{source}: {where} [{', '.join(f'{v:.4g}' for v in start)}] m is not reachable at "
                           f"task.orientation_rpy_deg = {list(task.orientation_rpy_deg)} with joint {lock.joint} "
                           f"locked at {angle:g} deg")
-    cand = nearest_turn(sol.q[0, :n], q_ini[arm.active])
-    off = np.abs(cand - q_ini[arm.active]).max(axis=1)
-    k = int(np.argmin(off))
-    q_start = np.rad2deg(arm.full_q(cand[k]))
+    k, q_branch, off = nearest_branch(sol.q[0, :n], q_ini[arm.active])
+    q_start = np.rad2deg(arm.full_q(q_branch))
     q_start[lock.joint - 1] = angle  # exactly as given, not through radians
     return Failure(joint=int(lock.joint), angle_deg=angle, start_m=tuple(float(v) for v in start),
                    q_start_deg=tuple(float(v) for v in q_start), branch=k, n_branches=n,
-                   offset_deg=float(np.rad2deg(off[k])), angle_given=angle_given, start_given=start_given,
+                   offset_deg=float(np.rad2deg(off)), angle_given=angle_given, start_given=start_given,
                    ini_miss_m=float(np.linalg.norm(T_ini[:3, 3] - start)),
                    ini_miss_deg=float(np.rad2deg(np.linalg.norm(rotation_log(task.rotation @ T_ini[:3, :3].T)))))
 

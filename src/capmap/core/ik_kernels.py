@@ -103,7 +103,6 @@ def _one(X, c, T, q0, theta, ok, f, s, sv, angles, only):
     A4 = d5[0] * a[0] + d5[1] * a[1]
     B4 = d5[0] * a[1] - d5[1] * a[0]
     t3x, t3y = X[3, 0, 3], X[3, 1, 3]
-    phi3 = math.atan2(t3y, t3x)
     for i1 in range(2):
         if only >= 0 and only // 2 != i1:
             continue
@@ -148,7 +147,7 @@ def _one(X, c, T, q0, theta, ok, f, s, sv, angles, only):
             ok[k] = ok1 and ok4 and okb
             if not angles:
                 continue
-            q2 = math.atan2(e1, e0) - phi3
+            q2 = math.atan2(e1, e0) - math.atan2(t3y, t3x)
             # q3 from (Rz(q2) R3)^T Rg: its first column's entries 0 and 1
             c2, s2 = math.cos(q2), math.sin(q2)
             g00 = 0.0

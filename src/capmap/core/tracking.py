@@ -19,7 +19,7 @@ from capmap.core import ik
 from capmap.core.reduction import LockedArm
 from capmap.errors import CapmapError
 
-__all__ = ["Tracking", "nearest_turn", "start_branch", "track", "range_excursions", "START_TOL_RAD", "MAX_STEP_RAD"]
+__all__ = ["Tracking", "nearest_turn", "nearest_branch", "start_branch", "track", "range_excursions", "START_TOL_RAD", "MAX_STEP_RAD"]
 
 START_TOL_RAD = np.deg2rad(2.0)  # a start configuration may be rounded: allow 2 deg to the nearest exact branch
 MAX_STEP_RAD = np.deg2rad(5.0)  # largest joint change between consecutive samples on one branch
@@ -47,6 +47,15 @@ def nearest_turn(q: np.ndarray, ref: np.ndarray) -> np.ndarray:
     return q + 2 * np.pi * np.round((ref - q) / (2 * np.pi))
 
 
+def nearest_branch(branches: np.ndarray, ref: np.ndarray) -> tuple[int, np.ndarray, float]:
+    """Of IK branches (n, m) rad, the one nearest ref (m,) after whole turns (largest joint
+    difference): its index, its angles shifted nearest ref (m,) rad and that difference (rad)."""
+    cand = nearest_turn(branches, ref)
+    off = np.abs(cand - ref).max(axis=1)
+    k = int(np.argmin(off))
+    return k, cand[k], float(off[k])
+
+
 def start_branch(arm: LockedArm, position: np.ndarray, rotation: np.ndarray, q_start: np.ndarray,
                  tol_rad: float = START_TOL_RAD) -> tuple[np.ndarray, float]:
     """The exact IK branch at ``position`` (3,) m, ``rotation`` (3, 3) nearest q_start (n_active,) rad,
@@ -56,14 +65,12 @@ def start_branch(arm: LockedArm, position: np.ndarray, rotation: np.ndarray, q_s
     n = int(sol.n_solutions[0])
     if n == 0:
         raise CapmapError("{start} is not reachable at the task orientation", start="the start position")
-    cand = nearest_turn(sol.q[0, :n], q_start)
-    off = np.abs(cand - q_start).max(axis=1)
-    k = int(np.argmin(off))
-    if off[k] > tol_rad:
-        raise CapmapError(f"{{q_ini}} is {np.rad2deg(off[k]):.2f} deg from the nearest of the {n} IK solutions at "
+    _, q, off = nearest_branch(sol.q[0, :n], q_start)
+    if off > tol_rad:
+        raise CapmapError(f"{{q_ini}} is {np.rad2deg(off):.2f} deg from the nearest of the {n} IK solutions at "
                           f"{{start}} (allowed {np.rad2deg(tol_rad):g} deg): it does not put the end effector at "
                           "the start", q_ini="the start configuration", start="the start position")
-    return cand[k], float(off[k])
+    return q, off
 
 
 def track(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, q_start: np.ndarray,
@@ -86,13 +93,11 @@ def track(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, q_start: 
         n = int(sol.n_solutions[i])
         if n == 0:
             return result(i, "no IK solution at the task orientation (outside the workspace)")
-        cand = nearest_turn(sol.q[i, :n], q_prev)
-        jump = np.abs(cand - q_prev).max(axis=1)
-        k = int(np.argmin(jump))
-        if jump[k] > max_step_rad:
-            return result(i, f"branch lost: nearest solution {np.rad2deg(jump[k]):.1f} deg away "
+        _, q_near, jump = nearest_branch(sol.q[i, :n], q_prev)
+        if jump > max_step_rad:
+            return result(i, f"branch lost: nearest solution {np.rad2deg(jump):.1f} deg away "
                              "(singularity or joint range)")
-        q[i] = q_prev = cand[k]
+        q[i] = q_prev = q_near
     return result(-1, "")
 
 
