@@ -33,13 +33,24 @@ include: "workflow/rules/atlas.smk"
 include: "workflow/rules/catalogue.smk"
 
 
+CAPACITY_MAP = [
+    "results/voxels/voxels.parquet",
+    "results/summary/capacity_summary.csv",
+    *expand("results/verify/payload_{payload}kg/{name}.png", payload=PAYLOADS,
+            name=["workspace", "torques", "base_force", "base_moment"]),
+    "results/verify/summary.csv",
+]
+
+
+rule capacity_map:
+    # method family 1 alone: map, plans, verification and their figures
+    input:
+        CAPACITY_MAP,
+
+
 rule all:
     input:
-        "results/voxels/voxels.parquet",
-        "results/summary/capacity_summary.csv",
-        expand("results/verify/payload_{payload}kg/{name}.png", payload=PAYLOADS,
-               name=["workspace", "torques", "base_force", "base_moment"]),
-        "results/verify/summary.csv",
+        CAPACITY_MAP,
         expand("results/follow/{case}/{name}.png", case=FOLLOW_CASES, name=["progress", "torques"]),
         ["results/follow/summary.csv"] if FOLLOW_CASES else [],
         [f"results/reconfig/{name}" for name in ("summary.csv", "manipulability.png", "joint_rates.png",

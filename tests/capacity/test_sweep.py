@@ -6,7 +6,7 @@ import pytest
 
 from capmap.capacity import directions
 from capmap.capacity.engine import LoadLimits, Motion, affine_over_directions, coefficients, direction_features
-from capmap.capacity.sweep import min_over_directions
+from capmap.capacity.sweep import min_over_directions, min_per_pair
 from capmap.config.robot_file import load
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
@@ -34,6 +34,34 @@ def test_fused_sweep_equals_the_full_evaluation(dirs, gravity, gravity_robot_yam
     rows = np.arange(len(cap))
     assert np.allclose(ref[rows, worst], ref.min(axis=1), rtol=1e-12, atol=1e-9)  # the worst direction is a minimiser
     assert np.allclose(bound[rows, binding, worst], cap, rtol=1e-12, atol=1e-9)  # and its binding output binds
+    # per antipodal pair (the line of u): the smaller of the two directions' minima
+    per_pair, pairs = min_per_pair(C, coef.S, phi, a * dirs.u, dyn.gravity, limits.limit, dirs.pairs)
+    other = np.where(pairs[:, 1] >= 0, pairs[:, 1], pairs[:, 0])
+    assert np.allclose(per_pair, np.minimum(ref[:, pairs[:, 0]], ref[:, other]), rtol=1e-12, atol=1e-9)
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.05])
+def test_ties_go_to_the_first_direction_in_pair_order(scale):
+    # tight limits: most directions violate at zero payload (capacity 0 everywhere, a tie)
+    dirs = directions.paper_grid(30)
+    arm = lock(load(SSRMS_YAML), 1, np.deg2rad(100))
+    dyn = ArmDynamics(arm)
+    limits = LoadLimits.uniform(7, 700 * scale, 200 * scale, 500 * scale).for_arm(arm)
+    coef = coefficients(dyn, np.random.default_rng(5).uniform(-np.pi, np.pi, (60, 6)))
+    motion = Motion(0.15, 0.03)
+    y0, s = affine_over_directions(coef, dirs.u, motion, dyn.gravity)
+    bound = limits.upper_from_zero(y0, s, axis=1)  # (B, n_out, D)
+    order = [d for row in dirs.pairs for d in row if d >= 0]  # u before -u, pair by pair
+    a, v = motion.a_max_mps2, motion.v_max_mps
+    phi = np.concatenate([np.ones((len(dirs.u), 1)), a * dirs.u, v**2 * direction_features(dirs.u)], axis=1)
+    C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)
+    cap, worst, binding = min_over_directions(C, coef.S, phi, a * dirs.u, dyn.gravity, limits.limit, dirs.pairs)
+    for m in range(len(cap)):
+        ref_min = bound[m].min()
+        d_first = next(d for d in order if bound[m, :, d].min() == ref_min)
+        assert worst[m] == d_first and binding[m] == int(np.argmax(bound[m, :, d_first] == ref_min))
+    if scale < 1:
+        assert (cap == 0).mean() > 0.5  # the tie case is exercised
 
 
 def test_violated_and_flat_outputs():

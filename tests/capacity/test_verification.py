@@ -87,13 +87,13 @@ def test_segment_capacity_is_the_largest_payload_within_all_limits(direct, scena
     assert worst_ratio(cap * (1 + 1e-6)) > 1.0
 
 
-def test_q_ini_branch_passes_joint_2_stop_on_the_scenario_line(direct, scenario_arm):
-    """On q_ini's branch joint 2 ends beyond +180 deg: flagged, and its wrapped value is an IK branch."""
+def test_q_ini_branch_turns_joint_2_past_180_within_its_270_deg_range(direct, scenario_arm):
+    """On q_ini's branch joint 2 ends beyond +180 deg (182.9): inside the SSRMS's +-270 deg (no
+    excursion flagged), tracked continuously (not wrapped), and its wrapped value is an IK branch."""
     _, res = direct
     q = res.tracking.q
-    exc = range_excursions(res.tracking.in_range)
-    assert [c for c, _, _ in exc] == [0] and exc[0][2] == len(q) - 1
-    assert q[-1, 0] > np.pi and np.all(np.abs(q[-1, 1:]) <= np.pi)
+    assert range_excursions(res.tracking.in_range) == []
+    assert np.pi < q[-1, 0] < np.deg2rad(270) and np.all(np.abs(q[-1, 1:]) <= np.pi)
     wrapped = q[-1].copy()
     wrapped[0] -= 2 * np.pi
     R, p = craig_fk(_full(scenario_arm, wrapped))

@@ -17,6 +17,8 @@ host=$(hostname -s)
 cpus=$(nproc)
 mem=$(( $(awk '/MemTotal/ {print $2}' /proc/meminfo) / 1024 * 9 / 10 ))
 mkdir -p /etc/slurm /var/spool/slurmctld /var/spool/slurmd /var/log/slurm /run/munge
+# MessageTimeout=2: with the daemons down (after a reboot) scontrol gives up in 1 s instead of 9 s;
+# the SLURM executor plugin calls it whenever Snakemake starts, so every snakemake run would wait.
 cat > /etc/slurm/slurm.conf <<CONF
 ClusterName=capmap
 SlurmctldHost=${host}
@@ -38,6 +40,7 @@ JobAcctGatherType=jobacct_gather/none
 AccountingStorageType=accounting_storage/none
 ReturnToService=2
 MinJobAge=3600
+MessageTimeout=2
 NodeName=${host} CPUs=${cpus} RealMemory=${mem} State=UNKNOWN
 PartitionName=main Nodes=${host} Default=YES MaxTime=INFINITE State=UP
 CONF

@@ -66,7 +66,7 @@ def test_a_rough_q_ini_still_names_a_branch_and_says_how_rough(ssrms):
 @pytest.mark.parametrize("lock, task, message", [
     ({"joint": 4, "angle_deg": 40}, {}, "task.start_m [0.379, 4.843, 1.888] m is not reachable"),
     ({"joint": 1, "angle_deg": 400}, {}, "lock.angle_deg = 400 is outside joint 1's range"),
-    ({"joint": 2}, {"q_ini_deg": [100, 200, 98, 130, 146, 174, 57]}, "task.q_ini_deg[1] = 200 is outside"),
+    ({"joint": 2}, {"q_ini_deg": [100, 280, 98, 130, 146, 174, 57]}, "task.q_ini_deg[1] = 280 is outside"),
     ({"joint": 9}, {}, "lock.joint = 9 is out of range"),
     ({"joint": 1}, {"q_ini_deg": [100, 124]}, "task.q_ini_deg has 2 values but ssrms7 has 7 joints"),
 ])

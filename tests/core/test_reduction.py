@@ -30,5 +30,5 @@ def test_joint_index_out_of_range_is_one_line(ssrms, joint):
 
 
 def test_lock_angle_outside_range(ssrms):
-    with pytest.raises(CapmapError, match=r"the lock angle = 200 is outside joint 3's range \[-180, 180\]"):
-        lock(ssrms, 3, np.deg2rad(200))
+    with pytest.raises(CapmapError, match=r"the lock angle = 300 is outside joint 3's range \[-270, 270\]"):
+        lock(ssrms, 3, np.deg2rad(300))

@@ -1,5 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.verify import stage_verify_plots
+from capmap.stages.verify_figures import stage_verify_plots
 
 call(stage_verify_plots, voxels=snakemake.input.voxels, timeseries=snakemake.input.timeseries,
      out_workspace=snakemake.output.workspace, out_torques=snakemake.output.torques, out_force=snakemake.output.force,

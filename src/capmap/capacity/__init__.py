@@ -8,11 +8,40 @@
 - :mod:`~capmap.capacity.verification` the real motion along a path: loads, segment capacities, verdicts
 """
 
-from capmap.capacity import directions, engine, planning, sampling, verification, voxels
-from capmap.capacity.engine import LoadLimits, Motion, point_capacity
-from capmap.capacity.planning import plan
-from capmap.capacity.verification import judge, verify_path
-from capmap.capacity.voxels import Grid, voxelise
+from capmap._lazy import lazy_exports
 
-__all__ = ["directions", "sampling", "engine", "voxels", "planning", "verification", "LoadLimits", "Motion",
-           "point_capacity", "Grid", "voxelise", "plan", "verify_path", "judge"]
+_EXPORTS = {
+    'directions': 'directions',
+    'engine': 'engine',
+    'planning': 'planning',
+    'sampling': 'sampling',
+    'verification': 'verification',
+    'voxels': 'voxels',
+    'LoadLimits': 'engine',
+    'Motion': 'engine',
+    'point_capacity': 'engine',
+    'plan': 'planning',
+    'judge': 'verification',
+    'verify_path': 'verification',
+    'Grid': 'voxels',
+    'voxelise': 'voxels',
+}
+
+__all__ = [
+    "Grid",
+    "LoadLimits",
+    "Motion",
+    "directions",
+    "engine",
+    "judge",
+    "plan",
+    "planning",
+    "point_capacity",
+    "sampling",
+    "verification",
+    "verify_path",
+    "voxelise",
+    "voxels",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

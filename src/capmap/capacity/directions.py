@@ -16,7 +16,7 @@ import numpy as np
 
 from capmap.errors import CapmapError
 
-__all__ = ["Directions", "paper_grid", "sphere", "antipodal_pairs"]
+__all__ = ["Directions", "paper_grid", "sphere", "antipodal_pairs", "GRID_AXES", "AXIS_LABELS", "grid_axes", "axis_of"]
 
 
 @dataclass(frozen=True)
@@ -83,3 +83,42 @@ def sphere(n: int) -> Directions:
     alpha = np.mod(np.pi * (1 + 5**0.5) * i, 2 * np.pi)
     u = np.stack([np.sin(beta) * np.cos(alpha), np.sin(beta) * np.sin(alpha), np.cos(beta)], axis=1)
     return Directions(u=u, alpha_deg=np.rad2deg(alpha), beta_deg=np.rad2deg(beta), kind=f"sphere({n})")
+
+
+def _axes() -> np.ndarray:
+    import itertools
+
+    out = []
+    for d in itertools.product((1, 0, -1), repeat=3):
+        nz = [v for v in d if v]
+        if nz and nz[0] > 0:  # one of d, -d: the first nonzero component positive
+            out.append(d)
+    return np.array(sorted(out, key=lambda d: (int(np.abs(d).sum()), [-v for v in d])), dtype=int)
+
+
+GRID_AXES = _axes()
+"""(13, 3) int: the move axes of the 26-neighbour voxel grid, each once (d and -d share an axis):
+x, y, z, then the 6 face diagonals, then the 4 space diagonals."""
+
+AXIS_LABELS = tuple("".join(("-" if v < 0 else "+") + "xyz"[c] for c, v in enumerate(d) if v).lstrip("+")
+                    for d in GRID_AXES)
+"""Labels of :data:`GRID_AXES`: 'x', 'y', 'z', 'x+y', 'x-y', ..., 'x-y-z'."""
+
+
+def grid_axes() -> Directions:
+    """The 26 unit directions of the voxel grid's moves: the 13 axes, then their opposites (so
+    :attr:`Directions.pairs` is [[a, a + 13]] for axis a)."""
+    d = np.concatenate([GRID_AXES, -GRID_AXES]).astype(float)
+    u = d / np.linalg.norm(d, axis=1, keepdims=True)
+    beta = np.rad2deg(np.arccos(np.clip(u[:, 2], -1, 1)))
+    alpha = np.mod(np.rad2deg(np.arctan2(u[:, 1], u[:, 0])), 360.0)
+    return Directions(u=u, alpha_deg=alpha, beta_deg=beta, kind="grid_axes(13)")
+
+
+def axis_of(offsets: np.ndarray) -> np.ndarray:
+    """Index into :data:`GRID_AXES` of neighbour offsets (..., 3) int (d and -d give the same axis)."""
+    offsets = np.asarray(offsets, dtype=int)
+    eq = np.all(offsets[..., None, :] == GRID_AXES, axis=-1) | np.all(offsets[..., None, :] == -GRID_AXES, axis=-1)
+    if not np.all(eq.any(axis=-1)):
+        raise CapmapError("offsets must be nonzero vectors of -1, 0, 1")
+    return np.argmax(eq, axis=-1)

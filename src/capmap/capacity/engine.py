@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.directions import Directions
-from capmap.capacity.sweep import min_over_directions
+from capmap.capacity.sweep import min_over_directions, min_per_pair
 from capmap.core.dynamics import ArmDynamics, output_names
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
@@ -163,14 +163,22 @@ class PointCapacity:
     direction: np.ndarray
     n_states: np.ndarray
     names: tuple[str, ...]
+    axis_capacity_kg: np.ndarray | None = None  # (N, P): per antipodal pair of ``axes`` (NaN if unreachable)
+
+
+def _phi(u: np.ndarray, motion: Motion) -> np.ndarray:
+    v, a = motion.v_max_mps, motion.a_max_mps2
+    return np.concatenate([np.ones((len(u), 1)), a * u, v**2 * direction_features(u)], axis=1)  # (D, 10)
 
 
 def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray, directions: Directions,
-                   motion: Motion, limits: AffineLimits) -> PointCapacity:
+                   motion: Motion, limits: AffineLimits, axes: Directions | None = None) -> PointCapacity:
     """Capacity of N points from their IK configuration sets.
 
     q_sets: (N, K, n_active) rad, NaN-padded beyond n_solutions (N,) per point; ``limits`` on
-    ``dyn.arm``'s outputs (:meth:`LoadLimits.for_arm`).
+    ``dyn.arm``'s outputs (:meth:`LoadLimits.for_arm`). With ``axes`` (directions in antipodal
+    pairs, e.g. :func:`~capmap.capacity.directions.grid_axes`), also the capacity along each
+    pair's line (moving along u or -u), min over the configuration set: axis_capacity_kg (N, P).
     """
     N, K = q_sets.shape[:2]
     names = limits.names + (SINGULAR,)
@@ -180,14 +188,20 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
     direction = np.full(N, -1)
     valid = np.arange(K)[None, :] < np.asarray(n_solutions)[:, None]
     pts, brs = np.nonzero(valid)
+    axis_cap = None if axes is None else np.full((N, len(axes.pairs)), np.nan)
     if len(pts):
         coef = coefficients(dyn, q_sets[pts, brs])
-        v, a = motion.v_max_mps, motion.a_max_mps2
-        u = directions.u
-        phi = np.concatenate([np.ones((len(u), 1)), a * u, v**2 * direction_features(u)], axis=1)  # (D, 10)
+        a = motion.a_max_mps2
         C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (M, n_out, 10)
-        c_cfg, worst_dir, b_cfg = min_over_directions(C, coef.S, phi, a * u, dyn.gravity, limits.limit,
-                                                      directions.pairs)
+        c_cfg, worst_dir, b_cfg = min_over_directions(C, coef.S, _phi(directions.u, motion), a * directions.u,
+                                                      dyn.gravity, limits.limit, directions.pairs)
+        if axes is not None:
+            per_axis, _ = min_per_pair(C, coef.S, _phi(axes.u, motion), a * axes.u, dyn.gravity, limits.limit,
+                                       axes.pairs)
+            per_axis[coef.singular] = 0.0
+            axis_cap[:] = np.inf
+            np.minimum.at(axis_cap, pts, per_axis)
+            axis_cap[np.asarray(n_solutions) == 0] = np.nan
         c_cfg[coef.singular] = 0.0
         b_cfg[coef.singular] = len(limits)
         # min over each point's configurations
@@ -201,4 +215,4 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
         direction[p] = worst_dir[sel]
         binding[p] = b_cfg[sel]
     return PointCapacity(capacity_kg=cap, binding=binding, branch=branch, direction=direction,
-                         n_states=np.asarray(n_solutions) * len(directions), names=names)
+                         n_states=np.asarray(n_solutions) * len(directions), names=names, axis_capacity_kg=axis_cap)

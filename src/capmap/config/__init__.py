@@ -14,20 +14,42 @@
 - :mod:`~capmap.config.checks`      checks that need the robot, with errors naming config keys
 """
 
-from capmap.config.checks import check_run_config
-from capmap.config.failure import Failure, resolve_failure, resolved_doc
-from capmap.config.run import RunConfig, load_config, parse_config
-from capmap.config.slices import (
-    atlas_slices,
-    canonical,
-    config_hash,
-    dualarm_slices,
-    follow_slices,
-    payload_label,
-    reconfig_slices,
-    stage_slices,
-)
+from capmap._lazy import lazy_exports
 
-__all__ = ["RunConfig", "parse_config", "load_config", "check_run_config", "Failure", "resolve_failure",
-           "resolved_doc", "canonical", "config_hash",
-           "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices", "atlas_slices"]
+_EXPORTS = {
+    'check_run_config': 'checks',
+    'Failure': 'failure',
+    'resolve_failure': 'failure',
+    'resolved_doc': 'failure',
+    'RunConfig': 'run',
+    'load_config': 'run',
+    'parse_config': 'run',
+    'atlas_slices': 'slices',
+    'canonical': 'slices',
+    'config_hash': 'slices',
+    'dualarm_slices': 'slices',
+    'follow_slices': 'slices',
+    'payload_label': 'slices',
+    'reconfig_slices': 'slices',
+    'stage_slices': 'slices',
+}
+
+__all__ = [
+    "Failure",
+    "RunConfig",
+    "atlas_slices",
+    "canonical",
+    "check_run_config",
+    "config_hash",
+    "dualarm_slices",
+    "follow_slices",
+    "load_config",
+    "parse_config",
+    "payload_label",
+    "reconfig_slices",
+    "resolve_failure",
+    "resolved_doc",
+    "stage_slices",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

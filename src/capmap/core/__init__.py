@@ -12,12 +12,48 @@
 Nothing here reads files, config keys or plots; everything is SI with radians.
 """
 
-from capmap.core import dynamics, ik, kinematics, limits, profiles, reduction, robot, tracking
-from capmap.core.dynamics import ArmDynamics, output_names, payload_models
-from capmap.core.limits import AffineLimits
-from capmap.core.reduction import LockedArm, free, lock
-from capmap.core.robot import Robot, RobotDescription, build_robot
+from capmap._lazy import lazy_exports
 
-__all__ = ["robot", "reduction", "kinematics", "ik", "dynamics", "tracking", "profiles", "limits",
-           "Robot", "RobotDescription", "build_robot", "LockedArm", "lock", "free", "ArmDynamics", "output_names",
-           "payload_models", "AffineLimits"]
+_EXPORTS = {
+    'dynamics': 'dynamics',
+    'ik': 'ik',
+    'kinematics': 'kinematics',
+    'limits': 'limits',
+    'profiles': 'profiles',
+    'reduction': 'reduction',
+    'robot': 'robot',
+    'tracking': 'tracking',
+    'ArmDynamics': 'dynamics',
+    'output_names': 'dynamics',
+    'payload_models': 'dynamics',
+    'AffineLimits': 'limits',
+    'LockedArm': 'reduction',
+    'free': 'reduction',
+    'lock': 'reduction',
+    'Robot': 'robot',
+    'RobotDescription': 'robot',
+    'build_robot': 'robot',
+}
+
+__all__ = [
+    "AffineLimits",
+    "ArmDynamics",
+    "LockedArm",
+    "Robot",
+    "RobotDescription",
+    "build_robot",
+    "dynamics",
+    "free",
+    "ik",
+    "kinematics",
+    "limits",
+    "lock",
+    "output_names",
+    "payload_models",
+    "profiles",
+    "reduction",
+    "robot",
+    "tracking",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

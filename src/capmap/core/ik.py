@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.core import ik_semi
+from capmap.core.ik_numeric import multi_start, newton
 from capmap.core.kinematics import Chain, inverse_transform, pose_error
 from capmap.core.reduction import LockedArm
 
@@ -57,6 +58,7 @@ __all__ = ["IKSolutions", "solve", "newton", "wrap_to_range", "method_for", "clo
 log = logging.getLogger(__name__)
 
 RESIDUAL_TOL = 1e-9  # m and rad
+POLISHED = 1e-13  # m, rad: candidates with a larger residual get two Newton steps
 DUPLICATE_TOL = 1e-6  # rad: two solutions closer than this (wrapped) are one
 _GEOM_TOL = 1e-9
 COMPLETE_METHODS = ("closed_form", "closed_form_reversed", "semi_analytic", "semi_analytic_reversed")
@@ -220,50 +222,6 @@ def _semi_analytic(chain: Chain, T_target: np.ndarray, steps: int = SEARCH_STEPS
     return theta, ok
 
 
-# --------------------------------------------------------------------------- numeric
-
-
-def newton(chain: Chain, theta: np.ndarray, T_target: np.ndarray, iters: int, damping: float = 0.0) -> np.ndarray:
-    """Damped Newton steps on the pose error; theta (M, n), T_target (M, 4, 4)."""
-    eye = np.eye(6)
-    for _ in range(iters):
-        T, J = chain.jacobian(theta)
-        err = pose_error(T, T_target)
-        JJt = J @ np.swapaxes(J, -1, -2) + damping**2 * eye
-        try:
-            step = np.einsum("mji,mj->mi", J, np.linalg.solve(JJt, err[..., None])[..., 0])
-        except np.linalg.LinAlgError:
-            step = np.einsum("mji,mj->mi", J, (np.linalg.pinv(JJt) @ err[..., None])[..., 0])
-        theta = theta + np.clip(step, -0.5, 0.5)
-    return theta
-
-
-def _halton(n: int, d: int) -> np.ndarray:
-    """The first n points (n, d) of the Halton sequence in [0, 1)^d (bases: the first d primes)."""
-    primes = [p for p in range(2, 200) if all(p % q for q in range(2, int(p**0.5) + 1))][:d]
-    out = np.zeros((n, d))
-    for j, b in enumerate(primes):
-        i = np.arange(1, n + 1)
-        f = 1.0
-        while np.any(i > 0):
-            f /= b
-            out[:, j] += f * (i % b)
-            i //= b
-    return out
-
-
-def _numeric(chain: Chain, T_target: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-             n_starts: int = 64) -> tuple[np.ndarray, np.ndarray]:
-    """Multi-start damped Newton from a deterministic Halton set of starts: (N, n_starts, n)."""
-    N, n = len(T_target), chain.n
-    starts = lower + (upper - lower) * _halton(n_starts, n)
-    theta = np.broadcast_to(starts, (N, n_starts, n)).reshape(-1, n).copy()
-    targets = np.repeat(T_target, n_starts, axis=0)
-    theta = newton(chain, theta, targets, iters=40, damping=1e-2)
-    theta = newton(chain, theta, targets, iters=5)
-    return theta.reshape(N, n_starts, n), np.ones((N, n_starts), dtype=bool)
-
-
 # --------------------------------------------------------------------------- driver
 
 _WARNED: set[bytes] = set()
@@ -297,10 +255,17 @@ def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarra
             lower: np.ndarray, upper: np.ndarray, tol: float, method: str) -> IKSolutions:
     N, K, n = theta.shape
     flat = np.where(ok[..., None], theta, 0.0).reshape(-1, n)
-    flat = newton(chain, flat, np.repeat(T_target, K, axis=0), iters=2)
-    err = pose_error(chain.fk(flat), np.repeat(T_target, K, axis=0))
-    good = ((np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
-            & np.all(np.isfinite(flat), axis=1))
+    # residuals of the candidates; two Newton steps polish those not already at rounding level
+    idx = np.flatnonzero(ok.reshape(-1) & np.all(np.isfinite(flat), axis=1))
+    target = T_target[idx // K]
+    err = pose_error(chain.fk(flat[idx]), target)
+    rough = np.flatnonzero(np.abs(err).max(axis=1, initial=0.0) > POLISHED)
+    if len(rough):
+        flat[idx[rough]] = newton(chain, flat[idx[rough]], target[rough], iters=2)
+        err[rough] = pose_error(chain.fk(flat[idx[rough]]), target[rough])
+    good = np.zeros(N * K, dtype=bool)
+    good[idx] = ((np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
+                 & np.all(np.isfinite(flat[idx]), axis=1))
     wrapped, inside = wrap_to_range(flat, lower, upper)
     good &= np.all(inside, axis=1) & ok.reshape(-1)
     wrapped = wrapped.reshape(N, K, n)
@@ -345,5 +310,5 @@ def solve(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, tol: floa
         theta = -theta_r[..., ::-1]
     else:
         _warn_incomplete(chain)
-        theta, ok = _numeric(chain, T, lower, upper)
+        theta, ok = multi_start(chain, T, lower, upper)
     return _finish(chain, theta, ok, T, lower, upper, tol, method)

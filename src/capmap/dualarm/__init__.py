@@ -16,5 +16,17 @@ panel assembly.
 - :mod:`~capmap.dualarm.evaluate`    errors and safety of a solution, on the nodes and a finer grid
 """
 
-__all__ = ["scene", "cloud", "primitives", "distance", "robot", "collision", "task", "assembly", "settings", "ocp",
-           "solver", "evaluate"]
+__all__ = [
+           "assembly",
+           "cloud",
+           "collision",
+           "distance",
+           "evaluate",
+           "ocp",
+           "primitives",
+           "robot",
+           "scene",
+           "settings",
+           "solver",
+           "task",
+]

@@ -7,10 +7,34 @@
 - :mod:`~capmap.following.comparison`       the follower against the command and TOPP-RA
 """
 
-from capmap.following import comparison, follower, path, path_dynamics, toppra_reference
-from capmap.following.comparison import FollowComparison, compare
-from capmap.following.follower import FollowSettings, follow, follow_segment
-from capmap.following.toppra_reference import time_optimal
+from capmap._lazy import lazy_exports
 
-__all__ = ["path", "path_dynamics", "follower", "toppra_reference", "comparison", "FollowSettings", "follow",
-           "follow_segment", "time_optimal", "FollowComparison", "compare"]
+_EXPORTS = {
+    'comparison': 'comparison',
+    'follower': 'follower',
+    'path': 'path',
+    'path_dynamics': 'path_dynamics',
+    'toppra_reference': 'toppra_reference',
+    'FollowComparison': 'comparison',
+    'compare': 'comparison',
+    'FollowSettings': 'follower',
+    'follow': 'follower',
+    'follow_segment': 'follower',
+    'time_optimal': 'toppra_reference',
+}
+
+__all__ = [
+    "FollowComparison",
+    "FollowSettings",
+    "compare",
+    "comparison",
+    "follow",
+    "follow_segment",
+    "follower",
+    "path",
+    "path_dynamics",
+    "time_optimal",
+    "toppra_reference",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -4,4 +4,4 @@ and one-line errors for the stages (:mod:`~capmap.io.logs`)."""
 
 from capmap.io import datasets, logs, tables
 
-__all__ = ["datasets", "tables", "logs"]
+__all__ = ["datasets", "logs", "tables"]

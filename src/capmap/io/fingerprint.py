@@ -79,8 +79,19 @@ def module_closure(name: str) -> tuple[str, ...]:
         expanded.add(mod)
         parts = mod.split(".")
         seen |= {".".join(parts[:k]) for k in range(1, len(parts) + 1) if _module_file(".".join(parts[:k]))}
-        todo.extend(_imports(mod, ast.parse(_module_file(mod).read_text())))
+        todo.extend(_module_imports(mod))
     return tuple(sorted(seen))
+
+
+@lru_cache(maxsize=None)
+def _module_imports(mod: str) -> frozenset[str]:
+    return frozenset(_imports(mod, ast.parse(_module_file(mod).read_text())))
+
+
+@lru_cache(maxsize=None)
+def _module_digest(mod: str) -> bytes:
+    """sha256 of a module's syntax tree without docstrings (each module parsed once per process)."""
+    return hashlib.sha256(ast.dump(_tree(_module_file(mod))).encode()).digest()
 
 
 @lru_cache(maxsize=None)
@@ -89,7 +100,7 @@ def code_fingerprint(name: str) -> str:
     h = hashlib.sha256()
     for mod in module_closure(name):
         h.update(mod.encode())
-        h.update(ast.dump(_tree(_module_file(mod))).encode())
+        h.update(_module_digest(mod))
     return h.hexdigest()[:16]
 
 

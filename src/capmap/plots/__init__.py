@@ -1,4 +1,4 @@
 """Figures, one module per family (:mod:`~capmap.plots.capacity`, :mod:`~capmap.plots.following`),
 shared helpers in :mod:`~capmap.plots.common`."""
 
-__all__ = ["common", "capacity", "following"]
+__all__ = ["capacity", "common", "following"]

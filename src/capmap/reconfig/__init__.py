@@ -10,14 +10,50 @@ avoids singularities in its null space.
 - :mod:`~capmap.reconfig.problem`     a problem put together; the robot's state and loop closure along a run
 """
 
-from capmap.reconfig import law, loop, multiarm, planner, problem, redundancy
-from capmap.reconfig.law import QuinticLaw
-from capmap.reconfig.loop import LoopSplit, close_capture, split_loop
-from capmap.reconfig.planner import PlannerSettings, Reconfiguration, reconfigure
-from capmap.reconfig.problem import ReconfigProblem, build_problem, closure_errors
-from capmap.reconfig.multiarm import PlatformDescription, PlatformState, platform_model
+from capmap._lazy import lazy_exports
 
-__all__ = ["multiarm", "loop", "law", "redundancy", "planner", "problem", "ReconfigProblem", "build_problem",
-           "closure_errors", "PlatformDescription", "PlatformState",
-           "platform_model", "LoopSplit", "split_loop", "close_capture", "QuinticLaw", "PlannerSettings",
-           "Reconfiguration", "reconfigure"]
+_EXPORTS = {
+    'law': 'law',
+    'loop': 'loop',
+    'multiarm': 'multiarm',
+    'planner': 'planner',
+    'problem': 'problem',
+    'redundancy': 'redundancy',
+    'QuinticLaw': 'law',
+    'LoopSplit': 'loop',
+    'close_capture': 'loop',
+    'split_loop': 'loop',
+    'PlannerSettings': 'planner',
+    'Reconfiguration': 'planner',
+    'reconfigure': 'planner',
+    'ReconfigProblem': 'problem',
+    'build_problem': 'problem',
+    'closure_errors': 'problem',
+    'PlatformDescription': 'multiarm',
+    'PlatformState': 'multiarm',
+    'platform_model': 'multiarm',
+}
+
+__all__ = [
+    "LoopSplit",
+    "PlannerSettings",
+    "PlatformDescription",
+    "PlatformState",
+    "QuinticLaw",
+    "ReconfigProblem",
+    "Reconfiguration",
+    "build_problem",
+    "close_capture",
+    "closure_errors",
+    "law",
+    "loop",
+    "multiarm",
+    "planner",
+    "platform_model",
+    "problem",
+    "reconfigure",
+    "redundancy",
+    "split_loop",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -8,4 +8,4 @@ writes Parquet with provenance, and logs its progress.
 - :mod:`~capmap.stages.report`     catalogue, concatenated summaries
 """
 
-__all__ = ["capacity", "verify", "following", "report", "common"]
+__all__ = ["capacity", "common", "following", "report", "verify"]

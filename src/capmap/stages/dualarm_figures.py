@@ -9,7 +9,13 @@ from capmap.config.dualarm import horizon
 from capmap.config.scene_file import load_scene
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.plots.dualarm import animation, constraint_errors, convergence, distances, joints
+from capmap.plots.dualarm import (
+    animation,
+    constraint_errors,
+    convergence,
+    distances,
+    joints,
+)
 from capmap.stages.common import parse_slice
 from capmap.stages.dualarm import envelope_from
 from capmap.stages.dualarm_solve import setup

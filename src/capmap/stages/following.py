@@ -21,11 +21,10 @@ from capmap.following.toppra_reference import time_optimal
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.plots.following import follow_progress, follow_torques
 from capmap.stages.arm import arm_from
 from capmap.stages.common import parse_slice
 
-__all__ = ["FollowCase", "follow_case", "stage_follow", "stage_follow_plots"]
+__all__ = ["FollowCase", "follow_case", "stage_follow"]
 
 
 @dataclass(frozen=True)
@@ -131,9 +130,3 @@ def stage_follow(case: str, out_timeseries: str, out_toppra: str, out_csv: str, 
              f"max path deviation {cmp.max_deviation_m:.2e} m")
 
 
-def stage_follow_plots(timeseries: str, toppra: str, out_s: str, out_torques: str, slice_json: str) -> None:
-    ts, tp = datasets.read(timeseries), datasets.read(toppra)
-    meta = ts.attrs["capmap"]
-    follow_progress(ts, tp, meta["case"], out_s)
-    follow_torques(ts, meta["torque_limits_nm"], meta["case"], out_torques)
-    stage_logger(__name__, f"follow plots {meta['case']}").info(f"-> {out_s}, {out_torques}")

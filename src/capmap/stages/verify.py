@@ -20,12 +20,11 @@ from capmap.errors import CapmapError, ConfigError, NoPath
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.plots.capacity import load_series, workspace_paths
 from capmap.stages.capacity import grid_of
 from capmap.stages.arm import arm_from
 from capmap.stages.common import parse_slice
 
-__all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "stage_verify", "stage_verify_plots"]
+__all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "stage_verify"]
 
 PLAN_KEYS = {"start": "task.start_m", "goal": "task.goal_m", "payload": "task.payload_kg"}  # planning's roles
 WAYPOINT_COLUMNS = ["waypoint", "kind", "x_m", "y_m", "z_m", "i", "j", "k", "voxel_capacity_kg"]
@@ -133,15 +132,3 @@ def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv
     write_table(summary, out_csv, out_md)
 
 
-def stage_verify_plots(voxels: str, timeseries: str, out_workspace: str, out_torques: str, out_force: str,
-                       out_moment: str, slice_json: str) -> None:
-    """Capacity workspace with both paths; torques, base force and base moment against their limits."""
-    vox, ts = datasets.read(voxels), datasets.read(timeseries)
-    meta = ts.attrs["capmap"]
-    payload, limits = meta["payload_kg"], meta["limits"]
-    workspace_paths(vox, ts, payload, out_workspace)
-    for prefix, what, out in (("tau_", "Joint torques", out_torques), ("base_f", "Base disturbance force", out_force),
-                              ("base_m", "Base disturbance moment", out_moment)):
-        load_series(ts, [c for c in limits if c.startswith(prefix)], limits, f"{what} carrying {payload:g} kg", out)
-    stage_logger(__name__, f"verify plots {payload:g} kg").info(f"-> {out_workspace}, {out_torques}, {out_force}, "
-                                                                f"{out_moment}")

@@ -1,0 +1,52 @@
+"""Numerical inverse kinematics: damped Newton steps on the pose error (polishing, path
+following) and the multi-start fallback for chains without a closed-form or semi-analytical
+solver (exact solutions, but branches may be missed)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from capmap.core.kinematics import Chain, pose_error
+
+__all__ = ["newton", "multi_start"]
+
+
+def newton(chain: Chain, theta: np.ndarray, T_target: np.ndarray, iters: int, damping: float = 0.0) -> np.ndarray:
+    """Damped Newton steps on the pose error; theta (M, n), T_target (M, 4, 4)."""
+    eye = np.eye(6)
+    for _ in range(iters):
+        T, J = chain.jacobian(theta)
+        err = pose_error(T, T_target)
+        JJt = J @ np.swapaxes(J, -1, -2) + damping**2 * eye
+        try:
+            step = np.einsum("mji,mj->mi", J, np.linalg.solve(JJt, err[..., None])[..., 0])
+        except np.linalg.LinAlgError:
+            step = np.einsum("mji,mj->mi", J, (np.linalg.pinv(JJt) @ err[..., None])[..., 0])
+        theta = theta + np.clip(step, -0.5, 0.5)
+    return theta
+
+
+def _halton(n: int, d: int) -> np.ndarray:
+    """The first n points (n, d) of the Halton sequence in [0, 1)^d (bases: the first d primes)."""
+    primes = [p for p in range(2, 200) if all(p % q for q in range(2, int(p**0.5) + 1))][:d]
+    out = np.zeros((n, d))
+    for j, b in enumerate(primes):
+        i = np.arange(1, n + 1)
+        f = 1.0
+        while np.any(i > 0):
+            f /= b
+            out[:, j] += f * (i % b)
+            i //= b
+    return out
+
+
+def multi_start(chain: Chain, T_target: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+             n_starts: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """Multi-start damped Newton from a deterministic Halton set of starts: (N, n_starts, n)."""
+    N, n = len(T_target), chain.n
+    starts = lower + (upper - lower) * _halton(n_starts, n)
+    theta = np.broadcast_to(starts, (N, n_starts, n)).reshape(-1, n).copy()
+    targets = np.repeat(T_target, n_starts, axis=0)
+    theta = newton(chain, theta, targets, iters=40, damping=1e-2)
+    theta = newton(chain, theta, targets, iters=5)
+    return theta.reshape(N, n_starts, n), np.ones((N, n_starts), dtype=bool)

@@ -1,0 +1,24 @@
+"""Figures of the verified motions (kept apart so that the planning and verification jobs do not
+import matplotlib)."""
+
+from __future__ import annotations
+
+from capmap.io import datasets
+from capmap.io.logs import stage_logger
+from capmap.plots.capacity import load_series, workspace_paths
+
+__all__ = ["stage_verify_plots"]
+
+
+def stage_verify_plots(voxels: str, timeseries: str, out_workspace: str, out_torques: str, out_force: str,
+                       out_moment: str, slice_json: str) -> None:
+    """Capacity workspace with both paths; torques, base force and base moment against their limits."""
+    vox, ts = datasets.read(voxels), datasets.read(timeseries)
+    meta = ts.attrs["capmap"]
+    payload, limits = meta["payload_kg"], meta["limits"]
+    workspace_paths(vox, ts, payload, out_workspace)
+    for prefix, what, out in (("tau_", "Joint torques", out_torques), ("base_f", "Base disturbance force", out_force),
+                              ("base_m", "Base disturbance moment", out_moment)):
+        load_series(ts, [c for c in limits if c.startswith(prefix)], limits, f"{what} carrying {payload:g} kg", out)
+    stage_logger(__name__, f"verify plots {payload:g} kg").info(f"-> {out_workspace}, {out_torques}, {out_force}, "
+                                                                f"{out_moment}")
