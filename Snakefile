@@ -39,6 +39,8 @@ CAPACITY_MAP = [
     *expand("results/verify/payload_{payload}kg/{name}.png", payload=PAYLOADS,
             name=["workspace", "torques", "base_force", "base_moment"]),
     "results/verify/summary.csv",
+    "results/plan/gain.csv",
+    *expand("results/tasks/{task}/{name}.png", task=TASKS, name=["workspace", "torques", "base_force", "base_moment"]),
 ]
 
 

@@ -10,8 +10,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 
-def dijkstra_cost(ok: np.ndarray, start, goal, edge: float) -> float:
-    """Shortest centre-to-centre distance through voxels with ok == True (inf if none)."""
+def dijkstra_cost(ok: np.ndarray, start, goal, edge: float, edge_ok=None) -> float:
+    """Shortest centre-to-centre distance through voxels with ok == True (inf if none).
+    ``edge_ok(voxel, neighbour, offset)``: an extra test per move (direction-aware maps)."""
     shape = ok.shape
     rows, cols, w = [], [], []
     for idx in itertools.product(*(range(n) for n in shape)):
@@ -21,7 +22,7 @@ def dijkstra_cost(ok: np.ndarray, start, goal, edge: float) -> float:
             if d == (0, 0, 0):
                 continue
             nb = tuple(i + di for i, di in zip(idx, d))
-            if all(0 <= nb[a] < shape[a] for a in range(3)) and ok[nb]:
+            if all(0 <= nb[a] < shape[a] for a in range(3)) and ok[nb] and (edge_ok is None or edge_ok(idx, nb, d)):
                 rows.append(np.ravel_multi_index(idx, shape))
                 cols.append(np.ravel_multi_index(nb, shape))
                 w.append(edge * np.sqrt(sum(di * di for di in d)))

@@ -19,15 +19,23 @@ from tests.workflow.runs import config_file
 
 NAN, INF = math.nan, math.inf
 
+_TASK = {"name": "t", "start_m": [0.379, 4.8432, 1.8878], "goal_m": [2.625, 1.875, 4.875], "payload_kg": 100,
+         "q_start_deg": [100, 0, 0, 0, 0, 0, 0]}
+
 CONFIG_CASES = [
     ({"limts": 3}, "unknown key limts"),
+    ({"tasks": [_TASK]}, "tasks[0] (t).q_start_deg is"),
+    ({"tasks": [{**_TASK, "q_start_deg": [90, 0, 0, 0, 0, 0, 0]}]}, "tasks[0] (t).q_start_deg[0] = 90 but joint 1"),
+    ({"tasks": [{**_TASK, "name": "Bad Name"}]}, "tasks"),
+    ({"voxels.refine": {"min_points": 300}}, "voxels.refine: min_points = 300"),
+    ({"planning.moves": "diagonal"}, "planning.moves"),
     ({"lock.joint": 9}, "lock.joint = 9 is out of range"),
     ({"limits.joint_torque_nm": -5}, "limits.joint_torque_nm"),
     ({"limits.joint_torque_nm": [700, 700]}, "limits.joint_torque_nm has 2 values"),
     ({"directions.n": 0}, "directions.n"),
     ({"lock.angle_deg": 400}, "lock.angle_deg = 400 is outside joint 1's range"),
-    ({"lock.joint": 2, "lock.angle_deg": None, "task.q_ini_deg": [100, 200, 98, 130, 146, 174, 57]},
-     "task.q_ini_deg[1] = 200 is outside"),
+    ({"lock.joint": 2, "lock.angle_deg": None, "task.q_ini_deg": [100, 280, 98, 130, 146, 174, 57]},
+     "task.q_ini_deg[1] = 280 is outside"),
     ({"task.q_ini_deg": [100, 124, 98]}, "task.q_ini_deg has 3 values but ssrms7 has 7 joints"),
     ({"task.goal_m": [30, 0, 0]}, "task.goal_m = [30, 0, 0] is not reachable"),
     ({"lock.joint": 4, "lock.angle_deg": 40}, "task.start_m [0.379, 4.843, 1.888] m is not reachable at "

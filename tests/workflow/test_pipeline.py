@@ -57,10 +57,10 @@ def test_voxel_capacity_is_min_of_points_inside(run_dir):
 def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
     cat = pd.read_parquet(tmp / "results/catalogue.parquet")
-    assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "voxels", "waypoints",
-                             "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud", "environment",
-                             "robot_capsules", "trajectory", "fine", "outer"}  # two 'points', three 'timeseries'
-    assert len(cat) == 21
+    assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "sampled", "voxels", "waypoints",
+                             "gain_tasks", "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud",
+                             "environment", "robot_capsules", "trajectory", "fine", "outer"}  # two 'points', three 'timeseries'
+    assert len(cat) == 23
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256
@@ -75,7 +75,8 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     assert planned_jobs(tmp, cfg) == {}
     after_payload = {"plan", "verify", "verify_plots", "verify_summary", "catalogue", "all"}
     follow = {"follow", "follow_plots", "follow_summary"}
-    downstream_of_capacity = {"capacity", "voxels", "summary"} | after_payload | follow
+    gain = {"plan_gain"}  # random tasks over the map, at the task payloads, verified at verification.dt_s
+    downstream_of_capacity = {"capacity", "voxels", "voxel_map", "summary"} | gain | after_payload | follow
     jobs = planned_jobs(tmp, config_file(tmp_path, **{"limits.joint_torque_nm": 650}))
     assert set(jobs) == downstream_of_capacity and jobs["capacity"] == 2
     jobs = planned_jobs(tmp, config_file(tmp_path, **{"limits.base_moment_nm": 450}))
@@ -88,12 +89,12 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     # the lock angle written out as it stood, or the start written out as FK(q_ini): the same run
     assert planned_jobs(tmp, config_file(tmp_path, **{"lock.angle_deg": None})) == {}
     jobs = planned_jobs(tmp, config_file(tmp_path, **{"task.payload_kg": 900, "follow.space.payload_kg": 900}))
-    assert set(jobs) == after_payload | follow and jobs["follow"] == 1  # the space case follows the new plan
+    assert set(jobs) == after_payload | gain | follow and jobs["follow"] == 1  # the space case follows the new plan
     # a second payload: one new plan/verify/plots job each, nothing for the first payload (nor its follower)
     jobs = planned_jobs(tmp, config_file(tmp_path, **{"task.payload_kg": [1500, 900]}))
-    assert set(jobs) == after_payload and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
+    assert set(jobs) == after_payload | gain and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
     jobs = planned_jobs(tmp, config_file(tmp_path, **{"verification.dt_s": 0.2}))
-    assert set(jobs) == after_payload - {"plan"}  # the follower does not sample at dt_s
+    assert set(jobs) == (after_payload - {"plan"}) | gain  # the follower does not sample at dt_s
     # q_ini matters through the start branch it selects: rounded differently, nothing reruns
     assert planned_jobs(tmp, config_file(tmp_path, **{"task.q_ini_deg": [100, 124.5, 98, 130, 146, 174, 57]})) == {}
     # the follower's own settings: only that case
@@ -280,3 +281,24 @@ def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     assert "below task.payload_kg = 90000" in summ.loc[(90000, "planned"), "planner"]
     direct = summ.loc[(90000, "direct")]
     assert not direct.loads_ok and not direct.feasible and direct.limits_exceeded_at_payload
+
+
+def test_refined_voxels_never_exceed_their_sampled_minima(tmp_path):
+    """The refine and voxel_map stages on the tiny config with refinement on: every refined value
+    is at most the sampled one, attained at a point inside its voxel (the stored worst point), and
+    the per-axis values are at least the isotropic value's lower bound 0."""
+    cfg = config_file(tmp_path, **{"voxels.refine": {"min_points": 8, "max_points": 16, "near_min_points": 16}})
+    res = subprocess.run(["snakemake", "results/voxels/voxels.parquet", "-s", str(ROOT / "Snakefile"), "-d",
+                          str(tmp_path), "--cores", "2", "--configfile", str(cfg)], capture_output=True, text=True,
+                         timeout=600)
+    assert res.returncode == 0, res.stderr[-2000:]
+    vox = pd.read_parquet(tmp_path / "results/voxels/voxels.parquet")
+    assert (tmp_path / "results/voxels/refined_1_of_2.parquet").exists()
+    r = vox[vox.n_reachable > 0]
+    assert len(r) and (r.capacity_kg <= r.capacity_sampled_kg + 1e-9).all() and r.n_points.min() >= 8
+    g = vox.attrs["capmap"]["grid"]
+    lo = np.array(g["lower_m"]) + r[["i", "j", "k"]].to_numpy() * g["edge_m"]
+    w = r[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
+    assert np.all((w >= lo - 1e-9) & (w <= lo + g["edge_m"] + 1e-9))
+    axis = r[[c for c in vox.columns if c.startswith("capacity_along_")]].to_numpy()
+    assert axis.shape[1] == 13 and np.all(axis >= 0)

@@ -47,11 +47,11 @@ rule capacity:
 
 
 rule voxels:
-    """Gather the shards into the voxel grid (minimum capacity per voxel)."""
+    """Gather the shards into the voxel grid (minimum capacity over the sampled points per voxel)."""
     input:
         shards=expand("results/capacity/shard_{k}_of_{n}.parquet", k=range(SHARDS), n=SHARDS),
     output:
-        voxels="results/voxels/voxels.parquet",
+        voxels="results/voxels/sampled.parquet",
         points="results/voxels/points.parquet",
     params:
         slice=with_code(slice_json("voxels"), "voxels"),
@@ -59,6 +59,38 @@ rule voxels:
         "results/logs/voxels.log",
     script:
         "../scripts/voxels.py"
+
+
+rule refine:
+    """Shard k of n of the reachable voxels: each voxel's minimum refined until it converges."""
+    input:
+        voxels="results/voxels/sampled.parquet",
+    output:
+        "results/voxels/refined_{k}_of_{n}.parquet",
+    params:
+        slice=with_code(slice_json("refine"), "refine"),
+    log:
+        "results/logs/refine/shard_{k}_of_{n}.log",
+    wildcard_constraints:
+        k=r"\d+",
+        n=r"\d+",
+    script:
+        "../scripts/refine.py"
+
+
+rule voxel_map:
+    """The voxel map every later stage reads: the sampled voxels with their refined values."""
+    input:
+        sampled="results/voxels/sampled.parquet",
+        refined=expand("results/voxels/refined_{k}_of_{n}.parquet", k=range(SHARDS), n=SHARDS) if REFINE else [],
+    output:
+        "results/voxels/voxels.parquet",
+    params:
+        slice=with_code(slice_json("refine"), "voxel_map"),
+    log:
+        "results/logs/voxel_map.log",
+    script:
+        "../scripts/voxel_map.py"
 
 
 rule summary:
@@ -71,7 +103,7 @@ rule summary:
         md="results/summary/capacity_summary.md",
         png=report("results/summary/capacity_map.png", category="Capacity map", caption="../report/capacity_map.rst"),
     params:
-        slice=with_code(slice_json("voxels"), "summary"),
+        slice=with_code(slice_json("refine"), "summary"),
     log:
         "results/logs/summary.log",
     script:
@@ -138,9 +170,10 @@ rule verify_plots:
 
 
 rule verify_summary:
-    """Every payload's verification in one table (in the report)."""
+    """Every payload's and further task's verification in one table (in the report)."""
     input:
         expand("results/verify/payload_{payload}kg/summary.csv", payload=PAYLOADS),
+        expand("results/tasks/{task}/summary.csv", task=TASKS),
     output:
         csv=report("results/verify/summary.csv", category="Verification", caption="../report/verify_summary.rst"),
         md="results/verify/summary.md",
@@ -150,3 +183,82 @@ rule verify_summary:
         "results/logs/verify/summary.log",
     script:
         "../scripts/verify_summary.py"
+
+
+rule plan_gain:
+    """Random tasks on this map planned with isotropic and direction-aware moves; gains verified."""
+    input:
+        voxels="results/voxels/voxels.parquet",
+    output:
+        tasks="results/plan/gain_tasks.parquet",
+        csv=report("results/plan/gain.csv", category="Planning", caption="../report/gain.rst"),
+        md="results/plan/gain.md",
+    params:
+        slice=with_code(slice_json("gain"), "plan_gain"),
+    log:
+        "results/logs/plan/gain.log",
+    script:
+        "../scripts/plan_gain.py"
+
+
+# Further tasks (config `tasks`): the same plan, verify and plot stages on their own start, goal,
+# payload and start configuration, one job each, under results/tasks/<name>/.
+
+
+rule plan_task:
+    """A* for one further task."""
+    input:
+        voxels="results/voxels/voxels.parquet",
+    output:
+        "results/tasks/{task}/waypoints.parquet",
+    params:
+        slice=lambda w: with_code(canonical(TASK_SLICES[w.task]["plan"]), "plan"),
+    log:
+        "results/logs/tasks/{task}_plan.log",
+    wildcard_constraints:
+        task=TASK_RE,
+    script:
+        "../scripts/plan.py"
+
+
+rule verify_task:
+    """Direct line and planned path of one further task, carrying its payload."""
+    input:
+        waypoints="results/tasks/{task}/waypoints.parquet",
+    output:
+        timeseries="results/tasks/{task}/timeseries.parquet",
+        segments="results/tasks/{task}/segments.parquet",
+        csv="results/tasks/{task}/summary.csv",
+        md="results/tasks/{task}/summary.md",
+    params:
+        slice=lambda w: with_code(canonical(TASK_SLICES[w.task]["verify"]), "verify"),
+    log:
+        "results/logs/tasks/{task}_verify.log",
+    wildcard_constraints:
+        task=TASK_RE,
+    script:
+        "../scripts/verify.py"
+
+
+rule verify_task_plots:
+    """Workspace with both paths; loads against their limits (one further task)."""
+    input:
+        voxels="results/voxels/voxels.parquet",
+        timeseries="results/tasks/{task}/timeseries.parquet",
+    output:
+        workspace=report("results/tasks/{task}/workspace.png", category="Verification", subcategory="task {task}",
+                         caption="../report/workspace.rst"),
+        torques=report("results/tasks/{task}/torques.png", category="Verification", subcategory="task {task}",
+                       caption="../report/loads.rst"),
+        force=report("results/tasks/{task}/base_force.png", category="Verification", subcategory="task {task}",
+                     caption="../report/loads.rst"),
+        moment=report("results/tasks/{task}/base_moment.png", category="Verification", subcategory="task {task}",
+                      caption="../report/loads.rst"),
+    params:
+        slice=lambda w: with_code(canonical(TASK_SLICES[w.task]["verify"]), "verify_plots"),
+    log:
+        "results/logs/tasks/{task}_plots.log",
+    wildcard_constraints:
+        task=TASK_RE,
+    script:
+        "../scripts/verify_plots.py"

@@ -3,8 +3,9 @@ import json
 import sys
 from pathlib import Path
 
-from capmap.config import (atlas_slices, canonical, check_run_config, dualarm_slices, follow_slices, payload_label,
+from capmap.config import (task_slices, atlas_slices, canonical, check_run_config, dualarm_slices, follow_slices, payload_label,
                            reconfig_slices, resolved_doc, stage_slices)
+from capmap.config.capacity import refine_doc
 from capmap.errors import CapmapError
 from capmap.io.datasets import missing_catalogued
 from capmap.io.fingerprint import script_fingerprint
@@ -23,10 +24,14 @@ for _path in missing_catalogued("results/catalogue.parquet") + missing_catalogue
 DOC = resolved_doc(config, RUN.failure)  # lock angle, start and start configuration resolved
 SLICES = stage_slices(DOC)
 SHARDS = RUN.shards
+REFINE = refine_doc(config["voxels"]) is not None  # voxels.refine: false keeps the sampled minima
 PAYLOADS = [payload_label(m) for m in RUN.task.payload_kg]  # wildcard values, e.g. "1500"
 FOLLOW_SLICES = follow_slices(DOC)
 FOLLOW_CASES = list(FOLLOW_SLICES)  # "space", "ground": those configured under follow
 PAYLOAD_RE = "|".join(p.replace(".", r"\.") for p in PAYLOADS)
+TASK_SLICES = task_slices(DOC)  # the further tasks of `tasks`, by name
+TASKS = list(TASK_SLICES)
+TASK_RE = "|".join(TASKS) or "(?!)"
 
 
 def slice_json(stage, payload=None):

@@ -21,14 +21,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from capmap.capacity.directions import axis_of
 from capmap.capacity.voxels import Grid
 from capmap.errors import CapmapError, NoPath
 
-__all__ = ["NEIGHBOURS", "capacity_penalty", "SearchResult", "astar", "Plan", "plan", "ROLES"]
+__all__ = ["NEIGHBOURS", "AXIS_OF_NEIGHBOUR", "capacity_penalty", "SearchResult", "astar", "Plan", "plan", "ROLES"]
 
 ROLES = {"start": "start", "goal": "goal", "payload": "payload"}  # own-terms names of plan()'s inputs
 
 NEIGHBOURS = np.array([d for d in itertools.product((-1, 0, 1), repeat=3) if d != (0, 0, 0)])  # (26, 3)
+AXIS_OF_NEIGHBOUR = axis_of(NEIGHBOURS)  # (26,) index into GRID_AXES
 
 
 def capacity_penalty(capacity_kg: np.ndarray, payload_kg: float) -> np.ndarray:
@@ -48,8 +50,11 @@ class SearchResult:
     reached: np.ndarray
 
 
-def astar(penalty: np.ndarray, start: tuple[int, int, int], goal: tuple[int, int, int], edge_m: float) -> SearchResult:
+def astar(penalty: np.ndarray, start: tuple[int, int, int], goal: tuple[int, int, int], edge_m: float,
+          axis_ok: np.ndarray | None = None) -> SearchResult:
     """A* with f = g + h + C over a 3-D grid; ``penalty`` (nx, ny, nz) is C (0 or inf).
+    ``axis_ok`` (nx, ny, nz, 13) bool, optional: a move along grid axis a (:data:`GRID_AXES`, either
+    sense) is allowed only when both its voxels allow that axis.
 
     Ties in f go to the larger g (deeper node), then to insertion order.
     """
@@ -81,6 +86,8 @@ def astar(penalty: np.ndarray, start: tuple[int, int, int], goal: tuple[int, int
             m = tuple(int(v) for v in nb[d])
             c = penalty[m]
             if closed[m] or np.isinf(c):
+                continue
+            if axis_ok is not None and not (axis_ok[node + (AXIS_OF_NEIGHBOUR[d],)] and axis_ok[m + (AXIS_OF_NEIGHBOUR[d],)]):
                 continue
             gm = gn + steps[d]
             if gm < g[m] - 1e-12:
@@ -133,18 +140,30 @@ def _endpoint_voxel(grid: Grid, penalty3: np.ndarray, cap3: np.ndarray, point: n
     return idx
 
 
-def plan(grid: Grid, capacity_kg: np.ndarray, start_m: np.ndarray, goal_m: np.ndarray, payload_kg: float) -> Plan:
+def plan(grid: Grid, capacity_kg: np.ndarray, start_m: np.ndarray, goal_m: np.ndarray, payload_kg: float,
+         axis_capacity_kg: np.ndarray | None = None) -> Plan:
     """Plan from start_m to goal_m (3,) m through voxels whose capacity (V,) kg, C-ordered over
     ``grid`` and NaN for unreachable voxels, is >= payload_kg. Raises a one-line CapmapError
     naming the problem when the start or goal is outside the grid or in an unreachable voxel;
     :class:`~capmap.errors.NoPath` when the start or goal voxel is too weak or no path exists.
-    Both name the inputs by the roles in :data:`ROLES`."""
+    Both name the inputs by the roles in :data:`ROLES`.
+
+    Direction-aware moves: with ``axis_capacity_kg`` (V, 13) kg (the capacity of each voxel for
+    motion along each grid axis, :data:`~capmap.capacity.directions.GRID_AXES`), a move between
+    neighbours is allowed when both voxels carry the payload along its axis; the start and goal
+    voxels must still carry it in every direction (the first and last segments, from the true
+    start and to the true goal, have any direction)."""
     cap3 = np.asarray(capacity_kg, dtype=float).reshape(grid.shape)
     pen = capacity_penalty(cap3, payload_kg)
     start_m, goal_m = np.asarray(start_m, dtype=float), np.asarray(goal_m, dtype=float)
     s = _endpoint_voxel(grid, pen, cap3, start_m, "start", payload_kg)
     g = _endpoint_voxel(grid, pen, cap3, goal_m, "goal", payload_kg)
-    res = astar(pen, s, g, grid.edge_m)
+    axis_ok = None
+    if axis_capacity_kg is not None:
+        axis_ok = (np.nan_to_num(np.asarray(axis_capacity_kg, dtype=float), nan=-np.inf) >= payload_kg).reshape(
+            grid.shape + (-1,))
+        pen = np.where(axis_ok.any(axis=-1), 0.0, np.inf)  # a voxel is entered along an axis it allows
+    res = astar(pen, s, g, grid.edge_m, axis_ok)
     if not len(res.path):
         raise NoPath(f"no path from the start voxel {s} to the goal voxel {g} through voxels with capacity >= "
                      f"{{payload}} = {payload_kg:g} ({int(res.reached.sum())} voxels connected to the start, "

@@ -32,6 +32,7 @@ _EXPORTS = {
     'payload_label': 'slices',
     'reconfig_slices': 'slices',
     'stage_slices': 'slices',
+    'task_slices': 'slices',
 }
 
 __all__ = [
@@ -50,6 +51,7 @@ __all__ = [
     "resolve_failure",
     "resolved_doc",
     "stage_slices",
+    "task_slices",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

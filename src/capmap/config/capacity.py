@@ -11,11 +11,40 @@ import pinocchio as pin
 from capmap.capacity import directions
 from capmap.capacity.directions import Directions
 from capmap.capacity.engine import LoadLimits, Motion
+from capmap.capacity.refine import RefineSettings
+from capmap.errors import CapmapError
 from capmap.config.validation import as_tuple, per_item
 from capmap.errors import ConfigError
 
 __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "DirectionsConfig", "VerificationConfig",
-           "rotation_from_rpy", "DEFAULT_DT_S"]
+           "rotation_from_rpy", "DEFAULT_DT_S", "REFINE_DEFAULTS", "refine_doc", "refine_settings", "PLAN_MOVES", "GAIN_TASKS"]
+
+REFINE_DEFAULTS = {"rel_tol": 0.005, "min_points": 16, "max_points": 256, "near_band": 0.1, "near_min_points": 64,
+                   "seed": 0}
+PLAN_MOVES = ("axis", "isotropic")  # planning.moves; the first is the default
+GAIN_TASKS = 30  # planning.gain_tasks: random tasks per payload comparing the two kinds of moves
+
+
+def refine_doc(voxels_doc: dict) -> dict | None:
+    """``voxels.refine`` with its defaults filled in (None when refinement is off)."""
+    r = voxels_doc.get("refine", {})
+    return None if r is False else {**REFINE_DEFAULTS, **r}
+
+
+def refine_settings(voxels_doc: dict, payloads_kg) -> RefineSettings | None:
+    """The refinement of ``voxels.refine`` around the task payloads; a one-line ConfigError
+    naming the key when its point counts contradict each other."""
+    r = refine_doc(voxels_doc)
+    if r is None:
+        return None
+    try:
+        return RefineSettings(rel_tol=float(r["rel_tol"]), min_points=int(r["min_points"]),
+                              max_points=int(r["max_points"]), payloads_kg=tuple(float(p) for p in payloads_kg),
+                              near_band=float(r["near_band"]), near_min_points=int(r["near_min_points"]))
+    except CapmapError:
+        raise ConfigError(f"voxels.refine: min_points = {r['min_points']}, near_min_points = {r['near_min_points']} "
+                          f"and max_points = {r['max_points']}: need min_points <= max_points and "
+                          "near_min_points <= max_points") from None
 
 DEFAULT_DT_S = 0.1  # verification.dt_s when not given
 

@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from capmap.config.atlas import AtlasConfig
-from capmap.config.capacity import TaskConfig
+from capmap.config.capacity import TaskConfig, refine_settings
 from capmap.config.validation import per_item
 from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.estimate import estimate_map
@@ -24,7 +24,8 @@ from capmap.core import ik
 from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free
 from capmap.core.robot import Robot
-from capmap.errors import ConfigError
+from capmap.core.tracking import start_branch
+from capmap.errors import CapmapError, ConfigError
 
 __all__ = ["check_run_config", "check_goal", "check_dt", "check_follow", "check_atlas"]
 
@@ -38,7 +39,12 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     limits = cfg.limits.resolve(robot.n_joints).for_arm(arm)
     dirs = cfg.directions.build()
     check_goal(arm, cfg.task, failure, source)
+    check_tasks(doc.get("tasks", []), arm, cfg.task, failure, source)
     check_dt(cfg, source)
+    try:
+        refine_settings(doc["voxels"], cfg.task.payload_kg)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
     keys = {"n_points": "sampling.n_points", "edge_m": "voxels.edge_m"}
     try:
         estimate = estimate_map(arm, cfg.sampling, cfg.voxel_edge_m, len(dirs), len(limits.names), cfg.shards, keys)
@@ -77,6 +83,29 @@ def check_goal(arm: LockedArm, task: TaskConfig, failure: Failure, source: str =
         raise ConfigError(f"{source}: task.goal_m = [{', '.join(f'{v:g}' for v in task.goal_m)}] is not reachable "
                           f"at task.orientation_rpy_deg = {list(task.orientation_rpy_deg)} with joint {failure.joint} "
                           f"locked at {failure.angle_deg:g} deg")
+
+
+def check_tasks(tasks: list, arm: LockedArm, task: TaskConfig, failure: Failure, source: str = "config") -> None:
+    """``tasks``: distinct names; every start configuration a branch at its start (the locked joint
+    at the lock angle), every goal reachable, at the task's orientation."""
+    names = [t["name"] for t in tasks]
+    if len(set(names)) < len(names):
+        raise ConfigError(f"{source}: tasks: names must differ ({names})")
+    for i, t in enumerate(tasks):
+        key = f"tasks[{i}] ({t['name']})"
+        q = np.asarray(t["q_start_deg"], dtype=float)
+        if len(q) != arm.robot.n_joints:
+            raise ConfigError(f"{source}: {key}.q_start_deg has {len(q)} values but {arm.robot.name} has "
+                              f"{arm.robot.n_joints} joints")
+        if abs(q[failure.joint - 1] - failure.angle_deg) > 1e-6:
+            raise ConfigError(f"{source}: {key}.q_start_deg[{failure.joint - 1}] = {q[failure.joint - 1]:g} but joint "
+                              f"{failure.joint} is locked at {failure.angle_deg:g} deg")
+        try:
+            start_branch(arm, np.asarray(t["start_m"], dtype=float), task.rotation, np.deg2rad(q)[arm.active])
+        except CapmapError as exc:
+            raise ConfigError(f"{source}: {exc.in_terms(start=f'{key}.start_m', q_ini=f'{key}.q_start_deg')}") from None
+        if ik.solve(arm, np.asarray(t["goal_m"], dtype=float)[None], task.rotation).n_solutions[0] == 0:
+            raise ConfigError(f"{source}: {key}.goal_m = {t['goal_m']} is not reachable at task.orientation_rpy_deg")
 
 
 def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> None:

@@ -6,15 +6,17 @@ the affected stages) and into each output's provenance.
 
 from __future__ import annotations
 
-from capmap.config.capacity import DEFAULT_DT_S
+import numpy as np
+
+from capmap.config.capacity import DEFAULT_DT_S, GAIN_TASKS, PLAN_MOVES, refine_doc
 from capmap.config.robot_file import referenced_files
 from capmap.io.datasets import canonical, config_hash
 from capmap.io.fingerprint import file_fingerprints
 
-__all__ = ["canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices",
+__all__ = ["task_slices", "canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices",
            "atlas_slices", "STAGES"]
 
-STAGES = ("model", "sample", "capacity", "voxels", "plan", "verify")  # the capacity family, in order
+STAGES = ("model", "sample", "capacity", "voxels", "refine", "plan", "verify")  # the capacity family, in order
 
 
 def payload_label(payload_kg: float) -> str:
@@ -42,8 +44,10 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     model:    robot
     sample:   lock, sampling (+ voxels for voxel_fill, whose grid it fills)
     capacity: task orientation/speed/acceleration, limits, directions
-    voxels:   voxels
-    plan:     task payload/start/goal
+    voxels:   voxels.edge_m
+    refine:   voxels.refine and the task payloads (voxels near a payload are refined further)
+    plan:     task payload/start/goal, planning.moves
+    gain:     the map (refine upstream), payloads, planning.gain_tasks, verification.dt_s
     verify:   task payload/start/goal/start configuration, verification
 
     ``doc`` is the resolved document (:func:`capmap.config.failure.resolved_doc`): the lock angle
@@ -54,23 +58,34 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     each job depends on its own only, so adding a payload reruns nothing else).
     """
     task = dict(doc["task"])
+    edge = doc["voxels"]["edge_m"]
     if payload_kg is not None:
         task["payload_kg"] = float(payload_kg)
     own = {
         "model": {"robot": doc["robot"], "files": files_of(doc["robot"])},
         "sample": {"lock": doc["lock"], "sampling": doc["sampling"],
-                   **({"voxels": doc["voxels"]} if doc["sampling"]["mode"] == "voxel_fill" else {})},
+                   **({"voxels": {"edge_m": edge}} if doc["sampling"]["mode"] == "voxel_fill" else {})},
         "capacity": {"task": {k: task[k] for k in ("orientation_rpy_deg", "v_max_mps", "a_max_mps2")},
                      "limits": per_item_canonical(doc["limits"]), "directions": doc["directions"]},
-        "voxels": {"voxels": doc["voxels"]},
-        "plan": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m")}},
-        "verify": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m", "q_start_deg")},
+        "voxels": {"voxels": {"edge_m": edge}},
+        # refinement sharpens voxels near every task payload: it depends on the list, not on one job's payload
+        "refine": {"refine": refine_doc(doc["voxels"]),
+                   **({"payloads_kg": sorted(float(m) for m in np.atleast_1d(doc["task"]["payload_kg"]))}
+                      if refine_doc(doc["voxels"]) is not None else {})},
+        "plan": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m")},
+                 "planning": {"moves": doc.get("planning", {}).get("moves", PLAN_MOVES[0])}},
+        # every payload x random (start, goal) pairs: isotropic against direction-aware moves, verified
+        "gain": {"payloads_kg": sorted(float(m) for m in np.atleast_1d(doc["task"]["payload_kg"])),
+                 "gain_tasks": doc.get("planning", {}).get("gain_tasks", GAIN_TASKS),
+                 "verification": {"dt_s": doc.get("verification", {}).get("dt_s", DEFAULT_DT_S)}},
+        "verify": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m", "q_start_deg", "name") if k in task},
                    "verification": {"dt_s": doc.get("verification", {}).get("dt_s", DEFAULT_DT_S)}},
     }
     out, acc = {}, {}
     for stage in STAGES:
         acc = {**acc, stage: own[stage]}
         out[stage] = {"own": own[stage], "upstream": dict(acc)}
+    out["gain"] = {"own": own["gain"], "upstream": {**out["refine"]["upstream"], "gain": own["gain"]}}  # not the task's
     return out
 
 
@@ -137,3 +152,14 @@ def atlas_slices(doc: dict) -> dict[str, dict]:
            "verification": {"dt_s": doc.get("verification", {}).get("dt_s", DEFAULT_DT_S)},
            "atlas": {k: at[k] for k in ("sampling", "directions", "edge_m")}}
     return {"map": one, "atlas": {**one, "atlas": at}}
+
+
+def task_slices(doc: dict) -> dict[str, dict]:
+    """The plan and verify slices (upstream) of each further task of ``tasks``, by name: the
+    main task's with its start, goal, payload and start configuration (and its name)."""
+    out = {}
+    for t in doc.get("tasks", []):
+        sub = {**doc, "task": {**doc["task"], **{k: t[k] for k in ("start_m", "goal_m", "q_start_deg", "name")}}}
+        sl = stage_slices(sub, float(t["payload_kg"]))
+        out[t["name"]] = {"plan": sl["plan"]["upstream"], "verify": sl["verify"]["upstream"]}
+    return out

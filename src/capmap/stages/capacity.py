@@ -13,6 +13,7 @@ import pandas as pd
 import pinocchio as pin
 
 from capmap.capacity import sampling
+from capmap.capacity.directions import AXIS_LABELS, grid_axes
 from capmap.capacity.engine import Motion, point_capacity
 from capmap.capacity.voxels import Grid, voxelise
 from capmap.config.capacity import DirectionsConfig, LimitsConfig, SamplingConfig, rotation_from_rpy
@@ -27,8 +28,10 @@ from capmap.io.logs import stage_logger
 from capmap.stages.arm import arm_from
 from capmap.stages.common import parse_slice
 
-__all__ = ["model_table", "stage_model", "sample_table", "stage_sample", "capacity_table", "stage_capacity",
+__all__ = ["AXIS_COLUMNS", "model_table", "stage_model", "sample_table", "stage_sample", "capacity_table", "stage_capacity",
            "voxel_table", "grid_meta", "grid_of", "stage_voxels"]
+
+AXIS_COLUMNS = [f"capacity_along_{label}_kg" for label in AXIS_LABELS]  # moves along the 13 grid axes
 
 
 # --------------------------------------------------------------------------- model
@@ -103,12 +106,13 @@ def capacity_table(arm: LockedArm, ids: np.ndarray, pos: np.ndarray, rotation: n
     """Per-point capacity table for points ``pos`` (N, 3) m at end-effector orientation ``rotation``
     (all IK branches x all directions); progress to ``log`` (a logger) every chunk."""
     dyn = ArmDynamics(arm)
+    axes = grid_axes()
     parts = []
     t0, states = time.perf_counter(), 0
     for start in range(0, len(pos), chunk):
         rows = slice(start, start + chunk)
         sol = ik.solve(arm, pos[rows], rotation)
-        pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits)
+        pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits, axes)
         states += int(pc.n_states.sum())
         reach = sol.n_solutions > 0
         d = np.where(pc.direction >= 0, pc.direction, 0)
@@ -127,6 +131,8 @@ def capacity_table(arm: LockedArm, ids: np.ndarray, pos: np.ndarray, rotation: n
         })
         for c, j in enumerate(arm.active_joint_numbers):
             part[f"worst_q_j{j}_deg"] = np.rad2deg(q_worst[:, c])
+        for c, col in enumerate(AXIS_COLUMNS):
+            part[col] = pc.axis_capacity_kg[:, c]
         parts.append(part)
         if log:
             done = min(start + chunk, len(pos))
@@ -175,11 +181,22 @@ def voxel_table(pts: pd.DataFrame, edge_m: float) -> tuple[pd.DataFrame, Grid]:
     centres = grid.centres(idx)
     worst = vm.worst_point
     binding = np.where(worst >= 0, pts.binding.astype(str).to_numpy()[np.maximum(worst, 0)], "")
+    axis = np.full((grid.n_voxels, len(AXIS_COLUMNS)), np.nan)
+    if AXIS_COLUMNS[0] in pts:
+        vi = grid.index(xyz)
+        r = pts.reachable.to_numpy() & (vi[:, 0] >= 0)
+        axis[:] = np.inf
+        np.fmin.at(axis, grid.flat(vi[r]), pts.loc[r, AXIS_COLUMNS].to_numpy())
+        axis[vm.n_reachable == 0] = np.nan
+    wxyz = np.where(worst[:, None] >= 0, xyz[np.maximum(worst, 0)], np.nan)
     vox = pd.DataFrame({"i": idx[:, 0], "j": idx[:, 1], "k": idx[:, 2],
                         "x_m": centres[:, 0], "y_m": centres[:, 1], "z_m": centres[:, 2],
                         "n_points": vm.n_points, "n_reachable": vm.n_reachable, "capacity_kg": vm.capacity_kg,
                         "binding": pd.Categorical(binding),
-                        "worst_point_id": np.where(worst >= 0, pts.point_id.to_numpy()[np.maximum(worst, 0)], -1)})
+                        "worst_point_id": np.where(worst >= 0, pts.point_id.to_numpy()[np.maximum(worst, 0)], -1),
+                        "worst_x_m": wxyz[:, 0], "worst_y_m": wxyz[:, 1], "worst_z_m": wxyz[:, 2]})
+    for c, col in enumerate(AXIS_COLUMNS):
+        vox[col] = axis[:, c]
     pidx = grid.index(xyz)
     pts["i"], pts["j"], pts["k"] = pidx[:, 0], pidx[:, 1], pidx[:, 2]
     return vox, grid

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from capmap.capacity import planning
+from capmap.capacity.directions import AXIS_LABELS, axis_of
 from capmap.capacity.engine import Motion
 from capmap.capacity.verification import PathResult, judge, verify_path
 from capmap.config.capacity import LimitsConfig, rotation_from_rpy
@@ -20,7 +21,7 @@ from capmap.errors import CapmapError, ConfigError, NoPath
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.stages.capacity import grid_of
+from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.arm import arm_from
 from capmap.stages.common import parse_slice
 
@@ -37,19 +38,33 @@ def stage_plan(voxels: str, out: str, slice_json: str) -> None:
     task = deps["plan"]["task"]
     payload = float(task["payload_kg"])
     log = stage_logger(__name__, f"plan {payload:g} kg")
+    moves = deps["plan"]["planning"]["moves"]
     vox = datasets.read(voxels)
     grid = grid_of(vox)
     cap = vox.capacity_kg.to_numpy()
+    axis_cap = vox[AXIS_COLUMNS].to_numpy() if moves == "axis" else None
     status, reason, cost, expanded = "ok", "", float("nan"), 0
     try:
-        p = planning.plan(grid, cap, task["start_m"], task["goal_m"], payload)
+        p = planning.plan(grid, cap, task["start_m"], task["goal_m"], payload, axis_cap)
         wv = p.waypoint_voxel
         df = pd.DataFrame({"waypoint": np.arange(len(p.waypoints)), "kind": p.waypoint_kind,
                            "x_m": p.waypoints[:, 0], "y_m": p.waypoints[:, 1], "z_m": p.waypoints[:, 2],
                            "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2], "voxel_capacity_kg": cap[grid.flat(wv)]})
+        if axis_cap is not None:  # the capacity along the move that arrives at each voxel (both voxels)
+            f = grid.flat(wv)
+            step = np.diff(wv, axis=0)
+            move = np.r_[False, np.any(step != 0, axis=1)]
+            a = np.zeros(len(wv), dtype=int)
+            a[move] = axis_of(step[move[1:]])
+            along = np.full(len(wv), np.nan)
+            along[move] = np.minimum(axis_cap[f[move], a[move]], axis_cap[np.r_[f[:-1]][move[1:]], a[move]])
+            df["move_axis"] = np.where(move, np.array(AXIS_LABELS)[a], "")
+            df["move_capacity_kg"] = along
         cost, expanded = p.cost_m, p.expanded
-        log.info(f"{len(p.voxel_path)} voxels, {len(df)} waypoints, A* cost {cost:.3f} m, path {p.length_m:.3f} m, "
-                 f"{expanded} voxels expanded; weakest voxel on it {df.voxel_capacity_kg.min():.1f} kg")
+        log.info(f"{moves} moves: {len(p.voxel_path)} voxels, {len(df)} waypoints, A* cost {cost:.3f} m, path "
+                 f"{p.length_m:.3f} m, {expanded} voxels expanded; weakest voxel on it {df.voxel_capacity_kg.min():.1f} kg"
+                 + (f", weakest move {np.nanmin(df.move_capacity_kg):.1f} kg" if axis_cap is not None
+                    and df.move_capacity_kg.notna().any() else ""))
     except NoPath as exc:
         status, reason = "no_path", exc.in_terms(**PLAN_KEYS)
         df = pd.DataFrame({c: pd.Series(dtype=object if c == "kind" else float) for c in WAYPOINT_COLUMNS})
@@ -57,7 +72,7 @@ def stage_plan(voxels: str, out: str, slice_json: str) -> None:
     except CapmapError as exc:  # start or goal outside the map: the config's fault
         raise ConfigError(exc.in_terms(**PLAN_KEYS)) from None
     datasets.write(df, out, datasets.provenance("plan", deps, payload_kg=payload, status=status, reason=reason,
-                                                 cost_m=cost, expanded=expanded))
+                                                 cost_m=cost, expanded=expanded, moves=moves))
 
 
 def path_tables(name: str, res: PathResult, arm: LockedArm, limits: AffineLimits, payload: float,
@@ -121,6 +136,9 @@ def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv
         log.info(f"planned: none ({plan_meta['reason']})")
     summary = pd.DataFrame(rows)
     summary.insert(0, "payload_kg", payload)
+    summary["task"] = vt.get("name", "task")  # "task": the config's task; else its name under `tasks`
+    if "name" in vt:
+        summary["path"] = vt["name"] + ": " + summary.path  # headed "3200 kg, around_singularity: direct"
     ts = pd.concat(ts_parts, ignore_index=True)
     ts["path"] = ts.path.astype("category")
     ts["binding"] = ts.binding.astype("category")

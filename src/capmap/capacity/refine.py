@@ -1,0 +1,243 @@
+"""Voxel values that do not overstate: refine each voxel's minimum until it has converged.
+
+A voxel's capacity is the minimum over the points inside it (the spec's step 7), estimated
+from the points evaluated there. A handful of points overstates it where the capacity falls
+steeply inside the voxel (a singular configuration, a branch that appears at a workspace
+boundary), so every voxel that has a reachable point is refined in rounds:
+
+    each round doubles the points evaluated in the voxel (new uniform points inside it, and a
+    shrinking pattern around its worst point), and the voxel has converged when the round
+    lowered its minimum, and each per-axis minimum, by less than ``rel_tol``
+    (relative), it holds at least ``min_points`` points, and, when its value lies within
+    ``near_band`` (relative) of a task payload, at least ``near_min_points``;
+    ``max_points`` ends the doubling, and so does the patterns' step reaching ``finest_step``
+    of the edge (the voxel is then reported as not converged).
+
+Where two points of a voxel have different numbers of IK branches, a fold of the IK map (a
+singular surface, or the workspace boundary) crosses the voxel; there two branches merge at a
+singular configuration and the capacity falls towards 0 in a thin shell that uniform points
+rarely hit. Such a voxel also bisects the segment between two points of different branch
+counts, one point per round, until the bracket is shorter than ``fold_tol_m``, and stays
+unconverged until then. When the closed bracket holds a point of capacity 0, the fold is a
+singular surface: moving along any grid axis that crosses it needs unbounded joint rates
+(those of the direction normal to it), so every per-axis value of the voxel is set to 0 too (a
+grid axis tangent to the fold everywhere in the voxel is the exception this rounds down).
+
+A voxel whose minimum and per-axis minima are all 0 cannot fall further and has converged. The per-axis capacities (moves along
+the 13 axes of the grid) are minimised over the same points. The evaluation of points is
+passed in as a function, so this module holds only the rounds; randomness comes from the
+Generator passed in.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.capacity.voxels import Grid
+from capmap.errors import CapmapError
+
+__all__ = ["RefineSettings", "Evaluation", "VoxelMinima", "refine"]
+
+_CORNERS = np.array([[i, j, k] for i in (0.0, 1.0) for j in (0.0, 1.0) for k in (0.0, 1.0)])
+# a compass and diagonal pattern (14 points) scaled by a step that halves every round
+_COMPASS = np.concatenate([np.eye(3), -np.eye(3)])
+_PATTERN = np.concatenate([_COMPASS, _CORNERS * 2 - 1])
+
+
+@dataclass(frozen=True)
+class RefineSettings:
+    """rel_tol: convergence (relative change of the minimum in the last doubling); min_points,
+    max_points: points per voxel at least / at most; payloads_kg with near_band and
+    near_min_points: voxels whose value is within near_band of a payload get at least that many."""
+
+    rel_tol: float = 0.005
+    min_points: int = 16
+    max_points: int = 256
+    payloads_kg: tuple[float, ...] = ()
+    near_band: float = 0.1
+    near_min_points: int = 64
+    fold_tol_m: float = 1e-3
+    finest_step: float = 1 / 64  # of the voxel edge: the patterns stop shrinking there
+
+    def __post_init__(self):
+        if not 0 < self.rel_tol < 1:
+            raise CapmapError(f"{{rel_tol}} = {self.rel_tol!r} must be in (0, 1)", rel_tol="rel_tol")
+        if not 1 <= self.min_points <= self.max_points or self.near_min_points > self.max_points:
+            raise CapmapError(f"points per voxel: min {self.min_points}, near a payload {self.near_min_points}, "
+                              f"max {self.max_points}: need 1 <= min <= max and near <= max", rel_tol="rel_tol")
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Point results: capacity_kg (N,) kg (NaN where unreachable), axis_capacity_kg (N, A) kg,
+    binding (N,) int: the binding limit's index (-1 where unreachable); n_branches (N,) int: IK
+    branches at the point (0 where unreachable)."""
+
+    capacity_kg: np.ndarray
+    axis_capacity_kg: np.ndarray
+    binding: np.ndarray
+    n_branches: np.ndarray
+
+
+@dataclass(frozen=True)
+class VoxelMinima:
+    """Per refined voxel (V,): capacity_kg, axis_capacity_kg (V, A), n_points evaluated inside,
+    n_reachable of them, last_change (relative drop of the minimum in the last round), converged,
+    worst_m (V, 3) the point attaining the minimum and binding (V,) its binding limit; rounds and
+    points evaluated in all."""
+
+    voxel: np.ndarray
+    capacity_kg: np.ndarray
+    axis_capacity_kg: np.ndarray
+    n_points: np.ndarray
+    n_reachable: np.ndarray
+    last_change: np.ndarray
+    converged: np.ndarray
+    worst_m: np.ndarray
+    binding: np.ndarray
+    rounds: int
+    n_evaluated: int
+
+
+def _near(cap: np.ndarray, s: RefineSettings) -> np.ndarray:
+    if not s.payloads_kg:
+        return np.zeros(len(cap), dtype=bool)
+    p = np.asarray(s.payloads_kg, dtype=float)
+    return np.any(np.abs(cap[:, None] - p) <= s.near_band * p, axis=1)
+
+
+def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Evaluation], settings: RefineSettings,
+           rng: np.random.Generator, progress: Callable[[int, int, int], None] | None = None) -> VoxelMinima:
+    """Refine the voxels of ``start`` (their minima from the points already evaluated; a voxel
+    without a reachable point keeps NaN and is not refined). ``evaluate(points (N, 3) m)`` gives
+    the point results; ``progress(round, active voxels, points this round)`` is called per round."""
+    s = settings
+    cap = start.capacity_kg.astype(float).copy()
+    axis = start.axis_capacity_kg.astype(float).copy()
+    n_pts = start.n_points.astype(int).copy()
+    n_reach = start.n_reachable.astype(int).copy()
+    worst = start.worst_m.astype(float).copy()
+    binding = start.binding.astype(int).copy()
+    change = np.zeros(len(cap))
+    zero = lambda: (cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=1)  # noqa: E731  nothing can fall further
+    converged = ~np.isfinite(cap) | zero()
+    stopped = np.zeros(len(cap), dtype=bool)  # still falling when the patterns reached their finest step
+    idx3 = np.stack(np.unravel_index(start.voxel, grid.shape), axis=1)
+    V = len(cap)
+    ref_pt, ref_n = np.full((V, 3), np.nan), np.full(V, -1)  # a first point and its branch count
+    fold = np.zeros(V, dtype=bool)  # a bracket [a, b] of different branch counts is known
+    fa, fb, na = np.zeros((V, 3)), np.zeros((V, 3)), np.zeros(V, dtype=int)
+    axis_worst = np.repeat(worst[:, None, :], axis.shape[1], axis=1)  # (V, A, 3): where each axis minimum is
+    axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their pattern continues)
+    rounds, evaluated = 0, 0
+    while True:
+        bisect = np.flatnonzero(fold & ~zero() & (np.linalg.norm(fb - fa, axis=1) > s.fold_tol_m))
+        active = np.union1d(np.flatnonzero(~converged & ~stopped & (n_pts < s.max_points)), bisect)
+        if not len(active):
+            break
+        rounds += 1
+        # new points: the pattern around the voxel's worst point so far (the voxel's corners in the
+        # first round), then uniform points doubling the count (capped)
+        if rounds == 1:
+            local = np.repeat(active, 8)
+            local_pts = grid.lower + (idx3[local] + np.tile(_CORNERS, (len(active), 1))) * grid.edge_m
+        else:
+            has = np.isfinite(cap[active])
+            local = np.repeat(active[has], len(_PATTERN))
+            h = grid.edge_m * 0.5 ** rounds
+            lo = grid.lower + idx3[local] * grid.edge_m
+            local_pts = np.clip(worst[local] + h * np.tile(_PATTERN, (int(has.sum()), 1)), lo, lo + grid.edge_m)
+        if rounds > 1:  # a compass pattern around the worst point of each axis still falling
+            v, a = np.nonzero(axis_open[active] & np.isfinite(axis[active]))
+            v = active[v]
+            # axes whose minima sit at the same point (often a corner) share one pattern
+            centre, keep = np.unique(np.column_stack([v, axis_worst[v, a]]), axis=0, return_index=True)
+            v, centre = v[keep], axis_worst[v[keep], a[keep]]
+            h = grid.edge_m * 0.5 ** rounds
+            lo = grid.lower + idx3[v] * grid.edge_m
+            ap = np.clip(centre[:, None, :] + h * _COMPASS, lo[:, None, :], lo[:, None, :] + grid.edge_m)
+            local = np.concatenate([local, np.repeat(v, len(_COMPASS))])
+            local_pts = np.concatenate([local_pts, ap.reshape(-1, 3)])
+        local = np.concatenate([local, bisect])
+        local_pts = np.concatenate([local_pts, 0.5 * (fa[bisect] + fb[bisect])])
+        n_local = np.bincount(local, minlength=len(cap))[active]
+        new = np.clip(np.minimum(n_pts[active], s.max_points - n_pts[active]) - n_local, 0, None)
+        uniform = np.repeat(active, new)
+        owner = np.concatenate([local, uniform])
+        pts = np.concatenate([local_pts,
+                              grid.lower + (idx3[uniform] + rng.uniform(0.0, 1.0, (len(uniform), 3))) * grid.edge_m])
+        new = new + n_local
+        if progress:
+            progress(rounds, len(active), len(pts))
+        ev = evaluate(pts)
+        evaluated += len(pts)
+        c = np.where(np.isfinite(ev.capacity_kg), ev.capacity_kg, np.inf)
+        # per voxel: the new minimum and where it is
+        order = np.lexsort((c, owner))
+        first = np.r_[True, owner[order][1:] != owner[order][:-1]]
+        best_i = order[first]
+        best_v = owner[best_i]
+        old = cap[best_v]
+        lower = c[best_i] < old
+        cap[best_v[lower]] = c[best_i][lower]
+        worst[best_v[lower]] = pts[best_i][lower]
+        binding[best_v[lower]] = ev.binding[best_i][lower]
+        axis_old = axis[active].copy()
+        ac = np.where(np.isfinite(ev.axis_capacity_kg), ev.axis_capacity_kg, np.inf)
+        for a in range(axis.shape[1]):  # per axis: the new minimum and where it is
+            order = np.lexsort((ac[:, a], owner))
+            first = np.r_[True, owner[order][1:] != owner[order][:-1]]
+            bi = order[first]
+            bv = owner[bi]
+            better = ac[bi, a] < axis[bv, a]
+            axis[bv[better], a] = ac[bi[better], a]
+            axis_worst[bv[better], a] = pts[bi[better]]
+        axis_drop = np.max(np.where(axis_old > 0, (axis_old - axis[active]) / np.where(axis_old > 0, axis_old, 1.0), 0.0),
+                           axis=1, initial=0.0)
+        _track_folds(owner, pts, ev.n_branches, len(local) - len(bisect), bisect, ref_pt, ref_n, fold, fa, fb, na)
+        n_pts[active] += new
+        np.add.at(n_reach, owner, np.isfinite(ev.capacity_kg).astype(int))
+        change[active] = 0.0
+        drop = np.where(old > 0, (old - cap[best_v]) / np.where(old > 0, old, 1.0), 0.0)
+        change[best_v] = drop
+        change[active] = np.maximum(change[active], np.nan_to_num(axis_drop))  # every axis has converged too
+        axis_open[active] = (np.where(axis_old > 0, (axis_old - axis[active]) / np.where(axis_old > 0, axis_old, 1.0),
+                                      0.0) >= s.rel_tol) & (0.5 ** (rounds + 1) >= s.finest_step)
+        enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
+        open_fold = fold[active] & (np.linalg.norm(fb[active] - fa[active], axis=1) > s.fold_tol_m)
+        # a closed bracket with capacity 0 is a singular fold: across it every axis falls to 0 as well
+        singular = active[fold[active] & ~open_fold & (cap[active] == 0.0)]
+        axis[singular] = 0.0
+        converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold) | zero()[active]
+        if 0.5 ** (rounds + 1) < s.finest_step:  # the patterns have reached their finest step: stop
+            stopped[active] = ~open_fold
+    return VoxelMinima(voxel=start.voxel, capacity_kg=cap, axis_capacity_kg=axis, n_points=n_pts,
+                       n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst, binding=binding, rounds=rounds,
+                       n_evaluated=evaluated)
+
+
+def _track_folds(owner, pts, n_br, n_first_local, bisect, ref_pt, ref_n, fold, fa, fb, na) -> None:
+    """Update the fold brackets in place: a midpoint (the points ``n_first_local`` onwards of the
+    local ones, one per voxel of ``bisect``) replaces the end whose branch count it shares; a
+    voxel without a bracket gets one from any point whose count differs from its first point's."""
+    mids = np.arange(n_first_local, n_first_local + len(bisect))
+    for i, v in zip(mids, bisect):
+        if n_br[i] == na[v]:
+            fa[v] = pts[i]
+        else:
+            fb[v] = pts[i]
+    seen = ref_n >= 0
+    first = np.unique(owner, return_index=True)
+    new_v = first[0][~seen[first[0]]]
+    ref_pt[new_v] = pts[first[1][~seen[first[0]]]]
+    ref_n[new_v] = n_br[first[1][~seen[first[0]]]]
+    differ = np.flatnonzero((n_br != ref_n[owner]) & ~fold[owner])
+    if len(differ):
+        v, i = np.unique(owner[differ], return_index=True)
+        j = differ[i]
+        fold[v] = True
+        fa[v], na[v] = ref_pt[v], ref_n[v]
+        fb[v] = pts[j]
