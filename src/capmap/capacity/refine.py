@@ -122,7 +122,10 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     worst = start.worst_m.astype(float).copy()
     binding = start.binding.astype(int).copy()
     change = np.zeros(len(cap))
-    zero = lambda: (cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=1)  # noqa: E731  nothing can fall further
+
+    def zero() -> np.ndarray:  # nothing can fall further
+        return (cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=1)
+
     converged = ~np.isfinite(cap) | zero()
     stopped = np.zeros(len(cap), dtype=bool)  # still falling when the patterns reached their finest step
     idx3 = np.stack(np.unravel_index(start.voxel, grid.shape), axis=1)
