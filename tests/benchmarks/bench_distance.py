@@ -20,7 +20,6 @@ import time  # noqa: E402
 
 import coal  # noqa: E402
 import numpy as np  # noqa: E402
-
 import yaml  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -35,7 +34,6 @@ from capmap.dualarm.ocp import Context, NodeModel  # noqa: E402
 from capmap.dualarm.robot import build_dual_arm, fit_capsules  # noqa: E402
 from capmap.dualarm.scene import nearest_solid, scan  # noqa: E402
 from capmap.dualarm.solver import initial_guess, node_pairs  # noqa: E402
-
 from tests.reference.coal_shapes import capsule  # noqa: E402
 
 

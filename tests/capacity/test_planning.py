@@ -70,9 +70,12 @@ def test_plan_waypoints_are_true_start_voxel_centres_true_goal():
 
 @pytest.mark.parametrize("where, change, expect, exc", [
     ("start", lambda c: None, "task.start_m = [-1, 0.5, 0.5] is outside the workspace grid", CapmapError),
-    ("goal_weak", lambda c: c.__setitem__((3, 0, 0), 900.0), "task.goal_m = [3.5, 0.5, 0.5] lies in voxel (3, 0, 0) whose capacity 900.0 kg is below task.payload_kg = 1500", NoPath),
-    ("start_unreachable", lambda c: c.__setitem__((0, 0, 0), np.nan), "task.start_m = [0.5, 0.5, 0.5] lies in voxel (0, 0, 0), which has no point reachable", CapmapError),
-    ("wall", lambda c: c.__setitem__((slice(1, 3), slice(None), slice(None)), 100.0), "no path from the start voxel (0, 0, 0) to the goal voxel (3, 0, 0)", NoPath),
+    ("goal_weak", lambda c: c.__setitem__((3, 0, 0), 900.0),
+     "task.goal_m = [3.5, 0.5, 0.5] lies in voxel (3, 0, 0) whose capacity 900.0 kg is below task.payload_kg = 1500", NoPath),
+    ("start_unreachable", lambda c: c.__setitem__((0, 0, 0), np.nan),
+     "task.start_m = [0.5, 0.5, 0.5] lies in voxel (0, 0, 0), which has no point reachable", CapmapError),
+    ("wall", lambda c: c.__setitem__((slice(1, 3), slice(None), slice(None)), 100.0),
+     "no path from the start voxel (0, 0, 0) to the goal voxel (3, 0, 0)", NoPath),
 ])
 def test_plan_errors_name_the_problem(where, change, expect, exc):
     grid, cap = _grid_case()

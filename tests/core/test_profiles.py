@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from capmap.errors import CapmapError
 from capmap.core.profiles import sample_segments, scurve, trapezoid
+from capmap.errors import CapmapError
 
 
 @pytest.mark.parametrize("L, duration", [

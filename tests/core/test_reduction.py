@@ -2,8 +2,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.errors import CapmapError
 from capmap.core.reduction import lock
+from capmap.errors import CapmapError
 
 
 @pytest.mark.parametrize("joint", range(1, 8))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from capmap.dualarm.cloud import FitSettings, fit_envelope, min_area_rectangle, uncovered
-from capmap.dualarm.scene import Box, Cylinder, PanelSpec, Scene, ScanSettings, scan
+from capmap.dualarm.scene import Box, Cylinder, PanelSpec, ScanSettings, Scene, scan
 
 
 def _scene():

@@ -13,6 +13,7 @@ import pytest
 from tests.scenario import ROOT, X_DES, X_INI
 from tests.workflow.runs import config_file, planned_jobs, planned_jobs_of, snakemake_run
 
+
 def test_outputs_and_provenance(run_dir):
     tmp, _ = run_dir
     pts = pd.read_parquet(tmp / "results/voxels/points.parquet")

@@ -129,7 +129,8 @@ def direction_features(u: np.ndarray) -> np.ndarray:
                      u[:, 1] * u[:, 2]], axis=1)
 
 
-def affine_over_directions(coef: Coefficients, u: np.ndarray, motion: Motion, gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def affine_over_directions(coef: Coefficients, u: np.ndarray, motion: Motion,
+                           gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(y0, s), each (B, n_out, D), for every configuration x direction u (D, 3)."""
     v, a = motion.v_max_mps, motion.a_max_mps2
     phi = np.concatenate([np.ones((len(u), 1)), a * u, v**2 * direction_features(u)], axis=1)  # (D, 10)

@@ -218,7 +218,8 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         if 0.5 ** (rounds + 1) < s.finest_step:  # the patterns have reached their finest step: stop
             stopped[active] = ~open_fold
     return VoxelMinima(voxel=start.voxel, capacity_kg=cap, axis_capacity_kg=axis, n_points=n_pts,
-                       n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst, binding=binding, rounds=rounds,
+                       n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst, binding=binding,
+                       rounds=rounds,
                        n_evaluated=evaluated)
 
 

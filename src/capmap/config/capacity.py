@@ -12,9 +12,8 @@ from capmap.capacity import directions
 from capmap.capacity.directions import Directions
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.refine import RefineSettings
-from capmap.errors import CapmapError
 from capmap.config.validation import as_tuple, per_item
-from capmap.errors import ConfigError
+from capmap.errors import CapmapError, ConfigError
 
 __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "DirectionsConfig", "VerificationConfig",
            "rotation_from_rpy", "DEFAULT_DT_S", "REFINE_DEFAULTS", "refine_doc", "refine_settings", "PLAN_MOVES", "GAIN_TASKS"]

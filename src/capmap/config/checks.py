@@ -11,15 +11,15 @@ import numpy as np
 
 from capmap.config.atlas import AtlasConfig
 from capmap.config.capacity import TaskConfig, refine_settings
-from capmap.config.validation import per_item
 from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.estimate import estimate_map
 from capmap.config.failure import Failure, locked_arm, resolve_failure
 from capmap.config.following import FollowConfig
 from capmap.config.reconfig import rate_limits, reconfig_problem
 from capmap.config.robot_file import load
-from capmap.config.scene_file import load_scene
 from capmap.config.run import RunConfig, parse_config
+from capmap.config.scene_file import load_scene
+from capmap.config.validation import per_item
 from capmap.core import ik
 from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free

@@ -21,7 +21,8 @@ from capmap.dualarm.scene import ScanSettings
 from capmap.dualarm.settings import ALSettings, Weights
 from capmap.errors import ConfigError
 
-__all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "CheckSettings", "check_settings",
+__all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "CheckSettings",
+           "check_settings",
            "weights", "DEFAULT_FINE_FACTOR", "DEFAULT_ANIMATION_FPS"]
 
 DEFAULT_FINE_FACTOR = 5

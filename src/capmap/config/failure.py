@@ -26,7 +26,8 @@ import numpy as np
 from capmap.config.capacity import LockConfig, TaskConfig
 from capmap.core import ik
 from capmap.core.kinematics import rotation_log
-from capmap.core.reduction import LockedArm, lock as lock_joint
+from capmap.core.reduction import LockedArm
+from capmap.core.reduction import lock as lock_joint
 from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError, ConfigError

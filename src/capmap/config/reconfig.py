@@ -6,9 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.config.validation import per_item
 from capmap.config.platform_file import load_platform
-from capmap.config.validation import as_tuple
+from capmap.config.validation import as_tuple, per_item
 from capmap.errors import CapmapError, ConfigError
 from capmap.reconfig.law import QuinticLaw
 from capmap.reconfig.multiarm import PlatformDescription, PlatformState

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from capmap.config.atlas import AtlasConfig
 from capmap.config.capacity import (
     DirectionsConfig,
     LimitsConfig,
@@ -13,7 +14,6 @@ from capmap.config.capacity import (
     TaskConfig,
     VerificationConfig,
 )
-from capmap.config.atlas import AtlasConfig
 from capmap.config.dualarm import DualArmConfig
 from capmap.config.estimate import Estimate
 from capmap.config.failure import Failure

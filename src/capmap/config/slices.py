@@ -13,7 +13,8 @@ from capmap.config.robot_file import referenced_files
 from capmap.io.datasets import canonical, config_hash
 from capmap.io.fingerprint import file_fingerprints
 
-__all__ = ["task_slices", "canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices", "dualarm_slices",
+__all__ = ["task_slices", "canonical", "config_hash", "payload_label", "stage_slices", "follow_slices", "reconfig_slices",
+           "dualarm_slices",
            "atlas_slices", "STAGES"]
 
 STAGES = ("model", "sample", "capacity", "voxels", "refine", "plan", "verify")  # the capacity family, in order

@@ -19,7 +19,8 @@ from capmap.core import ik
 from capmap.core.reduction import LockedArm
 from capmap.errors import CapmapError
 
-__all__ = ["Tracking", "nearest_turn", "nearest_branch", "start_branch", "track", "range_excursions", "START_TOL_RAD", "MAX_STEP_RAD"]
+__all__ = ["Tracking", "nearest_turn", "nearest_branch", "start_branch", "track", "range_excursions", "START_TOL_RAD",
+           "MAX_STEP_RAD"]
 
 START_TOL_RAD = np.deg2rad(2.0)  # a start configuration may be rounded: allow 2 deg to the nearest exact branch
 MAX_STEP_RAD = np.deg2rad(5.0)  # largest joint change between consecutive samples on one branch

@@ -24,7 +24,8 @@ from capmap.dualarm.collision import Pairs
 from capmap.dualarm.ocp import Context, NodeModel
 from capmap.dualarm.settings import ALSettings, Weights
 
-__all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs", "all_distances"]
+__all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
+           "all_distances"]
 
 
 @dataclass(frozen=True)

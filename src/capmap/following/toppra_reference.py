@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-
 import toppra as ta
 import toppra.algorithm as algo
 import toppra.constraint as constraint

@@ -50,7 +50,8 @@ def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_
     dx = vox.attrs["capmap"]["grid"]["edge_m"]
     lo = ts[["x_m", "y_m", "z_m"]].min().to_numpy() - 1.5 * dx
     hi = ts[["x_m", "y_m", "z_m"]].max().to_numpy() + 1.5 * dx
-    near = reach[np.all((reach[["x_m", "y_m", "z_m"]].to_numpy() >= lo) & (reach[["x_m", "y_m", "z_m"]].to_numpy() <= hi), axis=1)]
+    xyz = reach[["x_m", "y_m", "z_m"]].to_numpy()
+    near = reach[np.all((xyz >= lo) & (xyz <= hi), axis=1)]
     vmin, vmax = (np.nanpercentile(reach.capacity_kg, [1, 99]) if len(reach) else (0, 1))
     fig = plt.figure(figsize=(13, 5.5))
     ax = fig.add_subplot(1, 2, 1, projection="3d")

@@ -11,9 +11,9 @@ import numpy as np
 import pandas as pd
 
 from capmap.config.capacity import rotation_from_rpy
-from capmap.config.validation import per_item
 from capmap.config.following import FollowConfig
 from capmap.config.robot_file import load
+from capmap.config.validation import per_item
 from capmap.core.reduction import LockedArm, free
 from capmap.following.comparison import compare
 from capmap.following.follower import FollowSettings, follow_segment

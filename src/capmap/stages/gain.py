@@ -1,10 +1,11 @@
 """Stage plan_gain: what direction-aware moves change, shown on the run's own map. For every
-task payload M and a few payloads from the map itself (percentiles of its voxel capacities), random (start, goal) pairs of voxel centres whose voxels carry M in every
-direction are planned twice, with the paper's isotropic map and with direction-aware moves;
-every direction-aware plan is verified (the spec's step 9: trapezoidal segments, continuous IK,
-loads carrying M) on the first IK branch at its start that tracks the whole path within the
-joint ranges, and so is the direct line on that branch: the tasks where the line fails and the
-verified detour carries M are what the planner is for."""
+task payload M and a few payloads from the map itself (percentiles of its voxel capacities),
+random (start, goal) pairs of voxel centres whose voxels carry M in every direction are planned
+twice, with the paper's isotropic map and with direction-aware moves; every direction-aware
+plan is verified (the spec's step 9: trapezoidal segments, continuous IK, loads carrying M) on
+the first IK branch at its start that tracks the whole path within the joint ranges, and so is
+the direct line on that branch: the tasks where the line fails and the verified detour carries
+M are what the planner is for."""
 
 from __future__ import annotations
 

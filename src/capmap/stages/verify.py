@@ -21,8 +21,8 @@ from capmap.errors import CapmapError, ConfigError, NoPath
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.arm import arm_from
+from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.common import parse_slice
 
 __all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "stage_verify"]
