@@ -27,6 +27,8 @@ CONFIG_CASES = [
     ({"tasks": [_TASK]}, "tasks[0] (t).q_start_deg is"),
     ({"tasks": [{**_TASK, "q_start_deg": [90, 0, 0, 0, 0, 0, 0]}]}, "tasks[0] (t).q_start_deg[0] = 90 but joint 1"),
     ({"tasks": [{**_TASK, "name": "Bad Name"}]}, "tasks"),
+    ({"tasks": [{**_TASK, "q_start_deg": [100, 124, 98, 130, 146, 174, 57], "goal_m": [30, 0, 0]}]},
+     "tasks[0] (t).goal_m = [30, 0, 0] is not reachable"),
     ({"voxels.refine": {"min_points": 300}}, "voxels.refine: min_points = 300"),
     ({"planning.moves": "diagonal"}, "planning.moves"),
     ({"lock.joint": 9}, "lock.joint = 9 is out of range"),

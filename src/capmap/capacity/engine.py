@@ -25,7 +25,7 @@ from capmap.errors import CapmapError
 
 __all__ = ["LoadLimits", "Motion", "Coefficients", "coefficients", "coefficients_pinocchio", "state_affine", "joint_state_affine",
            "state_capacity", "direction_features", "affine_over_directions", "capacity_over_directions",
-           "PointCapacity", "point_capacity", "margin_pct", "SINGULAR"]
+           "PointCapacity", "point_capacity", "argmin_per_group", "margin_pct", "SINGULAR"]
 
 SINGULAR = "singular"
 
@@ -132,11 +132,9 @@ def direction_features(u: np.ndarray) -> np.ndarray:
 def affine_over_directions(coef: Coefficients, u: np.ndarray, motion: Motion,
                            gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(y0, s), each (B, n_out, D), for every configuration x direction u (D, 3)."""
-    v, a = motion.v_max_mps, motion.a_max_mps2
-    phi = np.concatenate([np.ones((len(u), 1)), a * u, v**2 * direction_features(u)], axis=1)  # (D, 10)
     C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (B, n_out, 10)
-    y0 = C @ phi.T
-    s = coef.S @ (a * u - gravity).T
+    y0 = C @ _phi(u, motion).T
+    s = coef.S @ (motion.a_max_mps2 * u - gravity).T
     return y0, s
 
 
@@ -165,6 +163,15 @@ class PointCapacity:
     n_states: np.ndarray
     names: tuple[str, ...]
     axis_capacity_kg: np.ndarray | None = None  # (N, P): per antipodal pair of ``axes`` (NaN if unreachable)
+
+
+def argmin_per_group(values: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """Rows (G,) of the smallest value (N,) of each group present in groups (N,) int, groups in
+    ascending order; ties go to the first row."""
+    order = np.lexsort((values, groups))
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = groups[order][1:] != groups[order][:-1]
+    return order[first]
 
 
 def _phi(u: np.ndarray, motion: Motion) -> np.ndarray:
@@ -205,11 +212,7 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
             axis_cap[np.asarray(n_solutions) == 0] = np.nan
         c_cfg[coef.singular] = 0.0
         b_cfg[coef.singular] = len(limits)
-        # min over each point's configurations
-        order = np.lexsort((c_cfg, pts))
-        first = np.ones(len(order), dtype=bool)
-        first[1:] = pts[order][1:] != pts[order][:-1]
-        sel = order[first]
+        sel = argmin_per_group(c_cfg, pts)  # min over each point's configurations
         p = pts[sel]
         cap[p] = c_cfg[sel]
         branch[p] = brs[sel]

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.voxels import Grid
 from capmap.errors import CapmapError
 
@@ -142,28 +143,23 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         if not len(active):
             break
         rounds += 1
-        # new points: the pattern around the voxel's worst point so far (the voxel's corners in the
-        # first round), then uniform points doubling the count (capped)
+        # new points: the voxel's corners in the first round; then a pattern around its worst point so
+        # far and a compass around the worst point of each axis still falling; uniform points
+        # doubling the count (capped)
         if rounds == 1:
             local = np.repeat(active, 8)
             local_pts = grid.lower + (idx3[local] + np.tile(_CORNERS, (len(active), 1))) * grid.edge_m
         else:
-            has = np.isfinite(cap[active])
-            local = np.repeat(active[has], len(_PATTERN))
             h = grid.edge_m * 0.5 ** rounds
-            lo = grid.lower + idx3[local] * grid.edge_m
-            local_pts = np.clip(worst[local] + h * np.tile(_PATTERN, (int(has.sum()), 1)), lo, lo + grid.edge_m)
-        if rounds > 1:  # a compass pattern around the worst point of each axis still falling
+            has = active[np.isfinite(cap[active])]
             v, a = np.nonzero(axis_open[active] & np.isfinite(axis[active]))
             v = active[v]
-            # axes whose minima sit at the same point (often a corner) share one pattern
-            centre, keep = np.unique(np.column_stack([v, axis_worst[v, a]]), axis=0, return_index=True)
+            # axes whose minima sit at the same point (often a corner) share one compass
+            _, keep = np.unique(np.column_stack([v, axis_worst[v, a]]), axis=0, return_index=True)
             v, centre = v[keep], axis_worst[v[keep], a[keep]]
-            h = grid.edge_m * 0.5 ** rounds
-            lo = grid.lower + idx3[v] * grid.edge_m
-            ap = np.clip(centre[:, None, :] + h * _COMPASS, lo[:, None, :], lo[:, None, :] + grid.edge_m)
-            local = np.concatenate([local, np.repeat(v, len(_COMPASS))])
-            local_pts = np.concatenate([local_pts, ap.reshape(-1, 3)])
+            local = np.concatenate([np.repeat(has, len(_PATTERN)), np.repeat(v, len(_COMPASS))])
+            local_pts = np.concatenate([_around(worst[has], _PATTERN, h, grid, idx3[has]),
+                                        _around(centre, _COMPASS, h, grid, idx3[v])])
         local = np.concatenate([local, bisect])
         local_pts = np.concatenate([local_pts, 0.5 * (fa[bisect] + fb[bisect])])
         n_local = np.bincount(local, minlength=len(cap))[active]
@@ -178,10 +174,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         ev = evaluate(pts)
         evaluated += len(pts)
         c = np.where(np.isfinite(ev.capacity_kg), ev.capacity_kg, np.inf)
-        # per voxel: the new minimum and where it is
-        order = np.lexsort((c, owner))
-        first = np.r_[True, owner[order][1:] != owner[order][:-1]]
-        best_i = order[first]
+        best_i = argmin_per_group(c, owner)  # per voxel: the new minimum and where it is
         best_v = owner[best_i]
         old = cap[best_v]
         lower = c[best_i] < old
@@ -191,24 +184,20 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         axis_old = axis[active].copy()
         ac = np.where(np.isfinite(ev.axis_capacity_kg), ev.axis_capacity_kg, np.inf)
         for a in range(axis.shape[1]):  # per axis: the new minimum and where it is
-            order = np.lexsort((ac[:, a], owner))
-            first = np.r_[True, owner[order][1:] != owner[order][:-1]]
-            bi = order[first]
+            bi = argmin_per_group(ac[:, a], owner)
             bv = owner[bi]
             better = ac[bi, a] < axis[bv, a]
             axis[bv[better], a] = ac[bi[better], a]
             axis_worst[bv[better], a] = pts[bi[better]]
-        axis_drop = np.max(np.where(axis_old > 0, (axis_old - axis[active]) / np.where(axis_old > 0, axis_old, 1.0), 0.0),
-                           axis=1, initial=0.0)
+        axis_drop = _rel_drop(axis_old, axis[active])  # (active, A)
         _track_folds(owner, pts, ev.n_branches, len(local) - len(bisect), bisect, ref_pt, ref_n, fold, fa, fb, na)
         n_pts[active] += new
         np.add.at(n_reach, owner, np.isfinite(ev.capacity_kg).astype(int))
         change[active] = 0.0
-        drop = np.where(old > 0, (old - cap[best_v]) / np.where(old > 0, old, 1.0), 0.0)
-        change[best_v] = drop
-        change[active] = np.maximum(change[active], np.nan_to_num(axis_drop))  # every axis has converged too
-        axis_open[active] = (np.where(axis_old > 0, (axis_old - axis[active]) / np.where(axis_old > 0, axis_old, 1.0),
-                                      0.0) >= s.rel_tol) & (0.5 ** (rounds + 1) >= s.finest_step)
+        change[best_v] = _rel_drop(old, cap[best_v])
+        # every axis has converged too
+        change[active] = np.maximum(change[active], np.nan_to_num(axis_drop.max(axis=1, initial=0.0)))
+        axis_open[active] = (axis_drop >= s.rel_tol) & (0.5 ** (rounds + 1) >= s.finest_step)
         enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
         open_fold = fold[active] & (np.linalg.norm(fb[active] - fa[active], axis=1) > s.fold_tol_m)
         # a closed bracket with capacity 0 is a singular fold: across it every axis falls to 0 as well
@@ -221,6 +210,18 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
                        n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst, binding=binding,
                        rounds=rounds,
                        n_evaluated=evaluated)
+
+
+def _rel_drop(old: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """(old - new) / old elementwise, 0 where old is not positive (nothing left to fall)."""
+    return np.where(old > 0, (old - new) / np.where(old > 0, old, 1.0), 0.0)
+
+
+def _around(centres: np.ndarray, pattern: np.ndarray, h: float, grid: Grid, idx3: np.ndarray) -> np.ndarray:
+    """Points (len(centres) * len(pattern), 3) m: each centre (n, 3) plus h times the pattern (p, 3),
+    clipped to its voxel idx3 (n, 3)."""
+    lo = (grid.lower + idx3 * grid.edge_m)[:, None, :]
+    return np.clip(centres[:, None, :] + h * pattern, lo, lo + grid.edge_m).reshape(-1, 3)
 
 
 def _track_folds(owner, pts, n_br, n_first_local, bisect, ref_pt, ref_n, fold, fa, fb, na) -> None:

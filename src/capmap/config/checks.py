@@ -77,10 +77,13 @@ def check_dt(cfg: RunConfig, source: str = "config") -> None:
                           f"{t_acc / MIN_PHASE_INTERVALS:.3g} s ({MIN_PHASE_INTERVALS} samples per phase)")
 
 
-def check_goal(arm: LockedArm, task: TaskConfig, failure: Failure, source: str = "config") -> None:
-    """The goal reachable at the task orientation by the locked arm (the start is, by resolution)."""
-    if ik.solve(arm, np.asarray(task.goal_m)[None], task.rotation).n_solutions[0] == 0:
-        raise ConfigError(f"{source}: task.goal_m = [{', '.join(f'{v:g}' for v in task.goal_m)}] is not reachable "
+def check_goal(arm: LockedArm, task: TaskConfig, failure: Failure, source: str = "config",
+               goal_m=None, key: str = "task.goal_m") -> None:
+    """The goal (``task.goal_m``, or ``goal_m`` named ``key``) reachable at the task orientation by
+    the locked arm (the start is, by resolution)."""
+    goal = task.goal_m if goal_m is None else goal_m
+    if ik.solve(arm, np.asarray(goal, dtype=float)[None], task.rotation).n_solutions[0] == 0:
+        raise ConfigError(f"{source}: {key} = [{', '.join(f'{v:g}' for v in goal)}] is not reachable "
                           f"at task.orientation_rpy_deg = {list(task.orientation_rpy_deg)} with joint {failure.joint} "
                           f"locked at {failure.angle_deg:g} deg")
 
@@ -104,8 +107,7 @@ def check_tasks(tasks: list, arm: LockedArm, task: TaskConfig, failure: Failure,
             start_branch(arm, np.asarray(t["start_m"], dtype=float), task.rotation, np.deg2rad(q)[arm.active])
         except CapmapError as exc:
             raise ConfigError(f"{source}: {exc.in_terms(start=f'{key}.start_m', q_ini=f'{key}.q_start_deg')}") from None
-        if ik.solve(arm, np.asarray(t["goal_m"], dtype=float)[None], task.rotation).n_solutions[0] == 0:
-            raise ConfigError(f"{source}: {key}.goal_m = {t['goal_m']} is not reachable at task.orientation_rpy_deg")
+        check_goal(arm, task, failure, source, t["goal_m"], f"{key}.goal_m")
 
 
 def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> None:

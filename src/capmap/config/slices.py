@@ -60,6 +60,8 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     """
     task = dict(doc["task"])
     edge = doc["voxels"]["edge_m"]
+    refine = refine_doc(doc["voxels"])
+    payloads = sorted(float(m) for m in np.atleast_1d(doc["task"]["payload_kg"]))  # every payload of the task
     if payload_kg is not None:
         task["payload_kg"] = float(payload_kg)
     own = {
@@ -70,13 +72,11 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
                      "limits": per_item_canonical(doc["limits"]), "directions": doc["directions"]},
         "voxels": {"voxels": {"edge_m": edge}},
         # refinement sharpens voxels near every task payload: it depends on the list, not on one job's payload
-        "refine": {"refine": refine_doc(doc["voxels"]),
-                   **({"payloads_kg": sorted(float(m) for m in np.atleast_1d(doc["task"]["payload_kg"]))}
-                      if refine_doc(doc["voxels"]) is not None else {})},
+        "refine": {"refine": refine, **({"payloads_kg": payloads} if refine is not None else {})},
         "plan": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m")},
                  "planning": {"moves": doc.get("planning", {}).get("moves", PLAN_MOVES[0])}},
         # every payload x random (start, goal) pairs: isotropic against direction-aware moves, verified
-        "gain": {"payloads_kg": sorted(float(m) for m in np.atleast_1d(doc["task"]["payload_kg"])),
+        "gain": {"payloads_kg": payloads,
                  "gain_tasks": doc.get("planning", {}).get("gain_tasks", GAIN_TASKS),
                  "verification": {"dt_s": doc.get("verification", {}).get("dt_s", DEFAULT_DT_S)}},
         "verify": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m", "q_start_deg", "name") if k in task},

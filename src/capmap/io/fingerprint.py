@@ -84,14 +84,20 @@ def module_closure(name: str) -> tuple[str, ...]:
 
 
 @lru_cache(maxsize=None)
+def _module_tree(mod: str) -> ast.Module:
+    """A module's syntax tree without docstrings, parsed once per process (its imports are intact)."""
+    return _tree(_module_file(mod))
+
+
+@lru_cache(maxsize=None)
 def _module_imports(mod: str) -> frozenset[str]:
-    return frozenset(_imports(mod, ast.parse(_module_file(mod).read_text())))
+    return frozenset(_imports(mod, _module_tree(mod)))
 
 
 @lru_cache(maxsize=None)
 def _module_digest(mod: str) -> bytes:
-    """sha256 of a module's syntax tree without docstrings (each module parsed once per process)."""
-    return hashlib.sha256(ast.dump(_tree(_module_file(mod))).encode()).digest()
+    """sha256 of a module's syntax tree without docstrings."""
+    return hashlib.sha256(ast.dump(_module_tree(mod)).encode()).digest()
 
 
 @lru_cache(maxsize=None)
@@ -108,9 +114,9 @@ def code_fingerprint(name: str) -> str:
 def script_fingerprint(path: str | Path) -> str:
     """16 hex digits of a Snakemake script (its syntax tree: not its comments) and of every capmap
     module it runs (:func:`code_fingerprint` of each module it imports)."""
-    path = Path(path)
-    h = hashlib.sha256(ast.dump(_tree(path)).encode())
-    mods = sorted(_imports("__main__", ast.parse(path.read_text())))
+    tree = _tree(Path(path))
+    h = hashlib.sha256(ast.dump(tree).encode())
+    mods = sorted(_imports("__main__", tree))
     for mod in mods:
         h.update(code_fingerprint(mod).encode())
     return h.hexdigest()[:16]

@@ -181,12 +181,12 @@ def voxel_table(pts: pd.DataFrame, edge_m: float) -> tuple[pd.DataFrame, Grid]:
     centres = grid.centres(idx)
     worst = vm.worst_point
     binding = np.where(worst >= 0, pts.binding.astype(str).to_numpy()[np.maximum(worst, 0)], "")
+    pidx = grid.index(xyz)
     axis = np.full((grid.n_voxels, len(AXIS_COLUMNS)), np.nan)
     if AXIS_COLUMNS[0] in pts:
-        vi = grid.index(xyz)
-        r = pts.reachable.to_numpy() & (vi[:, 0] >= 0)
+        r = pts.reachable.to_numpy() & (pidx[:, 0] >= 0)
         axis[:] = np.inf
-        np.fmin.at(axis, grid.flat(vi[r]), pts.loc[r, AXIS_COLUMNS].to_numpy())
+        np.fmin.at(axis, grid.flat(pidx[r]), pts.loc[r, AXIS_COLUMNS].to_numpy())
         axis[vm.n_reachable == 0] = np.nan
     wxyz = np.where(worst[:, None] >= 0, xyz[np.maximum(worst, 0)], np.nan)
     vox = pd.DataFrame({"i": idx[:, 0], "j": idx[:, 1], "k": idx[:, 2],
@@ -197,7 +197,6 @@ def voxel_table(pts: pd.DataFrame, edge_m: float) -> tuple[pd.DataFrame, Grid]:
                         "worst_x_m": wxyz[:, 0], "worst_y_m": wxyz[:, 1], "worst_z_m": wxyz[:, 2]})
     for c, col in enumerate(AXIS_COLUMNS):
         vox[col] = axis[:, c]
-    pidx = grid.index(xyz)
     pts["i"], pts["j"], pts["k"] = pidx[:, 0], pidx[:, 1], pidx[:, 2]
     return vox, grid
 

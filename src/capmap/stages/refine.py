@@ -36,6 +36,11 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
     limits = LimitsConfig.from_doc(cs["limits"]).resolve(robot.n_joints).for_arm(arm)
     dirs = DirectionsConfig.from_doc(cs["directions"]).build()
     names = list(limits.names) + [SINGULAR]
+    index = {n: i for i, n in enumerate(names)}
+
+    def codes(binding: pd.Series) -> np.ndarray:  # limit names -> their index (-1: none, unreachable)
+        return binding.astype(str).map(index).fillna(-1).astype(int).to_numpy()
+
     vox = datasets.read(voxels)
     grid = grid_of(vox)
     flat = grid.flat(vox[["i", "j", "k"]].to_numpy())
@@ -43,15 +48,15 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
 
     def evaluate(points: np.ndarray) -> Evaluation:
         df = capacity_table(arm, np.arange(len(points)), points, rotation, motion, limits, dirs, chunk=2000)
-        code = df.binding.astype(str).map({n: i for i, n in enumerate(names)}).fillna(-1).astype(int).to_numpy()
-        return Evaluation(df.capacity_kg.to_numpy(), df[AXIS_COLUMNS].to_numpy(), code, df.n_branches.to_numpy())
+        return Evaluation(df.capacity_kg.to_numpy(), df[AXIS_COLUMNS].to_numpy(), codes(df.binding),
+                          df.n_branches.to_numpy())
 
     start = VoxelMinima(
         voxel=grid.flat(mine[["i", "j", "k"]].to_numpy()), capacity_kg=mine.capacity_kg.to_numpy(),
         axis_capacity_kg=mine[AXIS_COLUMNS].to_numpy(), n_points=mine.n_points.to_numpy(),
         n_reachable=mine.n_reachable.to_numpy(), last_change=np.zeros(len(mine)),
         converged=np.zeros(len(mine), dtype=bool), worst_m=mine[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy(),
-        binding=mine.binding.astype(str).map({n: i for i, n in enumerate(names)}).fillna(-1).astype(int).to_numpy(),
+        binding=codes(mine.binding),
         rounds=0, n_evaluated=0)
     t0 = time.perf_counter()
 

@@ -57,7 +57,7 @@ def stage_plan(voxels: str, out: str, slice_json: str) -> None:
             a = np.zeros(len(wv), dtype=int)
             a[move] = axis_of(step[move[1:]])
             along = np.full(len(wv), np.nan)
-            along[move] = np.minimum(axis_cap[f[move], a[move]], axis_cap[np.r_[f[:-1]][move[1:]], a[move]])
+            along[move] = np.minimum(axis_cap[f[move], a[move]], axis_cap[f[:-1][move[1:]], a[move]])
             df["move_axis"] = np.where(move, np.array(AXIS_LABELS)[a], "")
             df["move_capacity_kg"] = along
         cost, expanded = p.cost_m, p.expanded
