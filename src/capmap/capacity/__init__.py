@@ -5,6 +5,8 @@
 - :mod:`~capmap.capacity.engine`       exact dynamic load-carrying capacity of configurations and points
 - :mod:`~capmap.capacity.voxels`       the voxel grid and per-voxel minima
 - :mod:`~capmap.capacity.planning`     improved A* through the voxels that carry the payload
+- :mod:`~capmap.capacity.branch_planning` A* over (voxel, IK branch) states: plans on the branch that is executed
+- :mod:`~capmap.capacity.branch_moves` tracking a branch along moves, their capacity, the search's IK caches
 - :mod:`~capmap.capacity.verification` the real motion along a path: loads, segment capacities, verdicts
 """
 
@@ -14,6 +16,9 @@ _EXPORTS = {
     'directions': 'directions',
     'engine': 'engine',
     'planning': 'planning',
+    'branch_planning': 'branch_planning',
+    'branch_moves': 'branch_moves',
+    'plan_on_branch': 'branch_planning',
     'sampling': 'sampling',
     'verification': 'verification',
     'voxels': 'voxels',
@@ -35,6 +40,9 @@ __all__ = [
     "engine",
     "judge",
     "plan",
+    "plan_on_branch",
+    "branch_planning",
+    "branch_moves",
     "planning",
     "point_capacity",
     "sampling",

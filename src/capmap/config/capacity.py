@@ -20,7 +20,7 @@ __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "Direct
 
 REFINE_DEFAULTS = {"rel_tol": 0.005, "min_points": 16, "max_points": 256, "near_band": 0.1, "near_min_points": 64,
                    "seed": 0}
-PLAN_MOVES = ("axis", "isotropic")  # planning.moves; the first is the default
+PLAN_MOVES = ("branch", "axis", "isotropic")  # planning.moves; the first is the default
 GAIN_TASKS = 30  # planning.gain_tasks: random tasks per payload comparing the two kinds of moves
 
 

@@ -37,6 +37,13 @@ def per_item_canonical(section: dict) -> dict:
     return {k: (v[0] if isinstance(v, list) and v and all(x == v[0] for x in v) else v) for k, v in section.items()}
 
 
+def _plan_slice(task: dict, moves: str) -> dict:
+    """What a plan depends on: the task's payload, start and goal, the kind of moves and, for
+    moves on the executed branch, the start configuration (it picks the branch)."""
+    keys = ("payload_kg", "start_m", "goal_m") + (("q_start_deg",) if moves == "branch" else ())
+    return {"task": {k: task[k] for k in keys}, "planning": {"moves": moves}}
+
+
 def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     """Per-stage config slices: ``own`` (the keys a stage reads itself) and ``upstream`` (its
     own plus every earlier stage's: what its output depends on). ``upstream`` is what the
@@ -47,7 +54,7 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
     capacity: task orientation/speed/acceleration, limits, directions
     voxels:   voxels.edge_m
     refine:   voxels.refine and the task payloads (voxels near a payload are refined further)
-    plan:     task payload/start/goal, planning.moves
+    plan:     task payload/start/goal, planning.moves (branch: also the start configuration)
     gain:     the map (refine upstream), payloads, planning.gain_tasks, verification.dt_s
     verify:   task payload/start/goal/start configuration, verification
 
@@ -73,8 +80,7 @@ def stage_slices(doc: dict, payload_kg: float | None = None) -> dict[str, dict]:
         "voxels": {"voxels": {"edge_m": edge}},
         # refinement sharpens voxels near every task payload: it depends on the list, not on one job's payload
         "refine": {"refine": refine, **({"payloads_kg": payloads} if refine is not None else {})},
-        "plan": {"task": {k: task[k] for k in ("payload_kg", "start_m", "goal_m")},
-                 "planning": {"moves": doc.get("planning", {}).get("moves", PLAN_MOVES[0])}},
+        "plan": _plan_slice(task, doc.get("planning", {}).get("moves", PLAN_MOVES[0])),
         # every payload x random (start, goal) pairs: isotropic against direction-aware moves, verified
         "gain": {"payloads_kg": payloads,
                  "gain_tasks": doc.get("planning", {}).get("gain_tasks", GAIN_TASKS),

@@ -8,7 +8,7 @@ from dataclasses import asdict
 import numpy as np
 import pandas as pd
 
-from capmap.capacity import planning
+from capmap.capacity import branch_planning, planning
 from capmap.capacity.directions import AXIS_LABELS, axis_of
 from capmap.capacity.engine import Motion
 from capmap.capacity.verification import PathResult, judge, verify_path
@@ -25,14 +25,67 @@ from capmap.stages.arm import arm_from
 from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.common import parse_slice
 
-__all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "stage_verify"]
+__all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "branch_deviation_deg", "stage_verify"]
 
-PLAN_KEYS = {"start": "task.start_m", "goal": "task.goal_m", "payload": "task.payload_kg"}  # planning's roles
+PLAN_KEYS = {"start": "task.start_m", "goal": "task.goal_m", "payload": "task.payload_kg",
+             "q_start": "task.q_ini_deg"}  # planning's roles
 WAYPOINT_COLUMNS = ["waypoint", "kind", "x_m", "y_m", "z_m", "i", "j", "k", "voxel_capacity_kg"]
 
 
+def _grid_plan(grid, vox: pd.DataFrame, task: dict, payload: float, moves: str) -> tuple[pd.DataFrame, float, int, str]:
+    """A* on the voxel map (``axis`` or ``isotropic`` moves): waypoints table, cost, expansions, log line."""
+    cap = vox.capacity_kg.to_numpy()
+    axis_cap = vox[AXIS_COLUMNS].to_numpy() if moves == "axis" else None
+    p = planning.plan(grid, cap, task["start_m"], task["goal_m"], payload, axis_cap)
+    wv = p.waypoint_voxel
+    df = pd.DataFrame({"waypoint": np.arange(len(p.waypoints)), "kind": p.waypoint_kind,
+                       "x_m": p.waypoints[:, 0], "y_m": p.waypoints[:, 1], "z_m": p.waypoints[:, 2],
+                       "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2], "voxel_capacity_kg": cap[grid.flat(wv)]})
+    if axis_cap is not None:  # the capacity along the move that arrives at each voxel (both voxels)
+        f = grid.flat(wv)
+        step = np.diff(wv, axis=0)
+        move = np.r_[False, np.any(step != 0, axis=1)]
+        a = np.zeros(len(wv), dtype=int)
+        a[move] = axis_of(step[move[1:]])
+        along = np.full(len(wv), np.nan)
+        along[move] = np.minimum(axis_cap[f[move], a[move]], axis_cap[f[:-1][move[1:]], a[move]])
+        df["move_axis"] = np.where(move, np.array(AXIS_LABELS)[a], "")
+        df["move_capacity_kg"] = along
+    line = (f"{moves} moves: {len(p.voxel_path)} voxels, {len(df)} waypoints, A* cost {p.cost_m:.3f} m, path "
+            f"{p.length_m:.3f} m, {p.expanded} voxels expanded; weakest voxel on it {df.voxel_capacity_kg.min():.1f} kg"
+            + (f", weakest move {np.nanmin(df.move_capacity_kg):.1f} kg" if axis_cap is not None
+               and df.move_capacity_kg.notna().any() else ""))
+    return df, p.cost_m, p.expanded, line
+
+
+def _branch_plan(deps: dict, grid, vox: pd.DataFrame, task: dict, payload: float) -> tuple[pd.DataFrame, float, int, str]:
+    """A* over (voxel, IK branch) states on the start configuration's branch: waypoints table with
+    the planned configuration at each waypoint, cost, expansions, log line."""
+    robot, arm = arm_from(deps)
+    cs = deps["capacity"]["task"]
+    limits = LimitsConfig.from_doc(deps["capacity"]["limits"]).resolve(robot.n_joints).for_arm(arm)
+    problem = branch_planning.BranchProblem(ArmDynamics(arm), grid, rotation_from_rpy(cs["orientation_rpy_deg"]),
+                                            Motion(cs["v_max_mps"], cs["a_max_mps2"]), limits,
+                                            (vox.n_reachable > 0).to_numpy())
+    q_start = np.deg2rad(np.asarray(task["q_start_deg"], dtype=float))[arm.active]
+    p = branch_planning.plan_on_branch(problem, task["start_m"], task["goal_m"], q_start, payload)
+    wv = p.waypoint_voxel
+    df = pd.DataFrame({"waypoint": np.arange(len(p.waypoints)), "kind": p.waypoint_kind,
+                       "x_m": p.waypoints[:, 0], "y_m": p.waypoints[:, 1], "z_m": p.waypoints[:, 2],
+                       "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2],
+                       "voxel_capacity_kg": vox.capacity_kg.to_numpy()[grid.flat(wv)],
+                       "move_capacity_kg": p.move_capacity_kg})
+    for c, j in enumerate(arm.active_joint_numbers):
+        df[f"q_j{j}_deg"] = np.rad2deg(p.q[:, c])
+    line = (f"branch moves: {len(df)} waypoints, path {p.length_m:.3f} m, {p.expanded} of {p.states} states expanded "
+            f"({p.voxels_solved} voxels' moves tracked); weakest move {np.nanmin(p.move_capacity_kg):.1f} kg at the "
+            f"tracked samples (the voxel map, every branch: {df.voxel_capacity_kg.min():.1f} kg)")
+    return df, p.length_m, p.expanded, line
+
+
 def stage_plan(voxels: str, out: str, slice_json: str) -> None:
-    """A* through the voxels that carry the task payload; a payload with no path is recorded
+    """Plan through the voxels that carry the task payload (``planning.moves``: on the executed
+    branch, or A* on the map's axis or isotropic values); a payload with no path is recorded
     (status ``no_path`` and the reason in the provenance, zero waypoints), not an error."""
     deps = parse_slice(slice_json)
     task = deps["plan"]["task"]
@@ -41,30 +94,13 @@ def stage_plan(voxels: str, out: str, slice_json: str) -> None:
     moves = deps["plan"]["planning"]["moves"]
     vox = datasets.read(voxels)
     grid = grid_of(vox)
-    cap = vox.capacity_kg.to_numpy()
-    axis_cap = vox[AXIS_COLUMNS].to_numpy() if moves == "axis" else None
     status, reason, cost, expanded = "ok", "", float("nan"), 0
     try:
-        p = planning.plan(grid, cap, task["start_m"], task["goal_m"], payload, axis_cap)
-        wv = p.waypoint_voxel
-        df = pd.DataFrame({"waypoint": np.arange(len(p.waypoints)), "kind": p.waypoint_kind,
-                           "x_m": p.waypoints[:, 0], "y_m": p.waypoints[:, 1], "z_m": p.waypoints[:, 2],
-                           "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2], "voxel_capacity_kg": cap[grid.flat(wv)]})
-        if axis_cap is not None:  # the capacity along the move that arrives at each voxel (both voxels)
-            f = grid.flat(wv)
-            step = np.diff(wv, axis=0)
-            move = np.r_[False, np.any(step != 0, axis=1)]
-            a = np.zeros(len(wv), dtype=int)
-            a[move] = axis_of(step[move[1:]])
-            along = np.full(len(wv), np.nan)
-            along[move] = np.minimum(axis_cap[f[move], a[move]], axis_cap[f[:-1][move[1:]], a[move]])
-            df["move_axis"] = np.where(move, np.array(AXIS_LABELS)[a], "")
-            df["move_capacity_kg"] = along
-        cost, expanded = p.cost_m, p.expanded
-        log.info(f"{moves} moves: {len(p.voxel_path)} voxels, {len(df)} waypoints, A* cost {cost:.3f} m, path "
-                 f"{p.length_m:.3f} m, {expanded} voxels expanded; weakest voxel on it {df.voxel_capacity_kg.min():.1f} kg"
-                 + (f", weakest move {np.nanmin(df.move_capacity_kg):.1f} kg" if axis_cap is not None
-                    and df.move_capacity_kg.notna().any() else ""))
+        if moves == "branch":
+            df, cost, expanded, line = _branch_plan(deps, grid, vox, task, payload)
+        else:
+            df, cost, expanded, line = _grid_plan(grid, vox, task, payload, moves)
+        log.info(line)
     except NoPath as exc:
         status, reason = "no_path", exc.in_terms(**PLAN_KEYS)
         df = pd.DataFrame({c: pd.Series(dtype=object if c == "kind" else float) for c in WAYPOINT_COLUMNS})
@@ -100,6 +136,15 @@ def path_tables(name: str, res: PathResult, arm: LockedArm, limits: AffineLimits
     return ts, seg, {"path": name, "planner": planner, **asdict(verdict)}
 
 
+def branch_deviation_deg(res: PathResult, q_plan_deg: np.ndarray) -> float:
+    """Largest difference (deg) between the configurations the verification tracked at the
+    waypoints (the end of each segment, and the start) and the planned ones q_plan_deg (W, n)."""
+    tl = res.timeline
+    rows = [0] + [int(np.flatnonzero(tl.segment == k)[-1]) for k in range(len(tl.profiles))]
+    return float(np.nanmax(np.abs(np.rad2deg(res.tracking.q[rows]) - q_plan_deg), initial=np.nan)) \
+        if not np.isnan(res.tracking.q[rows]).any() else float("inf")
+
+
 def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv: str, out_md: str,
                  slice_json: str) -> None:
     """Verify the direct line and the planned path (if any) carrying the task payload."""
@@ -122,8 +167,13 @@ def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv
     ts_parts, seg_parts, rows = [], [], []
     for name, pts in paths.items():
         res = verify_path(dyn, pts, rotation, q_start, motion, dt, limits)
-        planner = "straight line" if name == "direct" else f"A*, {len(pts)} waypoints"
+        q_cols = [f"q_j{j}_deg" for j in arm.active_joint_numbers]
+        on_branch = name == "planned" and q_cols[0] in wp  # planned on the start's branch
+        planner = ("straight line" if name == "direct" else
+                   f"A* on the start's IK branch, {len(pts)} waypoints" if on_branch else f"A*, {len(pts)} waypoints")
         ts, seg, row = path_tables(name, res, arm, limits, payload, planner)
+        if on_branch:  # does the execution stay on the planned branch?
+            row["branch_deviation_deg"] = branch_deviation_deg(res, wp[q_cols].to_numpy())
         ts_parts.append(ts)
         seg_parts.append(seg)
         rows.append(row)
