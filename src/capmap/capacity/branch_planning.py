@@ -23,7 +23,7 @@ to pop the goal is the shortest executable one among these states. The samples a
 screen, not a proof: :func:`capmap.capacity.verification.verify_path` samples the timed
 motion densely and is what says a plan carries the payload.
 
-Errors name the inputs by role (``start``, ``goal``, ``payload``, ``q_start``).
+Errors name the inputs by role (``start``, ``goal``, ``payload``; ``q_ini``: the start configuration).
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from capmap.errors import CapmapError, NoPath
 
 __all__ = ["BranchProblem", "BranchPlan", "plan_on_branch", "ROLES"]
 
-ROLES = {"start": "start", "goal": "goal", "payload": "payload", "q_start": "the start configuration"}
+ROLES = {"start": "start", "goal": "goal", "payload": "payload"}  # and start_branch's ``q_ini``
 PROGRESS_EVERY = 2000  # states expanded between progress lines
 
 log = logging.getLogger(__name__)
@@ -210,10 +210,9 @@ def plan_on_branch(problem: BranchProblem, start_m: np.ndarray, goal_m: np.ndarr
     n = int(sol.n_solutions[0])
     k0, _, _ = nearest_branch(sol.q[0, :n], q0)
     others = []
-    for k in range(n):
-        if k != k0:
-            log.info(f"no path on the start's branch {k0 + 1} of {n}; trying branch {k + 1} at the start")
-        if k != k0 and _search(s, start_m, goal_m, sol.q[0, k], payload_kg)[1] is not None:
+    for k in (k for k in range(n) if k != k0):
+        log.info(f"no path on the start's branch {k0 + 1} of {n}; trying branch {k + 1} at the start")
+        if _search(s, start_m, goal_m, sol.q[0, k], payload_kg)[1] is not None:
             others.append(k + 1)
     where = (f"the goal is reachable from IK branch{'es' if len(others) > 1 else ''} {', '.join(map(str, others))} of {n} "
              "at the start: the arm would have to change branch" if others

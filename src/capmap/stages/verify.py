@@ -28,7 +28,7 @@ from capmap.stages.common import parse_slice
 __all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "branch_deviation_deg", "stage_verify"]
 
 PLAN_KEYS = {"start": "task.start_m", "goal": "task.goal_m", "payload": "task.payload_kg",
-             "q_start": "task.q_ini_deg"}  # planning's roles
+             "q_ini": "task.q_ini_deg"}  # planning's roles
 WAYPOINT_COLUMNS = ["waypoint", "kind", "x_m", "y_m", "z_m", "i", "j", "k", "voxel_capacity_kg"]
 
 
