@@ -22,14 +22,12 @@ import numpy as np
 from capmap.capacity import planning
 from capmap.capacity.branch_moves import MoveCache
 from capmap.capacity.branch_planning import BranchProblem, _result, _search
-from capmap.capacity.engine import Motion
 from capmap.capacity.verification import judge, verify_path
-from capmap.config.capacity import LimitsConfig, rotation_from_rpy
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.errors import NoPath
 from capmap.io import datasets
-from capmap.stages.arm import arm_from
+from capmap.stages.arm import arm_task_from
 from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.verify import branch_deviation_deg
 
@@ -41,12 +39,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
     deps = datasets.read("results/verify/payload_1500kg/timeseries.parquet").attrs["capmap"]["config"]
-    robot, arm = arm_from(deps)
+    at = arm_task_from(deps)
+    arm, rot, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
-    cs = deps["capacity"]["task"]
-    rot = rotation_from_rpy(cs["orientation_rpy_deg"])
-    limits = LimitsConfig.from_doc(deps["capacity"]["limits"]).resolve(robot.n_joints).for_arm(arm)
-    motion = Motion(cs["v_max_mps"], cs["a_max_mps2"])
     vox = datasets.read("results/voxels/voxels.parquet")
     grid = grid_of(vox)
     cap, axis_cap = vox.capacity_kg.to_numpy(), vox[AXIS_COLUMNS].to_numpy()

@@ -1,8 +1,9 @@
 """The (voxel, IK branch) state graph built explicitly, the reference for the branch planner.
 
 Every move is tracked by the verification's own tracker (:func:`capmap.core.tracking.track`,
-one ``ik.solve`` per move and nearest-branch continuation), its joint range checked from the
-tracked angles, and its capacity taken state by state with the per-configuration Pinocchio
+one ``ik.solve`` per move; its branch-following kernel is the planner's too, and is checked on
+its own by the verification tests and the turn test of test_branch_planning), its joint range
+checked from the tracked angles, and its capacity taken state by state with the per-configuration Pinocchio
 path (:func:`capmap.capacity.engine.state_capacity`: J^-1 joint rates and RNEA), moving along
 u and along -u. The graph is grown breadth-first from the start over every tracked move
 (whatever its capacity), then shortest paths at a payload come from scipy's Dijkstra on the

@@ -3,7 +3,7 @@ straight moves between voxel centres, the capacity of the tracked configurations
 move's line, and the IK caches a search shares (none depends on the branch).
 
 Tracking: at each sample the IK solution nearest the previous configuration (whole turns
-allowed), as :func:`capmap.core.tracking.track` does; a move is executable when no joint
+allowed), by the verification's own :func:`capmap.core.tracking.follow_branches`; a move is executable when no joint
 changes by more than ``max_step_rad`` between samples and every joint stays within its range.
 """
 
@@ -14,13 +14,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from capmap.capacity.engine import Motion, coefficients, direction_features
+from capmap.capacity.engine import Motion, coefficients, motion_features
 from capmap.capacity.planning import NEIGHBOURS
 from capmap.capacity.voxels import Grid
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.limits import AffineLimits
-from capmap.core.tracking import MAX_STEP_RAD, nearest_branch, nearest_turn
+from capmap.core.tracking import MAX_STEP_RAD, follow_branches, nearest_branch
 
 __all__ = ["TRACK_STEP_M", "BranchProblem", "fractions", "solve_at", "track_moves", "line_capacity", "move_capacity",
            "MoveCache"]
@@ -62,25 +62,14 @@ def solve_at(problem: BranchProblem, pos: np.ndarray) -> tuple[np.ndarray, np.nd
 def track_moves(problem: BranchProblem, q0: np.ndarray, sets: np.ndarray,
                 counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Track E moves from configurations q0 (E, n) rad through the IK sets (E, S, K, n) / counts
-    (E, S) of their samples (in order; the last is the move's end).
+    (E, S) of their samples (in order; the last is the move's end), by
+    :func:`capmap.core.tracking.follow_branches`.
 
     Returns ok (E,): every sample solved within ``max_step_rad`` of the previous configuration and
-    within the joint ranges; and the tracked configurations (E, S, n) rad."""
+    within the joint ranges; and the tracked configurations (E, S, n) rad (NaN after a failure)."""
     arm = problem.dyn.arm
-    E, S, K = sets.shape[:3]
-    q_prev = np.array(q0, dtype=float)
-    ok = np.ones(E, dtype=bool)
-    path = np.empty((E, S, arm.n_active))
-    absent = np.arange(K)[None, :] >= counts[:, :, None]  # (E, S, K)
-    rows = np.arange(E)
-    for s in range(S):
-        cand = nearest_turn(np.nan_to_num(sets[:, s]), q_prev[:, None, :])  # (E, K, n)
-        off = np.where(absent[:, s], np.inf, np.abs(cand - q_prev[:, None, :]).max(axis=2))
-        k = np.argmin(off, axis=1)
-        ok &= off[rows, k] <= problem.max_step_rad
-        q_prev = np.where(ok[:, None], cand[rows, k], q_prev)
-        path[:, s] = q_prev
-    ok &= np.all((path >= arm.q_lower - _RANGE_TOL) & (path <= arm.q_upper + _RANGE_TOL), axis=(1, 2))
+    path, failed_at, _ = follow_branches(sets, counts, q0, problem.max_step_rad)
+    ok = (failed_at < 0) & np.all((path >= arm.q_lower - _RANGE_TOL) & (path <= arm.q_upper + _RANGE_TOL), axis=(1, 2))
     return ok, path
 
 
@@ -95,9 +84,7 @@ def line_capacity(dyn: ArmDynamics, q_active: np.ndarray, u: np.ndarray, motion:
     cap = np.full(len(coef.c0), np.inf)
     for sense in (1.0, -1.0):
         w = sense * np.asarray(u, dtype=float)
-        phi = np.concatenate([np.ones((len(w), 1)), motion.a_max_mps2 * w,
-                              motion.v_max_mps**2 * direction_features(w)], axis=1)  # (B, 10)
-        y0 = np.einsum("bok,bk->bo", C, phi)
+        y0 = np.einsum("bok,bk->bo", C, motion_features(w, motion))  # each configuration its own direction
         s = np.einsum("boj,bj->bo", coef.S, motion.a_max_mps2 * w - dyn.gravity)
         cap = np.minimum(cap, limits.largest(y0, s)[0])
     cap[coef.singular] = 0.0
@@ -154,15 +141,21 @@ class MoveCache:
         k, q_c, _ = nearest_branch(sols, q)
         return (v, k, tuple(np.round((q_c - sols[k]) / (2 * np.pi)).astype(int))), q_c
 
-    def voxel_moves(self, v: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Usable neighbours w (E,) of voxel v, the IK sets (E, S, K, n) and counts (E, S) along
-        each move v -> w (interior samples, then w's centre)."""
+    @staticmethod
+    def _oriented(v: int, x: int, sets: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Interior-sample IK sets and counts of an edge, in the order from the lower voxel index to
+        the higher, given in the order from v to x (and back: the same call turns them round)."""
+        return (sets, counts) if v < x else (sets[::-1], counts[::-1])
+
+    def voxel_moves(self, v: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Usable neighbours w (E,) of voxel v, their centres (E, 3) m, the IK sets (E, S, K, n) and
+        counts (E, S) along each move v -> w (interior samples, then w's centre)."""
         g, pb = self.problem.grid, self.problem
         idx = np.array(np.unravel_index(v, g.shape))
         nb = idx + NEIGHBOURS
         nb = nb[np.all((nb >= 0) & (nb < np.array(g.shape)), axis=1)]
+        nb = nb[pb.usable[g.flat(nb)]]
         w = g.flat(nb)
-        w = w[pb.usable[w]]
         if v not in self.solved:  # one IK batch: the missing edges' interior samples and the missing centres
             new = [int(x) for x in w if (min(v, x), max(v, x)) not in self.edges]
             cen = [int(x) for x in [v, *w] if x not in self.centre]
@@ -173,20 +166,17 @@ class MoveCache:
                 m = len(self.interior)
                 for e, x in enumerate(new):
                     rows = slice(e * m, (e + 1) * m)
-                    sl, cl = sets[rows], counts[rows]
-                    self.edges[(v, x) if v < x else (x, v)] = (sl, cl) if v < x else (sl[::-1], cl[::-1])
+                    self.edges[(min(v, x), max(v, x))] = self._oriented(v, x, sets[rows], counts[rows])
                 for c, x in enumerate(cen):
                     self.centre[x] = (sets[len(new) * m + c], int(counts[len(new) * m + c]))
             self.solved.add(v)
-        parts = []
-        for x in w:
-            x = int(x)
-            sl, cl = self.edges[(v, x) if v < x else (x, v)]
-            if v > x:
-                sl, cl = sl[::-1], cl[::-1]
-            parts.append((sl, cl, *self.centre[x]))
+        S, n = len(self.interior) + 1, pb.dyn.arm.n_active
+        if not len(w):
+            return w, np.zeros((0, 3)), np.zeros((0, S, 1, n)), np.zeros((0, S), dtype=int)
+        parts = [(*self._oriented(v, int(x), *self.edges[(min(v, int(x)), max(v, int(x)))]), *self.centre[int(x)])
+                 for x in w]
         K = max([p[0].shape[1] for p in parts] + [p[2].shape[0] for p in parts], default=1)
         sets = np.array([np.concatenate([_pad(sl, K), _pad(cq, K)[None]]) for sl, cl, cq, cc in parts]).reshape(
-            len(parts), len(self.interior) + 1, K, -1)
-        counts = np.array([np.r_[cl, cc] for sl, cl, cq, cc in parts]).reshape(len(parts), len(self.interior) + 1)
-        return w, sets, counts
+            len(parts), S, K, n)
+        counts = np.array([np.r_[cl, cc] for sl, cl, cq, cc in parts]).reshape(len(parts), S)
+        return w, g.centres(nb), sets, counts

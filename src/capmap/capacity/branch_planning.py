@@ -35,14 +35,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.branch_moves import BranchProblem, MoveCache, fractions, move_capacity, solve_at, track_moves
-from capmap.capacity.voxels import Grid
+from capmap.capacity.planning import ROLES, locate
 from capmap.core import ik
 from capmap.core.tracking import nearest_branch, start_branch
-from capmap.errors import CapmapError, NoPath
+from capmap.errors import NoPath
 
-__all__ = ["BranchProblem", "BranchPlan", "plan_on_branch", "ROLES"]
+__all__ = ["BranchProblem", "BranchPlan", "plan_on_branch"]
 
-ROLES = {"start": "start", "goal": "goal", "payload": "payload"}  # and start_branch's ``q_ini``
 PROGRESS_EVERY = 2000  # states expanded between progress lines
 
 log = logging.getLogger(__name__)
@@ -70,24 +69,12 @@ class BranchPlan:
         return float(np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1).sum())
 
 
-def _voxel_of(grid: Grid, usable: np.ndarray, point: np.ndarray, role: str) -> int:
-    idx = grid.index(point[None])[0]
-    where = f"{{{role}}} = [{', '.join(f'{v:g}' for v in point)}]"
-    if idx[0] < 0:
-        raise CapmapError(f"{where} is outside the workspace grid", **ROLES)
-    v = int(grid.flat(idx))
-    if not usable[v]:
-        raise CapmapError(f"{where} lies in voxel {tuple(int(i) for i in idx)}, which has no point reachable at "
-                          "the task orientation", **ROLES)
-    return v
-
-
 def _search(s: MoveCache, start_m: np.ndarray, goal_m: np.ndarray, q0: np.ndarray, payload_kg: float):
     """A* from the true start on configuration q0; the node list and the goal node's index (or None)."""
     pb, grid = s.problem, s.problem.grid
-    sv = _voxel_of(grid, pb.usable, start_m, "start")
-    gv = _voxel_of(grid, pb.usable, goal_m, "goal")
-    centre = grid.centres(grid.all_indices()[[sv, gv]])
+    sv = int(grid.flat(np.array(locate(grid, pb.usable, start_m, "start"))))
+    gv = int(grid.flat(np.array(locate(grid, pb.usable, goal_m, "goal"))))
+    centre = np.array([s.centre_of(sv), s.centre_of(gv)])
     # nodes: (position (3,), q (n,), voxel, kind, parent, move capacity)
     nodes = [(start_m, q0, sv, "start", -1, np.nan)]
     g_of, key_of = {0: 0.0}, {"start": 0}
@@ -146,11 +133,10 @@ def _search(s: MoveCache, start_m: np.ndarray, goal_m: np.ndarray, q0: np.ndarra
                 q1, cap = single(i, goal_m)
                 if q1 is not None:
                     push("goal", goal_m, q1, v, "goal", i, cap, g + float(np.linalg.norm(goal_m - centre[1])))
-        w, sets, counts = s.voxel_moves(v)
+        w, p1, sets, counts = s.voxel_moves(v)
         if not len(w):
             continue
         ok, path = track_moves(pb, np.repeat(q[None], len(w), axis=0), sets, counts)
-        p1 = grid.centres(grid.all_indices()[w])
         step = np.linalg.norm(p1 - pos, axis=1)
         arrivals = []  # tracked moves that would improve a state not yet closed: only these are loaded
         for e in np.flatnonzero(ok):
@@ -194,7 +180,8 @@ def plan_on_branch(problem: BranchProblem, start_m: np.ndarray, goal_m: np.ndarr
     """The shortest plan from start_m to goal_m (3,) m executable on the IK branch nearest
     q_start (n_active,) rad carrying payload_kg (see the module docstring).
 
-    Raises a one-line CapmapError (roles :data:`ROLES`) when the start or goal lies outside the
+    Raises a one-line CapmapError (roles :data:`capmap.capacity.planning.ROLES`; ``q_ini``: the
+    start configuration) when the start or goal lies outside the
     grid or in a voxel without a reachable point, or q_start is not a configuration at the start;
     :class:`~capmap.errors.NoPath` when no executable path exists on that branch, saying whether
     the goal is reachable from another IK branch at the start (the arm would have to change branch).

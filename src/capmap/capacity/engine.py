@@ -25,7 +25,7 @@ from capmap.errors import CapmapError
 
 __all__ = ["LoadLimits", "Motion", "Coefficients", "coefficients", "coefficients_pinocchio", "state_affine", "joint_state_affine",
            "state_capacity", "direction_features", "affine_over_directions", "capacity_over_directions",
-           "PointCapacity", "point_capacity", "argmin_per_group", "margin_pct", "SINGULAR"]
+           "PointCapacity", "point_capacity", "argmin_per_group", "motion_features", "margin_pct", "SINGULAR"]
 
 SINGULAR = "singular"
 
@@ -133,7 +133,7 @@ def affine_over_directions(coef: Coefficients, u: np.ndarray, motion: Motion,
                            gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(y0, s), each (B, n_out, D), for every configuration x direction u (D, 3)."""
     C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (B, n_out, 10)
-    y0 = C @ _phi(u, motion).T
+    y0 = C @ motion_features(u, motion).T
     s = coef.S @ (motion.a_max_mps2 * u - gravity).T
     return y0, s
 
@@ -174,7 +174,9 @@ def argmin_per_group(values: np.ndarray, groups: np.ndarray) -> np.ndarray:
     return order[first]
 
 
-def _phi(u: np.ndarray, motion: Motion) -> np.ndarray:
+def motion_features(u: np.ndarray, motion: Motion) -> np.ndarray:
+    """Features (D, 10) of the motion states along u (D, 3) at v_max and a_max: [1, a u, v^2 phi(u)],
+    so that y0 = C @ features with C (.., 10) the stacked coefficients [c0, L, Q]."""
     v, a = motion.v_max_mps, motion.a_max_mps2
     return np.concatenate([np.ones((len(u), 1)), a * u, v**2 * direction_features(u)], axis=1)  # (D, 10)
 
@@ -201,10 +203,10 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
         coef = coefficients(dyn, q_sets[pts, brs])
         a = motion.a_max_mps2
         C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (M, n_out, 10)
-        c_cfg, worst_dir, b_cfg = min_over_directions(C, coef.S, _phi(directions.u, motion), a * directions.u,
+        c_cfg, worst_dir, b_cfg = min_over_directions(C, coef.S, motion_features(directions.u, motion), a * directions.u,
                                                       dyn.gravity, limits.limit, directions.pairs)
         if axes is not None:
-            per_axis, _ = min_per_pair(C, coef.S, _phi(axes.u, motion), a * axes.u, dyn.gravity, limits.limit,
+            per_axis, _ = min_per_pair(C, coef.S, motion_features(axes.u, motion), a * axes.u, dyn.gravity, limits.limit,
                                        axes.pairs)
             per_axis[coef.singular] = 0.0
             axis_cap[:] = np.inf

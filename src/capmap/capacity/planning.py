@@ -25,7 +25,8 @@ from capmap.capacity.directions import axis_of
 from capmap.capacity.voxels import Grid
 from capmap.errors import CapmapError, NoPath
 
-__all__ = ["NEIGHBOURS", "AXIS_OF_NEIGHBOUR", "capacity_penalty", "SearchResult", "astar", "Plan", "plan", "ROLES"]
+__all__ = ["NEIGHBOURS", "AXIS_OF_NEIGHBOUR", "capacity_penalty", "SearchResult", "astar", "Plan", "locate", "plan",
+           "ROLES"]
 
 ROLES = {"start": "start", "goal": "goal", "payload": "payload"}  # own-terms names of plan()'s inputs
 
@@ -122,20 +123,32 @@ class Plan:
         return float(np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1).sum())
 
 
-def _endpoint_voxel(grid: Grid, penalty3: np.ndarray, cap3: np.ndarray, point: np.ndarray, role: str,
-                    payload_kg: float) -> tuple[int, int, int]:
+def _where(role: str, point: np.ndarray) -> str:
+    return f"{{{role}}} = [{', '.join(f'{v:g}' for v in point)}]"
+
+
+def locate(grid: Grid, reachable: np.ndarray, point: np.ndarray, role: str) -> tuple[int, int, int]:
+    """The voxel index of a start or goal ``point`` (3,) m; a one-line CapmapError naming its
+    ``role`` (:data:`ROLES`) when it is outside the grid or in a voxel without a reachable point
+    (``reachable`` (V,) bool, C-ordered over the grid)."""
     idx = grid.index(point[None])[0]
-    where = f"{{{role}}} = [{', '.join(f'{v:g}' for v in point)}]"
+    where = _where(role, point)
     if idx[0] < 0:
         hi = grid.lower + np.array(grid.shape) * grid.edge_m
         raise CapmapError(f"{where} is outside the workspace grid "
                           f"[{', '.join(f'{a:g}..{b:g}' for a, b in zip(grid.lower, hi))}] m", **ROLES)
     idx = tuple(int(v) for v in idx)
-    if np.isnan(cap3[idx]):
+    if not reachable[grid.flat(np.array(idx))]:
         raise CapmapError(f"{where} lies in voxel {idx}, which has no point reachable at the task orientation",
                           **ROLES)
+    return idx
+
+
+def _endpoint_voxel(grid: Grid, penalty3: np.ndarray, cap3: np.ndarray, point: np.ndarray, role: str,
+                    payload_kg: float) -> tuple[int, int, int]:
+    idx = locate(grid, ~np.isnan(cap3.reshape(-1)), point, role)
     if np.isinf(penalty3[idx]):
-        raise NoPath(f"{where} lies in voxel {idx} whose capacity {cap3[idx]:.1f} kg is below "
+        raise NoPath(f"{_where(role, point)} lies in voxel {idx} whose capacity {cap3[idx]:.1f} kg is below "
                      f"{{payload}} = {payload_kg:g}", **ROLES)
     return idx
 

@@ -198,7 +198,7 @@ def judge(res: PathResult, arm: LockedArm, limits: AffineLimits, payload_kg: flo
     bind_names = np.array(list(names) + ["untracked"])
     tracked = ~np.isnan(tr.q).any(axis=1)
     in_range = tr.in_range.all(axis=1)
-    wp = np.concatenate([tl.p[[0]], [tl.p[tl.segment == k][-1] for k in range(len(tl.profiles))]])
+    wp = tl.p[tl.waypoint_rows()]
     segs = []
     for k, prof in enumerate(tl.profiles):
         rows = tl.segment == k

@@ -87,6 +87,11 @@ class Timeline:
     def __len__(self) -> int:
         return len(self.t_s)
 
+    def waypoint_rows(self) -> np.ndarray:
+        """(W,) the sample at each waypoint: the first, then the last of each segment."""
+        last = np.flatnonzero(np.diff(self.segment) != 0)  # segments are sampled in order
+        return np.concatenate([[0], last, [len(self.t_s) - 1]]).astype(int)
+
 
 MIN_PHASE_INTERVALS = 10  # a phase is never sampled coarser than this: a verdict never comes from two samples
 

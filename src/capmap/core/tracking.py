@@ -19,8 +19,8 @@ from capmap.core import ik
 from capmap.core.reduction import LockedArm
 from capmap.errors import CapmapError
 
-__all__ = ["Tracking", "nearest_turn", "nearest_branch", "start_branch", "track", "range_excursions", "START_TOL_RAD",
-           "MAX_STEP_RAD"]
+__all__ = ["Tracking", "nearest_turn", "nearest_branch", "start_branch", "follow_branches", "track", "range_excursions",
+           "START_TOL_RAD", "MAX_STEP_RAD"]
 
 START_TOL_RAD = np.deg2rad(2.0)  # a start configuration may be rounded: allow 2 deg to the nearest exact branch
 MAX_STEP_RAD = np.deg2rad(5.0)  # largest joint change between consecutive samples on one branch
@@ -74,6 +74,36 @@ def start_branch(arm: LockedArm, position: np.ndarray, rotation: np.ndarray, q_s
     return q, off
 
 
+def follow_branches(sets: np.ndarray, counts: np.ndarray, q0: np.ndarray,
+                    max_step_rad: float = MAX_STEP_RAD) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Follow E branches through IK sets, sample by sample: at each sample the solution nearest
+    the previous configuration (:func:`nearest_branch`, whole turns allowed).
+
+    sets (E, S, K, n) rad, NaN-padded beyond counts (E, S); q0 (E, n) rad, the configurations
+    before the first sample. Returns q (E, S, n) rad (NaN from the failed sample on), failed_at
+    (E,) the first sample without a solution within max_step_rad (-1: none) and jump (E,) rad
+    the nearest solution's distance there (inf: no solution at all; 0 where none failed)."""
+    E, S, K, n = sets.shape
+    q = np.full((E, S, n), np.nan)
+    failed_at = np.full(E, -1)
+    jump_at = np.zeros(E)
+    alive = np.ones(E, dtype=bool)
+    q_prev = np.array(q0, dtype=float)
+    absent = np.arange(K)[None, None, :] >= np.asarray(counts)[:, :, None]  # (E, S, K)
+    rows = np.arange(E)
+    for s in range(S):
+        cand = nearest_turn(np.nan_to_num(sets[:, s]), q_prev[:, None, :])  # (E, K, n)
+        off = np.where(absent[:, s], np.inf, np.abs(cand - q_prev[:, None, :]).max(axis=2))
+        k = np.argmin(off, axis=1)
+        jump = off[rows, k]
+        fail = alive & ~(jump <= max_step_rad)
+        failed_at[fail], jump_at[fail] = s, jump[fail]
+        alive &= ~fail
+        q_prev = np.where(alive[:, None], cand[rows, k], q_prev)
+        q[alive, s] = q_prev[alive]
+    return q, failed_at, jump_at
+
+
 def track(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, q_start: np.ndarray,
           max_step_rad: float = MAX_STEP_RAD) -> Tracking:
     """Continuous-branch IK along positions (N, 3) m at a fixed rotation (3, 3).
@@ -83,23 +113,14 @@ def track(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, q_start: 
     positions = np.asarray(positions, dtype=float)
     q_prev, offset = start_branch(arm, positions[0], rotation, q_start)
     sol = ik.solve(arm, positions, rotation)
-    N = len(positions)
-    q = np.full((N, arm.n_active), np.nan)
-
-    def result(failed_at: int, failure: str) -> Tracking:
-        in_range = (q >= arm.q_lower - 1e-9) & (q <= arm.q_upper + 1e-9)
-        return Tracking(q, failed_at, failure, offset, in_range | np.isnan(q))
-
-    for i in range(N):
-        n = int(sol.n_solutions[i])
-        if n == 0:
-            return result(i, "no IK solution at the task orientation (outside the workspace)")
-        _, q_near, jump = nearest_branch(sol.q[i, :n], q_prev)
-        if jump > max_step_rad:
-            return result(i, f"branch lost: nearest solution {np.rad2deg(jump):.1f} deg away "
-                             "(singularity or joint range)")
-        q[i] = q_prev = q_near
-    return result(-1, "")
+    q, failed_at, jump = follow_branches(sol.q[None], sol.n_solutions[None], q_prev[None], max_step_rad)
+    q, failed_at, jump = q[0], int(failed_at[0]), float(jump[0])
+    failure = ""
+    if failed_at >= 0:
+        failure = ("no IK solution at the task orientation (outside the workspace)" if np.isinf(jump) else
+                   f"branch lost: nearest solution {np.rad2deg(jump):.1f} deg away (singularity or joint range)")
+    in_range = (q >= arm.q_lower - 1e-9) & (q <= arm.q_upper + 1e-9)
+    return Tracking(q, failed_at, failure, offset, in_range | np.isnan(q))
 
 
 def range_excursions(in_range: np.ndarray) -> list[tuple[int, int, int]]:

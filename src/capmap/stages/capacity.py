@@ -16,7 +16,7 @@ from capmap.capacity import sampling
 from capmap.capacity.directions import AXIS_LABELS, grid_axes
 from capmap.capacity.engine import Motion, point_capacity
 from capmap.capacity.voxels import Grid, voxelise
-from capmap.config.capacity import DirectionsConfig, LimitsConfig, SamplingConfig, rotation_from_rpy
+from capmap.config.capacity import DirectionsConfig, SamplingConfig
 from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
@@ -25,7 +25,7 @@ from capmap.core.reduction import LockedArm
 from capmap.core.robot import Robot
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.stages.arm import arm_from
+from capmap.stages.arm import arm_from, arm_task_from
 from capmap.stages.common import parse_slice
 
 __all__ = ["AXIS_COLUMNS", "model_table", "stage_model", "sample_table", "stage_sample", "capacity_table", "stage_capacity",
@@ -149,13 +149,9 @@ def stage_capacity(points: str, out: str, slice_json: str, shard: int, shards: i
     """Shard ``shard`` (0-based) of ``shards``: points with point_id % shards == shard."""
     deps = parse_slice(slice_json)
     log = stage_logger(__name__, f"capacity shard {shard + 1}/{shards}")
-    robot, arm = arm_from(deps)
-    cs = deps["capacity"]
-    task = cs["task"]
-    rotation = rotation_from_rpy(task["orientation_rpy_deg"])
-    motion = Motion(task["v_max_mps"], task["a_max_mps2"])
-    limits = LimitsConfig.from_doc(cs["limits"]).resolve(robot.n_joints).for_arm(arm)  # checked before the long work
-    dirs = DirectionsConfig.from_doc(cs["directions"]).build()
+    at = arm_task_from(deps)  # limits checked before the long work
+    arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
+    dirs = DirectionsConfig.from_doc(deps["capacity"]["directions"]).build()
     pts = datasets.read(points)
     mine = pts[pts.point_id % shards == shard]
     log.info(f"{len(mine)} of {len(pts)} points, {len(dirs)} directions ({dirs.kind})")

@@ -13,16 +13,14 @@ import numpy as np
 import pandas as pd
 
 from capmap.capacity import planning
-from capmap.capacity.engine import Motion
 from capmap.capacity.verification import judge, verify_path
-from capmap.config.capacity import LimitsConfig, rotation_from_rpy
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.errors import NoPath
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.stages.arm import arm_from
+from capmap.stages.arm import arm_task_from
 from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.common import parse_slice
 
@@ -43,12 +41,9 @@ def stage_plan_gain(voxels: str, out_tasks: str, out_csv: str, out_md: str, slic
     deps = parse_slice(slice_json)
     g = deps["gain"]
     log = stage_logger(__name__, "plan gain")
-    robot, arm = arm_from(deps)
+    at = arm_task_from(deps)
+    arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
-    cs = deps["capacity"]["task"]
-    rotation = rotation_from_rpy(cs["orientation_rpy_deg"])
-    motion = Motion(cs["v_max_mps"], cs["a_max_mps2"])
-    limits = LimitsConfig.from_doc(deps["capacity"]["limits"]).resolve(robot.n_joints).for_arm(arm)
     dt = float(g["verification"]["dt_s"])
     vox = datasets.read(voxels)
     grid = grid_of(vox)

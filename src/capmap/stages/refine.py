@@ -9,12 +9,12 @@ import time
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.engine import SINGULAR, Motion
+from capmap.capacity.engine import SINGULAR
 from capmap.capacity.refine import Evaluation, VoxelMinima, refine
-from capmap.config.capacity import DirectionsConfig, LimitsConfig, refine_settings, rotation_from_rpy
+from capmap.config.capacity import DirectionsConfig, refine_settings
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.stages.arm import arm_from
+from capmap.stages.arm import arm_task_from
 from capmap.stages.capacity import AXIS_COLUMNS, capacity_table, grid_of
 from capmap.stages.common import parse_slice
 
@@ -28,13 +28,11 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
     """Refine the reachable voxels with flat index % shards == shard; write one row per voxel."""
     deps = parse_slice(slice_json)
     log = stage_logger(__name__, f"refine shard {shard + 1}/{shards}")
-    robot, arm = arm_from(deps)
-    cs, rf = deps["capacity"], deps["refine"]
+    at = arm_task_from(deps)
+    arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
+    rf = deps["refine"]
     settings = refine_settings({"refine": rf["refine"]}, rf.get("payloads_kg", ()))
-    rotation = rotation_from_rpy(cs["task"]["orientation_rpy_deg"])
-    motion = Motion(cs["task"]["v_max_mps"], cs["task"]["a_max_mps2"])
-    limits = LimitsConfig.from_doc(cs["limits"]).resolve(robot.n_joints).for_arm(arm)
-    dirs = DirectionsConfig.from_doc(cs["directions"]).build()
+    dirs = DirectionsConfig.from_doc(deps["capacity"]["directions"]).build()
     names = list(limits.names) + [SINGULAR]
     index = {n: i for i, n in enumerate(names)}
 

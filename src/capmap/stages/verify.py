@@ -10,9 +10,7 @@ import pandas as pd
 
 from capmap.capacity import branch_planning, planning
 from capmap.capacity.directions import AXIS_LABELS, axis_of
-from capmap.capacity.engine import Motion
 from capmap.capacity.verification import PathResult, judge, verify_path
-from capmap.config.capacity import LimitsConfig, rotation_from_rpy
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.limits import AffineLimits
 from capmap.core.profiles import PHASES
@@ -21,7 +19,7 @@ from capmap.errors import CapmapError, ConfigError, NoPath
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.stages.arm import arm_from
+from capmap.stages.arm import arm_task_from
 from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.common import parse_slice
 
@@ -32,15 +30,22 @@ PLAN_KEYS = {"start": "task.start_m", "goal": "task.goal_m", "payload": "task.pa
 WAYPOINT_COLUMNS = ["waypoint", "kind", "x_m", "y_m", "z_m", "i", "j", "k", "voxel_capacity_kg"]
 
 
+def _waypoint_frame(p, grid, capacity_kg: np.ndarray) -> pd.DataFrame:
+    """The :data:`WAYPOINT_COLUMNS` of a plan (:class:`~capmap.capacity.planning.Plan` or
+    :class:`~capmap.capacity.branch_planning.BranchPlan`) on the map's voxel capacities (V,) kg."""
+    wp, wv = p.waypoints, p.waypoint_voxel
+    return pd.DataFrame({"waypoint": np.arange(len(wp)), "kind": p.waypoint_kind, "x_m": wp[:, 0], "y_m": wp[:, 1],
+                         "z_m": wp[:, 2], "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2],
+                         "voxel_capacity_kg": capacity_kg[grid.flat(wv)]})
+
+
 def _grid_plan(grid, vox: pd.DataFrame, task: dict, payload: float, moves: str) -> tuple[pd.DataFrame, float, int, str]:
     """A* on the voxel map (``axis`` or ``isotropic`` moves): waypoints table, cost, expansions, log line."""
     cap = vox.capacity_kg.to_numpy()
     axis_cap = vox[AXIS_COLUMNS].to_numpy() if moves == "axis" else None
     p = planning.plan(grid, cap, task["start_m"], task["goal_m"], payload, axis_cap)
     wv = p.waypoint_voxel
-    df = pd.DataFrame({"waypoint": np.arange(len(p.waypoints)), "kind": p.waypoint_kind,
-                       "x_m": p.waypoints[:, 0], "y_m": p.waypoints[:, 1], "z_m": p.waypoints[:, 2],
-                       "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2], "voxel_capacity_kg": cap[grid.flat(wv)]})
+    df = _waypoint_frame(p, grid, cap)
     if axis_cap is not None:  # the capacity along the move that arrives at each voxel (both voxels)
         f = grid.flat(wv)
         step = np.diff(wv, axis=0)
@@ -61,20 +66,14 @@ def _grid_plan(grid, vox: pd.DataFrame, task: dict, payload: float, moves: str) 
 def _branch_plan(deps: dict, grid, vox: pd.DataFrame, task: dict, payload: float) -> tuple[pd.DataFrame, float, int, str]:
     """A* over (voxel, IK branch) states on the start configuration's branch: waypoints table with
     the planned configuration at each waypoint, cost, expansions, log line."""
-    robot, arm = arm_from(deps)
-    cs = deps["capacity"]["task"]
-    limits = LimitsConfig.from_doc(deps["capacity"]["limits"]).resolve(robot.n_joints).for_arm(arm)
-    problem = branch_planning.BranchProblem(ArmDynamics(arm), grid, rotation_from_rpy(cs["orientation_rpy_deg"]),
-                                            Motion(cs["v_max_mps"], cs["a_max_mps2"]), limits,
+    at = arm_task_from(deps)
+    arm = at.arm
+    problem = branch_planning.BranchProblem(ArmDynamics(arm), grid, at.rotation, at.motion, at.limits,
                                             (vox.n_reachable > 0).to_numpy())
     q_start = np.deg2rad(np.asarray(task["q_start_deg"], dtype=float))[arm.active]
     p = branch_planning.plan_on_branch(problem, task["start_m"], task["goal_m"], q_start, payload)
-    wv = p.waypoint_voxel
-    df = pd.DataFrame({"waypoint": np.arange(len(p.waypoints)), "kind": p.waypoint_kind,
-                       "x_m": p.waypoints[:, 0], "y_m": p.waypoints[:, 1], "z_m": p.waypoints[:, 2],
-                       "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2],
-                       "voxel_capacity_kg": vox.capacity_kg.to_numpy()[grid.flat(wv)],
-                       "move_capacity_kg": p.move_capacity_kg})
+    df = _waypoint_frame(p, grid, vox.capacity_kg.to_numpy())
+    df["move_capacity_kg"] = p.move_capacity_kg
     for c, j in enumerate(arm.active_joint_numbers):
         df[f"q_j{j}_deg"] = np.rad2deg(p.q[:, c])
     line = (f"branch moves: {len(df)} waypoints, path {p.length_m:.3f} m, {p.expanded} of {p.states} states expanded "
@@ -139,8 +138,7 @@ def path_tables(name: str, res: PathResult, arm: LockedArm, limits: AffineLimits
 def branch_deviation_deg(res: PathResult, q_plan_deg: np.ndarray) -> float:
     """Largest difference (deg) between the configurations the verification tracked at the
     waypoints (the end of each segment, and the start) and the planned ones q_plan_deg (W, n)."""
-    tl = res.timeline
-    rows = [0] + [int(np.flatnonzero(tl.segment == k)[-1]) for k in range(len(tl.profiles))]
+    rows = res.timeline.waypoint_rows()
     return float(np.nanmax(np.abs(np.rad2deg(res.tracking.q[rows]) - q_plan_deg), initial=np.nan)) \
         if not np.isnan(res.tracking.q[rows]).any() else float("inf")
 
@@ -149,15 +147,13 @@ def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv
                  slice_json: str) -> None:
     """Verify the direct line and the planned path (if any) carrying the task payload."""
     deps = parse_slice(slice_json)
-    robot, arm = arm_from(deps)
+    at = arm_task_from(deps)
+    arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
-    cs, vt = deps["capacity"]["task"], deps["verify"]["task"]
+    vt = deps["verify"]["task"]
     payload = float(vt["payload_kg"])
     log = stage_logger(__name__, f"verify {payload:g} kg")
-    rotation = rotation_from_rpy(cs["orientation_rpy_deg"])
-    limits = LimitsConfig.from_doc(deps["capacity"]["limits"]).resolve(robot.n_joints).for_arm(arm)
     q_start = np.deg2rad(np.asarray(vt["q_start_deg"], dtype=float))[arm.active]
-    motion = Motion(cs["v_max_mps"], cs["a_max_mps2"])
     dt = float(deps["verify"]["verification"]["dt_s"])
     wp = datasets.read(waypoints)
     plan_meta = wp.attrs["capmap"]
