@@ -24,6 +24,9 @@ if not workflow.overwrite_configfiles:
     configfile: "config/config.yaml"
 
 
+report: "workflow/report/workflow.rst"
+
+
 include: "workflow/rules/common.smk"
 include: "workflow/rules/capacity.smk"
 include: "workflow/rules/following.smk"
@@ -34,13 +37,14 @@ include: "workflow/rules/catalogue.smk"
 
 
 CAPACITY_MAP = [
-    "results/voxels/voxels.parquet",
-    "results/summary/capacity_summary.csv",
-    *expand("results/verify/payload_{payload}kg/{name}.png", payload=PAYLOADS,
+    out("voxels/voxels.parquet"),
+    out("summary/capacity_summary.csv"),
+    out("summary/capacity_3d.html"),
+    *expand(out("verify/payload_{payload}kg/{name}.png"), payload=PAYLOADS,
             name=["workspace", "torques", "base_force", "base_moment"]),
-    "results/verify/summary.csv",
-    "results/plan/gain.csv",
-    *expand("results/tasks/{task}/{name}.png", task=TASKS, name=["workspace", "torques", "base_force", "base_moment"]),
+    out("verify/summary.csv"),
+    out("plan/gain.csv"),
+    *expand(out("tasks/{task}/{name}.png"), task=TASKS, name=["workspace", "torques", "base_force", "base_moment"]),
 ]
 
 
@@ -48,17 +52,19 @@ rule capacity_map:
     # method family 1 alone: map, plans, verification and their figures
     input:
         CAPACITY_MAP,
+        [TABLE_PAGES[name] for name in ("capacity_summary", "verify_summary", "gain")],
 
 
 rule all:
     input:
         CAPACITY_MAP,
-        expand("results/follow/{case}/{name}.png", case=FOLLOW_CASES, name=["progress", "torques"]),
-        ["results/follow/summary.csv"] if FOLLOW_CASES else [],
-        [f"results/reconfig/{name}" for name in ("summary.csv", "manipulability.png", "joint_rates.png",
+        expand(out("follow/{case}/{name}.png"), case=FOLLOW_CASES, name=["progress", "torques"]),
+        [out("follow/summary.csv")] if FOLLOW_CASES else [],
+        [out(f"reconfig/{name}") for name in ("summary.csv", "manipulability.png", "joint_rates.png",
                                                  "passive_joint.png", "animation.html")] if RECONFIG_METHODS else [],
-        [f"results/dualarm/{name}" for name in ("summary.csv", "csqp_check.csv", "constraint_errors.png", "distances.png",
+        [out(f"dualarm/{name}") for name in ("summary.csv", "csqp_check.csv", "constraint_errors.png", "distances.png",
                                                 "joints.png", "velocities.png", "convergence.png", "animation.html")]
         if DUALARM else [],
-        "results/catalogue.parquet",
+        out("catalogue.parquet"),
+        list(TABLE_PAGES.values()),
     default_target: True

@@ -9,7 +9,7 @@ branch search (an exhaustive search, when there is no path, takes tens of second
 
     python tests/benchmarks/bench_branch_gain.py [--payload 3200] [--tasks 12] [--seed 1]
 
-Needs results/voxels/voxels.parquet and results/verify/payload_1500kg/ of the default run.
+Needs results/default/voxels/voxels.parquet and results/default/verify/payload_1500kg/ of the default run.
 """
 
 from __future__ import annotations
@@ -38,11 +38,11 @@ def main() -> None:
     ap.add_argument("--tasks", type=int, default=12)
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
-    deps = datasets.read("results/verify/payload_1500kg/timeseries.parquet").attrs["capmap"]["config"]
+    deps = datasets.read("results/default/verify/payload_1500kg/timeseries.parquet").attrs["capmap"]["config"]
     at = arm_task_from(deps)
     arm, rot, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
-    vox = datasets.read("results/voxels/voxels.parquet")
+    vox = datasets.read("results/default/voxels/voxels.parquet")
     grid = grid_of(vox)
     cap, axis_cap = vox.capacity_kg.to_numpy(), vox[AXIS_COLUMNS].to_numpy()
     usable = (vox.n_reachable > 0).to_numpy()

@@ -21,6 +21,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from capmap.config.run import run_name
+from capmap.config.validation import load_yaml
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -39,12 +42,12 @@ def _run(target: str, config: Path, cores: int) -> tuple[float, Path, tempfile.T
     return wall, tmp, holder
 
 
-def _jobs(tmp: Path) -> list[tuple[float, str]]:
-    """(wall s, job) of every job, from the 'job stage_x: 1.2 s wall' lines of the logs."""
+def _jobs(run: Path) -> list[tuple[float, str]]:
+    """(wall s, job) of every job, from the 'job stage_x: 1.2 s wall' lines of the run's logs."""
     out = []
-    for log in (tmp / "results" / "logs").rglob("*.log"):
+    for log in (run / "logs").rglob("*.log"):
         for m in re.finditer(r"job (stage_\w+): ([0-9.]+) s wall", log.read_text()):
-            out.append((float(m.group(2)), f"{m.group(1)} ({log.relative_to(tmp / 'results' / 'logs')})"))
+            out.append((float(m.group(2)), f"{m.group(1)} ({log.relative_to(run / 'logs')})"))
     return sorted(out, reverse=True)
 
 
@@ -54,11 +57,12 @@ def main():
     ap.add_argument("--cores", type=int, default=2)
     args = ap.parse_args()
     cfg = (ROOT / args.config).resolve()
+    name = run_name(load_yaml(cfg), str(cfg))  # the run's folder, results/<run>/
     wall, tmp, holder = _run("capacity_map", cfg, args.cores)
-    pts = pd.read_parquet(tmp / "results/voxels/points.parquet")
-    vox = pd.read_parquet(tmp / "results/voxels/voxels.parquet")
+    pts = pd.read_parquet(tmp / "results" / name / "voxels/points.parquet")
+    vox = pd.read_parquet(tmp / "results" / name / "voxels/voxels.parquet")
     dirs = pts.attrs["capmap"]["config"]["capacity"]["directions"]
-    jobs = _jobs(tmp)
+    jobs = _jobs(tmp / "results" / name)
     holder.cleanup()
     print(f"snakemake --cores {args.cores} capacity_map from clean: {wall:.1f} s wall (target < 30 s), "
           f"{len(jobs)} jobs, {sum(j[0] for j in jobs):.1f} s of job compute")
@@ -68,7 +72,7 @@ def main():
           f"{int((vox.n_points == 0).sum())} without samples)")
     print(f"  throughput {int(pts.n_states.sum()) / wall:,.0f} states/s end to end")
     wall, tmp, holder = _run("all", cfg, args.cores)
-    jobs = _jobs(tmp)
+    jobs = _jobs(tmp / "results" / name)
     holder.cleanup()
     print(f"snakemake --cores {args.cores} all from clean: {wall:.1f} s wall, {len(jobs)} jobs, "
           f"{sum(j[0] for j in jobs):.1f} s of job compute; longest jobs:")

@@ -6,6 +6,7 @@ import hashlib
 import re
 import shutil
 import subprocess
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pandas as pd
@@ -17,8 +18,8 @@ from tests.workflow.runs import config_file, planned_jobs, planned_jobs_of, snak
 
 def test_outputs_and_provenance(run_dir):
     tmp, _ = run_dir
-    pts = pd.read_parquet(tmp / "results/voxels/points.parquet")
-    vox = pd.read_parquet(tmp / "results/voxels/voxels.parquet")
+    pts = pd.read_parquet(tmp / "results/tiny/voxels/points.parquet")
+    vox = pd.read_parquet(tmp / "results/tiny/voxels/voxels.parquet")
     for col in ("point_id", "x_m", "y_m", "z_m", "reachable", "n_branches", "capacity_kg", "binding",
                 "worst_alpha_deg", "worst_beta_deg", "worst_branch"):
         assert col in pts.columns
@@ -28,7 +29,7 @@ def test_outputs_and_provenance(run_dir):
     assert meta["stage"] == "voxels" and meta["seed"] == 7 and meta["capmap_version"]
     assert meta["config"]["capacity"]["limits"]["joint_torque_nm"] == 700
     # points: each id exactly once across shards
-    assert pts.point_id.is_unique and len(pts) == pd.read_parquet(tmp / "results/sample/points.parquet").shape[0]
+    assert pts.point_id.is_unique and len(pts) == pd.read_parquet(tmp / "results/tiny/sample/points.parquet").shape[0]
     # reachable <=> at least one branch <=> finite capacity
     assert np.array_equal(pts.reachable, pts.n_branches > 0)
     assert np.array_equal(pts.reachable, np.isfinite(pts.capacity_kg))
@@ -37,8 +38,8 @@ def test_outputs_and_provenance(run_dir):
 
 def test_voxel_capacity_is_min_of_points_inside(run_dir):
     tmp, _ = run_dir
-    pts = pd.read_parquet(tmp / "results/voxels/points.parquet")
-    vox = pd.read_parquet(tmp / "results/voxels/voxels.parquet")
+    pts = pd.read_parquet(tmp / "results/tiny/voxels/points.parquet")
+    vox = pd.read_parquet(tmp / "results/tiny/voxels/voxels.parquet")
     grid = vox.attrs["capmap"]["grid"]
     edge, lower = grid["edge_m"], np.array(grid["lower_m"])
     # independent binning
@@ -58,7 +59,7 @@ def test_voxel_capacity_is_min_of_points_inside(run_dir):
 
 def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
-    cat = pd.read_parquet(tmp / "results/catalogue.parquet")
+    cat = pd.read_parquet(tmp / "results/tiny/catalogue.parquet")
     assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "sampled", "voxels", "waypoints",
                              "gain_tasks", "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud",
                              "environment", "robot_capsules", "trajectory", "fine", "outer"}  # two 'points', three 'timeseries'
@@ -68,63 +69,89 @@ def test_catalogue_lists_every_dataset(run_dir):
         assert hashlib.sha256(data).hexdigest() == row.sha256
         assert row.rows == len(pd.read_parquet(tmp / row.path))
         assert row.config_hash
-    cols = cat.set_index("path").loc["results/voxels/voxels.parquet", "columns"]
+    cols = cat.set_index("path").loc["results/tiny/voxels/voxels.parquet", "columns"]
     assert "capacity_kg [kg]" in list(cols) and "x_m [m]" in list(cols)
 
 
 def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     tmp, cfg = run_dir
     assert planned_jobs(tmp, cfg) == {}
-    after_payload = {"plan", "verify", "verify_plots", "verify_summary", "catalogue", "all"}
+    changes = [
+        {"limits.joint_torque_nm": 650},
+        {"limits.base_moment_nm": 450},
+        {"lock.angle_deg": 95},
+        {"lock.joint": 7},
+        {"lock.angle_deg": None},
+        {"task.payload_kg": 900, "follow.space.payload_kg": 900},
+        {"task.payload_kg": [1500, 900]},
+        {"verification.dt_s": 0.2},
+        {"task.q_ini_deg": [100, 124.5, 98, 130, 146, 174, 57]},
+        {"follow.ground.joint_torque_nm": 15},
+        {"follow.period_s": 0.002},
+        {"task.v_max_mps": 0.1},
+        {"reconfig.kappa0": 0.0003},
+        {"reconfig.animation_fps": 4},
+        {"reconfig.law.d_m": 0.2},
+        {"dualarm.weights.velocity": 2.0},
+        {"dualarm.margin_m": 0.004},
+        {"dualarm.check.max_iterations": 50},
+        {"dualarm.animation_fps": 4},
+        {"dualarm.cloud.noise_m": 0.004},
+    ]
+    with ThreadPoolExecutor(2) as pool:  # dry runs in parallel (each parses the workflow: seconds)
+        run = list(pool.map(lambda ch: planned_jobs(tmp, config_file(tmp_path, **ch)), changes))
+    # a plan also redraws the 3D map; every summary the report's table pages
+    after_payload = {"plan", "capacity_3d", "verify", "verify_plots", "verify_summary", "catalogue", "report_tables", "all"}
     follow = {"follow", "follow_plots", "follow_summary"}
     gain = {"plan_gain"}  # random tasks over the map, at the task payloads, verified at verification.dt_s
     downstream_of_capacity = {"capacity", "voxels", "voxel_map", "summary"} | gain | after_payload | follow
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"limits.joint_torque_nm": 650}))
+    jobs = run[0]
     assert set(jobs) == downstream_of_capacity and jobs["capacity"] == 2
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"limits.base_moment_nm": 450}))
+    jobs = run[1]
     assert set(jobs) == downstream_of_capacity
     # the failure in one edit: another angle, or another joint locked where it stood
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"lock.angle_deg": 95}))
+    jobs = run[2]
     assert set(jobs) == {"sample"} | downstream_of_capacity
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"lock.joint": 7}))
+    jobs = run[3]
     assert set(jobs) == {"sample"} | downstream_of_capacity
     # the lock angle written out as it stood, or the start written out as FK(q_ini): the same run
-    assert planned_jobs(tmp, config_file(tmp_path, **{"lock.angle_deg": None})) == {}
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"task.payload_kg": 900, "follow.space.payload_kg": 900}))
-    assert set(jobs) == after_payload | gain | follow and jobs["follow"] == 1  # the space case follows the new plan
+    assert run[4] == {}
+    jobs = run[5]
+    # the space case follows the new plan; the map's figure draws the payloads' contours
+    assert set(jobs) == after_payload | gain | follow | {"summary"} and jobs["follow"] == 1
     # a second payload: one new plan/verify/plots job each, nothing for the first payload (nor its follower)
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"task.payload_kg": [1500, 900]}))
-    assert set(jobs) == after_payload | gain and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"verification.dt_s": 0.2}))
-    assert set(jobs) == (after_payload - {"plan"}) | gain  # the follower does not sample at dt_s
+    jobs = run[6]
+    assert set(jobs) == after_payload | gain | {"summary"} and jobs["plan"] == jobs["verify"] == jobs["verify_plots"] == 1
+    jobs = run[7]
+    assert set(jobs) == (after_payload - {"plan", "capacity_3d"}) | gain  # the follower does not sample at dt_s
     # q_ini matters through the start branch it selects: rounded differently, nothing reruns
-    assert planned_jobs(tmp, config_file(tmp_path, **{"task.q_ini_deg": [100, 124.5, 98, 130, 146, 174, 57]})) == {}
+    assert run[8] == {}
     # the follower's own settings: only that case
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"follow.ground.joint_torque_nm": 15}))
-    assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == jobs["follow_plots"] == 1
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"follow.period_s": 0.002}))
-    assert set(jobs) == follow | {"catalogue", "all"} and jobs["follow"] == 2
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"task.v_max_mps": 0.1}))
+    jobs = run[9]
+    assert set(jobs) == follow | {"catalogue", "report_tables", "all"} and jobs["follow"] == jobs["follow_plots"] == 1
+    jobs = run[10]
+    assert set(jobs) == follow | {"catalogue", "report_tables", "all"} and jobs["follow"] == 2
+    jobs = run[11]
     assert set(jobs) == downstream_of_capacity
     # the reconfiguration family: kappa0 is the null-space method's only; the frame rate the animation's
-    reconfig = {"reconfig", "reconfig_summary", "reconfig_plots", "reconfig_animation", "catalogue", "all"}
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"reconfig.kappa0": 0.0003}))
+    reconfig = {"reconfig", "reconfig_summary", "reconfig_plots", "reconfig_animation", "catalogue", "report_tables", "all"}
+    jobs = run[12]
     assert set(jobs) == reconfig and jobs["reconfig"] == 1
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"reconfig.animation_fps": 4}))
+    jobs = run[13]
     assert set(jobs) == {"reconfig_animation", "all"}
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"reconfig.law.d_m": 0.2}))
+    jobs = run[14]
     assert set(jobs) == reconfig and jobs["reconfig"] == 2
     # the dual-arm family: a cost weight re-optimises, the scene and the capsules stay
-    motion = {"dualarm_optimise", "dualarm_check", "dualarm_plots", "dualarm_animation", "catalogue", "all"}
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.weights.velocity": 2.0}))
+    motion = {"dualarm_optimise", "dualarm_check", "dualarm_plots", "dualarm_animation", "catalogue", "report_tables", "all"}
+    jobs = run[15]
     assert set(jobs) == motion
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.margin_m": 0.004}))
+    jobs = run[16]
     assert set(jobs) == motion - {"dualarm_check"}  # the check has no inequalities
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.check.max_iterations": 50}))
-    assert set(jobs) == {"dualarm_check", "all"}
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.animation_fps": 4}))
+    jobs = run[17]
+    assert set(jobs) == {"dualarm_check", "report_tables", "all"}
+    jobs = run[18]
     assert set(jobs) == {"dualarm_animation", "all"}
-    jobs = planned_jobs(tmp, config_file(tmp_path, **{"dualarm.cloud.noise_m": 0.004}))
+    jobs = run[19]
     assert set(jobs) == {"dualarm_scan", "dualarm_envelope"} | motion
 
 
@@ -133,18 +160,18 @@ def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
     cfg3 = config_file(tmp_path, shards=3)
     jobs = planned_jobs(tmp, cfg3)
     assert jobs.get("capacity") == 3 and "sample" not in jobs and "model" not in jobs
-    before = pd.read_parquet(tmp / "results/voxels/voxels.parquet")
+    before = pd.read_parquet(tmp / "results/tiny/voxels/voxels.parquet")
     work3 = tmp_path / "w3"
     work3.mkdir()
     res = snakemake_run(work3, cfg3)
     assert res.returncode == 0, res.stderr[-2000:]
-    after = pd.read_parquet(work3 / "results/voxels/voxels.parquet")
+    after = pd.read_parquet(work3 / "results/tiny/voxels/voxels.parquet")
     pd.testing.assert_series_equal(before.capacity_kg, after.capacity_kg)
 
 
 def test_plan_and_verify_outputs(run_dir):
     tmp, _ = run_dir
-    res = tmp / "results"
+    res = tmp / "results" / "tiny"
     wp = pd.read_parquet(res / "plan/payload_1500kg/waypoints.parquet")
     meta = wp.attrs["capmap"]
     assert meta["status"] == "ok" and meta["payload_kg"] == 1500
@@ -175,7 +202,7 @@ def test_plan_and_verify_outputs(run_dir):
 
 def test_follow_outputs(run_dir):
     tmp, _ = run_dir
-    summ = pd.read_csv(tmp / "results/follow/summary.csv").set_index("case")
+    summ = pd.read_csv(tmp / "results/tiny/follow/summary.csv").set_index("case")
     assert list(summ.index) == ["space", "ground"]
     ground = summ.loc["ground"]
     assert ground.saturated_joints == "j1" and ground.command_peak_torque_pct > 105
@@ -183,19 +210,19 @@ def test_follow_outputs(run_dir):
     assert ground.max_deviation_m < 1e-4
     space = summ.loc["space"]
     assert space.path == "planned path" and space.segments >= 2 and space.follower_max_violation_pct < 0.01
-    ts = pd.read_parquet(tmp / "results/follow/ground/timeseries.parquet")
+    ts = pd.read_parquet(tmp / "results/tiny/follow/ground/timeseries.parquet")
     for col in ("t_s", "s_cmd_m", "s_m", "sd_mps", "sdd_mps2", "tau_cmd_j1_nm", "tau_j1_nm", "lag_m", "deviation_m"):
         assert col in ts.columns
     assert ts.attrs["capmap"]["torque_limits_nm"]["tau_j1_nm"] == 14
     assert ts.s_m.iloc[-1] == pytest.approx(0.5, abs=1e-4) and ts.limited.any()
     for case in ("space", "ground"):
         for png in ("progress", "torques"):
-            assert (tmp / f"results/follow/{case}/{png}.png").stat().st_size > 10_000
+            assert (tmp / f"results/tiny/follow/{case}/{png}.png").stat().st_size > 10_000
 
 
 def test_reconfig_outputs(run_dir):
     tmp, _ = run_dir
-    res = tmp / "results" / "reconfig"
+    res = tmp / "results" / "tiny" / "reconfig"
     runs = {m: pd.read_parquet(res / f"{m}.parquet") for m in ("nullspace", "pinv")}
     for method, df in runs.items():
         meta = df.attrs["capmap"]
@@ -217,7 +244,7 @@ def test_reconfig_outputs(run_dir):
 
 def test_dualarm_outputs(run_dir):
     tmp, _ = run_dir
-    res = tmp / "results" / "dualarm"
+    res = tmp / "results" / "tiny" / "dualarm"
     traj = pd.read_parquet(res / "trajectory.parquet")
     joints = traj.attrs["capmap"]["joints"]
     assert len(joints) == 14 and len(traj) == 101  # the tiny horizon: N = 100
@@ -247,23 +274,23 @@ def test_atlas_maps_agree_with_the_main_run_and_rerun_alone(run_dir, tmp_path):
     res = subprocess.run(["snakemake", "atlas", "-s", str(ROOT / "Snakefile"), "-d", str(tmp), "--cores", "2",
                           "--configfile", str(cfg)], capture_output=True, text=True, timeout=900)
     assert res.returncode == 0, res.stderr[-3000:]
-    atlas = pd.read_parquet(tmp / "results/atlas/atlas.parquet")
+    atlas = pd.read_parquet(tmp / "results/tiny/atlas/atlas.parquet")
     assert len(atlas) == 2 * 2 * 1 and set(atlas.joint) == {1, 4} and set(atlas.angle_deg) == {100.0, 130.0}
     # joint 1 at 100 deg is the main run's lock: the same start, so the same direct-line capacity
     row = atlas[(atlas.joint == 1) & (atlas.angle_deg == 100)].iloc[0]
-    summ = pd.read_csv(tmp / "results/verify/summary.csv").set_index(["payload_kg", "path"])
+    summ = pd.read_csv(tmp / "results/tiny/verify/summary.csv").set_index(["payload_kg", "path"])
     assert row.start_reachable and row.direct_capacity_kg == pytest.approx(summ.loc[(1500, "direct"), "capacity_kg"],
                                                                            rel=1e-12)
     assert row.start_branch_offset_deg == pytest.approx(0.54, abs=0.01)
     # every map's summary agrees with its own voxels (reachable volume, volume carrying the payload)
     for _, r in atlas.iterrows():
-        vox = pd.read_parquet(tmp / f"results/atlas/joint{r.joint}_angle{r.angle_deg:g}/voxels.parquet")
+        vox = pd.read_parquet(tmp / f"results/tiny/atlas/joint{r.joint}_angle{r.angle_deg:g}/voxels.parquet")
         reach = vox[vox.n_reachable > 0]
         assert r.reachable_volume_m3 == pytest.approx(len(reach) * 27.0)
         assert r.volume_carrying_payload_m3 == pytest.approx((reach.capacity_kg >= r.payload_kg).sum() * 27.0)
-    curves = pd.read_parquet(tmp / "results/atlas/curves.parquet")
+    curves = pd.read_parquet(tmp / "results/tiny/atlas/curves.parquet")
     assert len(curves) == 4 * 101 and (curves.groupby(["joint", "angle_deg"]).volume_m3.diff().dropna() <= 0).all()
-    cat = pd.read_parquet(tmp / "results/atlas/catalogue.parquet")
+    cat = pd.read_parquet(tmp / "results/tiny/atlas/catalogue.parquet")
     assert len(cat) == 4 * 2 + 2
     # another angle: one new map and the table; nothing of the main run
     jobs = planned_jobs_of(tmp, config_file(tmp_path, **{"atlas.angles_deg": [100, 130, 160]}), "atlas")
@@ -276,11 +303,11 @@ def test_payload_without_a_path_is_reported_not_fatal(run_dir, tmp_path):
     shutil.copytree(tmp, work, symlinks=True)
     res = snakemake_run(work, config_file(tmp_path, **{"task.payload_kg": [1500, 90000]}))
     assert res.returncode == 0, res.stderr[-2000:]
-    wp = pd.read_parquet(work / "results/plan/payload_90000kg/waypoints.parquet")
+    wp = pd.read_parquet(work / "results/tiny/plan/payload_90000kg/waypoints.parquet")
     assert len(wp) == 0 and wp.attrs["capmap"]["status"] == "no_path"
     reason = "no path executable on the start's IK branch ({} of {}) carrying task.payload_kg = 90000"  # branch moves
     assert re.match(re.escape(reason).replace(r"\{\}", r"\d+"), wp.attrs["capmap"]["reason"]), wp.attrs["capmap"]["reason"]
-    summ = pd.read_csv(work / "results/verify/summary.csv").set_index(["payload_kg", "path"])
+    summ = pd.read_csv(work / "results/tiny/verify/summary.csv").set_index(["payload_kg", "path"])
     assert "carrying task.payload_kg = 90000" in summ.loc[(90000, "planned"), "planner"]
     direct = summ.loc[(90000, "direct")]
     assert not direct.loads_ok and not direct.feasible and direct.limits_exceeded_at_payload
@@ -291,12 +318,12 @@ def test_refined_voxels_never_exceed_their_sampled_minima(tmp_path):
     is at most the sampled one, attained at a point inside its voxel (the stored worst point), and
     the per-axis values are at least the isotropic value's lower bound 0."""
     cfg = config_file(tmp_path, **{"voxels.refine": {"min_points": 8, "max_points": 16, "near_min_points": 16}})
-    res = subprocess.run(["snakemake", "results/voxels/voxels.parquet", "-s", str(ROOT / "Snakefile"), "-d",
+    res = subprocess.run(["snakemake", "results/tiny/voxels/voxels.parquet", "-s", str(ROOT / "Snakefile"), "-d",
                           str(tmp_path), "--cores", "2", "--configfile", str(cfg)], capture_output=True, text=True,
                          timeout=600)
     assert res.returncode == 0, res.stderr[-2000:]
-    vox = pd.read_parquet(tmp_path / "results/voxels/voxels.parquet")
-    assert (tmp_path / "results/voxels/refined_1_of_2.parquet").exists()
+    vox = pd.read_parquet(tmp_path / "results/tiny/voxels/voxels.parquet")
+    assert (tmp_path / "results/tiny/voxels/refined_1_of_2.parquet").exists()
     r = vox[vox.n_reachable > 0]
     assert len(r) and (r.capacity_kg <= r.capacity_sampled_kg + 1e-9).all() and r.n_points.min() >= 8
     g = vox.attrs["capmap"]["grid"]

@@ -2,7 +2,7 @@
 #   snakemake --cores 2 atlas
 ATLAS_SLICES = atlas_slices(DOC)
 ATLAS_CASES = RUN.atlas.cases if RUN.atlas else []  # (joint, angle label)
-ATLAS_DIRS = [f"results/atlas/joint{j}_angle{a}" for j, a in ATLAS_CASES]
+ATLAS_DIRS = [out(f"atlas/joint{j}_angle{a}") for j, a in ATLAS_CASES]
 
 
 rule atlas_map:
@@ -10,15 +10,17 @@ rule atlas_map:
     input:
         robot=config["robot"],
     output:
-        voxels="results/atlas/joint{joint}_angle{angle}/voxels.parquet",
-        summary="results/atlas/joint{joint}_angle{angle}/summary.parquet",
+        voxels=out("atlas/joint{joint}_angle{angle}/voxels.parquet"),
+        summary=out("atlas/joint{joint}_angle{angle}/summary.parquet"),
     params:
         slice=with_code(canonical(ATLAS_SLICES.get("map", {})), "atlas_map"),
     log:
-        "results/logs/atlas/joint{joint}_angle{angle}.log",
+        out("logs/atlas/joint{joint}_angle{angle}.log"),
     wildcard_constraints:
         joint=r"\d+",
         angle=r"-?\d+(\.\d+)?",
+    conda:
+        "../envs/capmap.yaml"
     script:
         "../scripts/atlas_map.py"
 
@@ -29,14 +31,16 @@ rule atlas_tables:
         summaries=[f"{d}/summary.parquet" for d in ATLAS_DIRS],
         voxels=[f"{d}/voxels.parquet" for d in ATLAS_DIRS],
     output:
-        atlas="results/atlas/atlas.parquet",
-        curves="results/atlas/curves.parquet",
-        heatmap=report("results/atlas/heatmap.png", category="Fault atlas", caption="../report/atlas_heatmap.rst"),
-        curves_png=report("results/atlas/curves.png", category="Fault atlas", caption="../report/atlas_curves.rst"),
+        atlas=out("atlas/atlas.parquet"),
+        curves=out("atlas/curves.parquet"),
+        heatmap=report(out("atlas/heatmap.png"), category="Fault atlas", caption="../report/atlas_heatmap.rst"),
+        curves_png=report(out("atlas/curves.png"), category="Fault atlas", caption="../report/atlas_curves.rst"),
     params:
         slice=with_code(canonical(ATLAS_SLICES.get("atlas", {})), "atlas"),
     log:
-        "results/logs/atlas/atlas.log",
+        out("logs/atlas/atlas.log"),
+    conda:
+        "../envs/capmap.yaml"
     script:
         "../scripts/atlas.py"
 
@@ -45,14 +49,16 @@ rule atlas_catalogue:
     """Catalogue of the atlas datasets."""
     input:
         [f"{d}/{name}.parquet" for d in ATLAS_DIRS for name in ("voxels", "summary")],
-        "results/atlas/atlas.parquet",
-        "results/atlas/curves.parquet",
+        out("atlas/atlas.parquet"),
+        out("atlas/curves.parquet"),
     output:
-        "results/atlas/catalogue.parquet",
+        out("atlas/catalogue.parquet"),
     params:
         code=with_code("{}", "catalogue"),
     log:
-        "results/logs/atlas/catalogue.log",
+        out("logs/atlas/catalogue.log"),
+    conda:
+        "../envs/capmap.yaml"
     script:
         "../scripts/catalogue.py"
 
@@ -60,7 +66,7 @@ rule atlas_catalogue:
 rule atlas:
     """Target: the fault atlas of the config's atlas section."""
     input:
-        "results/atlas/atlas.parquet",
-        "results/atlas/heatmap.png",
-        "results/atlas/curves.png",
-        "results/atlas/catalogue.parquet",
+        out("atlas/atlas.parquet"),
+        out("atlas/heatmap.png"),
+        out("atlas/curves.png"),
+        out("atlas/catalogue.parquet"),

@@ -8,14 +8,16 @@ rule reconfig:
     input:
         robot=lambda w: config["reconfig"]["robot"],
     output:
-        table="results/reconfig/{method}.parquet",
-        timing="results/reconfig/{method}_timing.json",
+        table=out("reconfig/{method}.parquet"),
+        timing=out("reconfig/{method}_timing.json"),
     params:
         slice=lambda w: with_code(canonical(RECONFIG_SLICES[w.method]), "reconfig"),
     log:
-        "results/logs/reconfig/{method}.log",
+        out("logs/reconfig/{method}.log"),
     wildcard_constraints:
         method="nullspace|pinv",
+    conda:
+        "../envs/capmap.yaml"
     script:
         "../scripts/reconfig.py"
 
@@ -23,15 +25,17 @@ rule reconfig:
 rule reconfig_summary:
     """Both methods side by side: m, closure, rates, range margins, time per step."""
     input:
-        tables=expand("results/reconfig/{method}.parquet", method=RECONFIG_METHODS),
-        timings=expand("results/reconfig/{method}_timing.json", method=RECONFIG_METHODS),
+        tables=expand(out("reconfig/{method}.parquet"), method=RECONFIG_METHODS),
+        timings=expand(out("reconfig/{method}_timing.json"), method=RECONFIG_METHODS),
     output:
-        csv=report("results/reconfig/summary.csv", category="Reconfiguration", caption="../report/reconfig_summary.rst"),
-        md="results/reconfig/summary.md",
+        csv=out("reconfig/summary.csv"),
+        md=out("reconfig/summary.md"),
     params:
         code=with_code("{}", "reconfig_summary"),
     log:
-        "results/logs/reconfig/summary.log",
+        out("logs/reconfig/summary.log"),
+    conda:
+        "../envs/capmap.yaml"
     script:
         "../scripts/reconfig_summary.py"
 
@@ -39,18 +43,20 @@ rule reconfig_summary:
 rule reconfig_plots:
     """m(t), joint rates and the passive joint's motion for both methods."""
     input:
-        expand("results/reconfig/{method}.parquet", method=RECONFIG_METHODS),
+        expand(out("reconfig/{method}.parquet"), method=RECONFIG_METHODS),
     output:
-        manipulability=report("results/reconfig/manipulability.png", category="Reconfiguration",
+        manipulability=report(out("reconfig/manipulability.png"), category="Reconfiguration",
                               caption="../report/reconfig_manipulability.rst"),
-        rates=report("results/reconfig/joint_rates.png", category="Reconfiguration",
+        rates=report(out("reconfig/joint_rates.png"), category="Reconfiguration",
                      caption="../report/reconfig_rates.rst"),
-        passive=report("results/reconfig/passive_joint.png", category="Reconfiguration",
+        passive=report(out("reconfig/passive_joint.png"), category="Reconfiguration",
                        caption="../report/reconfig_passive.rst"),
     params:
         code=with_code("{}", "reconfig_plots"),
     log:
-        "results/logs/reconfig/plots.log",
+        out("logs/reconfig/plots.log"),
+    conda:
+        "../envs/capmap.yaml"
     script:
         "../scripts/reconfig_plots.py"
 
@@ -59,13 +65,15 @@ rule reconfig_animation:
     """Offline 3D animation (MeshCat static HTML) of the reconfiguration."""
     input:
         robot=lambda w: config["reconfig"]["robot"],
-        tables=expand("results/reconfig/{method}.parquet", method=RECONFIG_METHODS),
+        tables=expand(out("reconfig/{method}.parquet"), method=RECONFIG_METHODS),
     output:
-        report("results/reconfig/animation.html", category="Reconfiguration",
+        report(out("reconfig/animation.html"), category="Reconfiguration",
                caption="../report/reconfig_animation.rst"),
     params:
         slice=lambda w: with_code(canonical(RECONFIG_SLICES["animation"]), "reconfig_animation"),
     log:
-        "results/logs/reconfig/animation.log",
+        out("logs/reconfig/animation.log"),
+    conda:
+        "../envs/capmap.yaml"
     script:
         "../scripts/reconfig_animation.py"

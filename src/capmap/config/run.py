@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,7 +24,7 @@ from capmap.config.slices import payload_label
 from capmap.config.validation import load_yaml, validate
 from capmap.errors import ConfigError
 
-__all__ = ["RunConfig", "parse_config", "load_config"]
+__all__ = ["RunConfig", "parse_config", "load_config", "run_name"]
 
 
 @dataclass(frozen=True)
@@ -47,6 +48,16 @@ class RunConfig:
     atlas: AtlasConfig | None = None
     failure: Failure | None = None
     estimate: Estimate | None = None
+    name: str = "default"
+
+
+def run_name(doc: dict, source: str = "config") -> str:
+    """The run's name, its folder under ``results/``: the config's ``run`` key, else the name of the
+    (last) config file without its suffix ("my_lock95.yaml" -> "my_lock95"), else "default"."""
+    if "run" in doc:
+        return str(doc["run"])
+    stem = re.sub(r"[^A-Za-z0-9_.-]", "_", Path(source.split(", ")[-1]).stem).lstrip("_.-")[:64]
+    return stem if stem and source != "config" else "default"
 
 
 def parse_config(doc: object, source: str = "config") -> RunConfig:
@@ -78,6 +89,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         reconfig=ReconfigConfig.from_doc(doc["reconfig"]) if "reconfig" in doc else None,
         dualarm=dualarm,
         atlas=atlas,
+        name=run_name(doc, source),
     )
 
 

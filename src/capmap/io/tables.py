@@ -7,10 +7,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-__all__ = ["write_table", "write_quantities"]
+__all__ = ["fmt_value", "write_table", "write_quantities"]
 
 
-def _fmt(v) -> str:
+def fmt_value(v) -> str:
+    """A cell for people: floats to 4 significant digits (one decimal from 100), NaN and None empty."""
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, (float, np.floating)):
         return "" if v is None else str(v)
     return "" if np.isnan(v) else f"{v:.1f}" if 100 <= abs(v) < 1e6 else f"{v:.4g}"
@@ -21,7 +22,7 @@ def write_table(df: pd.DataFrame, out_csv: str | Path, out_md: str | Path) -> No
     by its first two fields (e.g. payload and path)."""
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out_csv, index=False)
-    md = df.iloc[:, 2:].map(_fmt).T
+    md = df.iloc[:, 2:].map(fmt_value).T
     md.columns = [f"{a:g} kg, {b}" if df.columns[0] == "payload_kg" else f"{a} {b}"
                   for a, b in zip(df.iloc[:, 0], df.iloc[:, 1])]
     Path(out_md).write_text(md.to_markdown() + "\n")
@@ -32,6 +33,6 @@ def write_quantities(rows: list[tuple[str, object]], out_csv: str | Path, out_md
     table = pd.DataFrame(rows, columns=["quantity", "value"])
     Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(out_csv, index=False)
-    Path(out_md).write_text(table.assign(value=table.value.map(_fmt)).to_markdown(index=False) + "\n")
+    Path(out_md).write_text(table.assign(value=table.value.map(fmt_value)).to_markdown(index=False) + "\n")
     return table
 

@@ -10,32 +10,80 @@ import pandas as pd
 
 from capmap.plots.common import plt, save
 
-__all__ = ["capacity_map", "workspace_paths", "load_series", "PATH_STYLE"]
+__all__ = ["capacity_map", "workspace_paths", "load_series", "load_label", "PATH_STYLE"]
 
 
-def capacity_map(vox: pd.DataFrame, out_png: str | Path, title: str = "Dynamic load-carrying capacity") -> None:
-    """3D scatter of reachable voxel centres coloured by capacity, and the fullest z-slice."""
+def _layer(vox: pd.DataFrame, k: int) -> tuple[np.ndarray, list[float]]:
+    """Capacity image (ny, nx) of voxel layer ``k`` (NaN: unreachable) and its imshow extent [m]."""
+    grid = vox.attrs["capmap"]["grid"]
+    dx, lo, (nx, ny, _) = grid["edge_m"], grid["lower_m"], grid["shape"]
+    sl = vox[vox.k == k]
+    img = np.full((ny, nx), np.nan)
+    img[sl.j.to_numpy(), sl.i.to_numpy()] = np.where(sl.n_reachable > 0, sl.capacity_kg, np.nan)
+    return img, [lo[0], lo[0] + nx * dx, lo[1], lo[1] + ny * dx]
+
+
+def _layer_of(vox: pd.DataFrame, z_m: float) -> int:
+    grid = vox.attrs["capmap"]["grid"]
+    return int(np.clip(np.floor((z_m - grid["lower_m"][2]) / grid["edge_m"]), 0, grid["shape"][2] - 1))
+
+
+def capacity_map(vox: pd.DataFrame, view, out_png: str | Path) -> None:
+    """The map for people: the share of reachable voxels carrying each payload, and three horizontal
+    voxel layers (the start's, the goal's and the fullest) coloured by capacity on one full-range
+    scale, the task payloads as contour lines, start and goal marked. ``view``: a
+    :class:`capmap.stages.capacity_figures.MapView` (start_m, goal_m, payloads_kg)."""
     reach = vox[vox.n_reachable > 0]
-    fig = plt.figure(figsize=(13, 5.5))
-    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    grid = vox.attrs["capmap"]["grid"]
+    fig, axes = plt.subplots(2, 2, figsize=(12, 10.5), layout="constrained")
+    cap = np.sort(reach.capacity_kg.to_numpy())
+    vmax = float(cap[-1]) if len(cap) and cap[-1] > 0 else 1.0
+    mmax = 1.05 * max(vmax, *view.payloads_kg)
+    ax = axes[0, 0]
+    ax.step(cap, 1.0 - np.arange(len(cap)) / max(len(cap), 1), where="post", color="tab:blue")
+    pay_colors = ["white", "tab:red", "magenta", "orange"]
+    for n, m in enumerate(view.payloads_kg):
+        share = float(np.mean(cap >= m)) if len(cap) else 0.0
+        ax.axvline(m, color="k", ls="--", lw=1)
+        right = m > 0.7 * mmax
+        ax.annotate(f"{m:g} kg: {100 * share:.0f}% of voxels", (m, share), xytext=(-6 if right else 6, 6 + 14 * n),
+                    textcoords="offset points", fontsize=9, ha="right" if right else "left")
+    ax.set(xlabel="payload M [kg]", ylabel="share of reachable voxels carrying M", ylim=(0, 1.02), xlim=(0, mmax),
+           title=f"{len(reach):,} reachable voxels (edge {grid['edge_m']:g} m)\ndashed: task payloads")
+    ax.grid(alpha=0.3)
+    layers = [("start's", _layer_of(vox, view.start_m[2])), ("goal's", _layer_of(vox, view.goal_m[2]))]
     if len(reach):
-        vmin, vmax = np.nanpercentile(reach.capacity_kg, [1, 99])
-        sc = ax.scatter(reach.x_m, reach.y_m, reach.z_m, c=reach.capacity_kg, s=6, cmap="viridis", vmin=vmin, vmax=vmax)
-        fig.colorbar(sc, ax=ax, shrink=0.7, label="capacity [kg]")
-    ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"{title}\n{len(reach)} reachable voxels")
-    ax2 = fig.add_subplot(1, 2, 2)
-    if len(reach):
-        k = reach.k.value_counts().idxmax()
-        sl = vox[vox.k == k]
-        nx, ny = sl.i.max() + 1, sl.j.max() + 1
-        img = np.full((ny, nx), np.nan)
-        img[sl.j.to_numpy(), sl.i.to_numpy()] = sl.capacity_kg.to_numpy()
-        dx = vox.attrs["capmap"]["grid"]["edge_m"]
-        x0, y0 = sl.x_m.min(), sl.y_m.min()
-        im = ax2.imshow(img, origin="lower", cmap="viridis", vmin=vmin, vmax=vmax,
-                        extent=[x0 - dx / 2, x0 + (nx - 0.5) * dx, y0 - dx / 2, y0 + (ny - 0.5) * dx])
-        fig.colorbar(im, ax=ax2, label="capacity [kg]")
-        ax2.set(xlabel="x [m]", ylabel="y [m]", title=f"slice z = {sl.z_m.iloc[0]:.3f} m (white: unreachable)")
+        layers.append(("fullest", int(reach.k.value_counts().idxmax())))
+    im = None
+    for ax, (what, k) in zip([axes[0, 1], axes[1, 0], axes[1, 1]], layers):
+        img, extent = _layer(vox, k)
+        z = grid["lower_m"][2] + (k + 0.5) * grid["edge_m"]
+        im = ax.imshow(img, origin="lower", cmap="viridis", vmin=0.0, vmax=vmax, extent=extent, interpolation="nearest")
+        drawn = []
+        for n, m in enumerate(view.payloads_kg):
+            lo, hi = np.nanmin(img, initial=np.inf), np.nanmax(img, initial=-np.inf)
+            if lo < m <= hi:
+                ax.contour(np.where(np.isnan(img), -1.0, img), levels=[m], colors=pay_colors[n % 4], linewidths=1.3,
+                           extent=extent, origin="lower")
+                drawn.append(f"{m:g} kg ({pay_colors[n % 4]})")
+            else:
+                drawn.append(f"{m:g} kg: {'no voxel carries it' if hi < m else 'every voxel carries it'}")
+        for pos, name, mk, col in ((view.start_m, "start", "o", "tab:green"), (view.goal_m, "goal", "*", "tab:orange")):
+            inside = _layer_of(vox, pos[2]) == k
+            ax.plot(pos[0], pos[1], mk, ms=11, mfc=col if inside else "none", mec=col, mew=2,
+                    label=f"{name}{'' if inside else ' (other layer, projected)'}")
+        ax.set(xlabel="x [m]", ylabel="y [m]",
+               title=f"{what} voxel layer, z = {z:.3f} m\ncontours: " + "; ".join(drawn))
+        ax.xaxis.set_major_locator(plt.MaxNLocator(6))
+        ax.legend(fontsize=8, loc="lower left", framealpha=0.9)
+    if im is not None:
+        cb = fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.6,
+                          label="voxel capacity [kg] (white: unreachable; black lines: task payloads)")
+        for m in view.payloads_kg:
+            if m <= vmax:
+                cb.ax.axhline(m, color="k", lw=1.5)
+    fig.suptitle("Dynamic load-carrying capacity of each voxel: the least over its points, every IK branch and "
+                 "motion direction", fontsize=12)
     save(fig, out_png)
 
 
@@ -43,66 +91,94 @@ PATH_STYLE = {"direct": {"color": "tab:red", "ls": "--", "label": "direct line"}
               "planned": {"color": "black", "ls": "-", "label": "planned path"}}
 
 
-def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_png: str | Path) -> None:
+def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_png: str | Path,
+                    no_path: str = "") -> None:
     """Voxels near the paths coloured by capacity (grey: below the payload), the direct line and
-    the planned path in 3D; and the x-y slice through the goal's voxel layer."""
+    the planned path in 3D; and the x-y voxel layer of the goal. ``no_path``: why there is no planned
+    path (shown in both panels), '' when there is one."""
     reach = vox[vox.n_reachable > 0]
     dx = vox.attrs["capmap"]["grid"]["edge_m"]
     lo = ts[["x_m", "y_m", "z_m"]].min().to_numpy() - 1.5 * dx
     hi = ts[["x_m", "y_m", "z_m"]].max().to_numpy() + 1.5 * dx
     xyz = reach[["x_m", "y_m", "z_m"]].to_numpy()
     near = reach[np.all((xyz >= lo) & (xyz <= hi), axis=1)]
-    vmin, vmax = (np.nanpercentile(reach.capacity_kg, [1, 99]) if len(reach) else (0, 1))
-    fig = plt.figure(figsize=(13, 5.5))
+    vmax = float(max(np.nanmax(reach.capacity_kg), payload_kg)) if len(reach) else 1.0
+    fig = plt.figure(figsize=(13, 5.8))
     ax = fig.add_subplot(1, 2, 1, projection="3d")
     strong = near[near.capacity_kg >= payload_kg]
     weak = near[near.capacity_kg < payload_kg]
-    sc = ax.scatter(strong.x_m, strong.y_m, strong.z_m, c=strong.capacity_kg, s=8, cmap="viridis", vmin=vmin,
-                    vmax=vmax, alpha=0.25, depthshade=False)
-    ax.scatter(weak.x_m, weak.y_m, weak.z_m, c="0.5", s=10, marker="x", alpha=0.5, label=f"< {payload_kg:g} kg")
+    sc = ax.scatter(strong.x_m, strong.y_m, strong.z_m, c=strong.capacity_kg, s=8, cmap="viridis", vmin=0, vmax=vmax,
+                    alpha=0.25, depthshade=False)
+    ax.scatter(weak.x_m, weak.y_m, weak.z_m, c="0.5", s=10, marker="x", alpha=0.5,
+               label=f"voxel < {payload_kg:g} kg (least over all IK branches)")
     for name, g in ts.groupby("path", observed=True):
         ax.plot(g.x_m, g.y_m, g.z_m, lw=2.5, zorder=10, **PATH_STYLE.get(name, {}))
     first = ts.iloc[0]
     last = ts[ts.path == ts.path.iloc[0]].iloc[-1]
     ax.scatter([first.x_m], [first.y_m], [first.z_m], c="tab:green", s=60, marker="o", label="start")
     ax.scatter([last.x_m], [last.y_m], [last.z_m], c="tab:orange", s=80, marker="*", label="goal")
-    fig.colorbar(sc, ax=ax, shrink=0.7, label="voxel capacity [kg]")
-    ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title=f"Voxels near the paths, payload {payload_kg:g} kg",
-           xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
+    fig.colorbar(sc, ax=ax, shrink=0.7, pad=0.12, label="voxel capacity [kg]")
+    ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]),
+           title=f"Voxels near the paths, payload {payload_kg:g} kg" + (f"\nno planned path: {_short(no_path)}"
+                                                                          if no_path else ""))
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(plt.MaxNLocator(4))
     ax.set_box_aspect(hi - lo)
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(loc="upper left", fontsize=7)
     ax2 = fig.add_subplot(1, 2, 2)
-    k_goal = int(np.floor((last.z_m - vox.attrs["capmap"]["grid"]["lower_m"][2]) / dx))
-    sl = vox[vox.k == k_goal]
-    nx, ny = int(sl.i.max()) + 1, int(sl.j.max()) + 1
-    img = np.full((ny, nx), np.nan)
-    img[sl.j.to_numpy(), sl.i.to_numpy()] = sl.capacity_kg.to_numpy()
-    x0, y0 = sl.x_m.min(), sl.y_m.min()
-    extent = [x0 - dx / 2, x0 + (nx - 0.5) * dx, y0 - dx / 2, y0 + (ny - 0.5) * dx]
-    im = ax2.imshow(img, origin="lower", cmap="viridis", vmin=vmin, vmax=vmax, extent=extent)
-    ax2.contour(np.where(np.isnan(img), -1, img), levels=[payload_kg], colors="white", linewidths=1.2,
-                extent=extent, origin="lower")
+    img, extent = _layer(vox, _layer_of(vox, last.z_m))
+    im = ax2.imshow(img, origin="lower", cmap="viridis", vmin=0, vmax=vmax, extent=extent, interpolation="nearest")
+    has_edge = np.nanmin(img, initial=np.inf) < payload_kg <= np.nanmax(img, initial=-np.inf)
+    if has_edge:
+        ax2.contour(np.where(np.isnan(img), -1, img), levels=[payload_kg], colors="white", linewidths=1.2,
+                    extent=extent, origin="lower")
     for name, g in ts.groupby("path", observed=True):
         ax2.plot(g.x_m, g.y_m, lw=1.5, **PATH_STYLE.get(name, {}))
-    ax2.plot(last.x_m, last.y_m, "*", color="tab:orange", ms=12)
-    fig.colorbar(im, ax=ax2, label="voxel capacity [kg]")
-    ax2.set(xlabel="x [m]", ylabel="y [m]",
-            title=f"goal layer z = {sl.z_m.iloc[0]:.3f} m; white: {payload_kg:g} kg contour")
-    ax2.legend(fontsize=8)
+    ax2.plot(last.x_m, last.y_m, "*", color="tab:orange", ms=12, label="goal")
+    ax2.plot(first.x_m, first.y_m, "o", mfc="none", mec="tab:green", mew=2, ms=9, label="start (projected)")
+    cb = fig.colorbar(im, ax=ax2, label="voxel capacity [kg] (white: unreachable)")
+    cb.ax.axhline(payload_kg, color="k", lw=1.5)
+    z = vox.attrs["capmap"]["grid"]["lower_m"][2] + (_layer_of(vox, last.z_m) + 0.5) * dx
+    edge = (f"white line: boundary of {payload_kg:g} kg" if has_edge else
+            f"no voxel of this layer carries {payload_kg:g} kg" if np.nanmax(img, initial=0) < payload_kg else
+            f"every voxel of this layer carries {payload_kg:g} kg")
+    ax2.set(xlabel="x [m]", ylabel="y [m]", title=f"goal's voxel layer z = {z:.3f} m; {edge}")
+    ax2.legend(fontsize=8, loc="lower left")
+    if no_path:
+        ax2.text(0.5, 0.97, f"no planned path: {_short(no_path)}", transform=ax2.transAxes, ha="center", va="top",
+                 fontsize=8, bbox=dict(fc="white", ec="tab:red", alpha=0.9), wrap=True)
     save(fig, out_png)
 
 
+def _short(text: str, n: int = 90) -> str:
+    return text if len(text) <= n else text[: n - 1] + "…"
+
+
+# the quantity and unit of each load column, for axis labels and legends
+QUANTITY = {"tau": ("joint torque", "N m"), "base_f": ("base disturbance force", "N"),
+            "base_m": ("base disturbance moment", "N m")}
+
+
+def load_label(column: str) -> str:
+    """'tau_j3_nm' -> 'τ joint 3', 'base_fx_n' -> 'F_x', 'base_my_nm' -> 'M_y'."""
+    if column.startswith("tau_j"):
+        return f"τ joint {column.split('_')[1][1:]}"
+    return f"{'F' if column.startswith('base_f') else 'M'}_{column.split('_')[1][1:]}"
+
+
 def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, out_png: str | Path) -> None:
-    """One panel per path: the given outputs over time with their +-limit lines."""
+    """One panel per path: the given loads over time, each with its +-limit as dotted lines of its
+    own colour (one grey pair when all share one limit)."""
     paths = list(ts.path.cat.categories if hasattr(ts.path, "cat") else ts.path.unique())
+    quantity, unit = next(v for k, v in QUANTITY.items() if columns[0].startswith(k))
     fig, axes = plt.subplots(len(paths), 1, figsize=(11, 3.6 * len(paths)), squeeze=False, sharex=True)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    same = len({limits[k] for k in columns}) == 1  # one pair of grey lines serves all
     for ax, name in zip(axes[:, 0], paths):
         g = ts[ts.path == name]
         for n, col in enumerate(columns):
             c = colors[n % len(colors)]
-            ax.plot(g.t_s, g[col], color=c, lw=1.2, label=col)
-            same = len({limits[k] for k in columns}) == 1  # one pair of grey lines serves all
+            ax.plot(g.t_s, g[col], color=c, lw=1.2, label=load_label(col))
             if not same or n == 0:
                 lim = limits[col]
                 ax.axhline(lim, color="0.3" if same else c, ls=":", lw=1.2)
@@ -110,10 +186,11 @@ def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, 
         peak = max(np.nanmax(np.abs(g[c]) / limits[c]) for c in columns)
         top = 1.4 * max(max(limits[c] for c in columns), max(np.nanmax(np.abs(g[c])) for c in columns))
         ax.set_ylim(-top, top)  # room for the legend above the limit lines
-        ax.set(ylabel=columns[0].rsplit("_", 1)[-1].replace("nm", "[N m]").replace("n", "[N]"),
-               title=f"{PATH_STYLE.get(name, {}).get('label', name)}: peak {100 * peak:.0f}% of limit (dotted: +-limit)")
+        lim_note = (f"dotted grey: ±{limits[columns[0]]:g} {unit}" if same else "dotted: ±limit, colour of its load")
+        ax.set(ylabel=f"{quantity} [{unit}]",
+               title=f"{PATH_STYLE.get(name, {}).get('label', name)}: peak {100 * peak:.0f}% of its limit ({lim_note})")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncol=len(columns), loc="upper right")
-    axes[-1, 0].set_xlabel("t [s]")
+    axes[-1, 0].set_xlabel("time t [s]")
     fig.suptitle(title + ("" if "planned" in paths else " (no planned path at this payload: see the summary)"))
     save(fig, out_png)

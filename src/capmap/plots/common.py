@@ -13,9 +13,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 __all__ = ["plt", "save"]
 
 
-def save(fig, out_png: str | Path) -> None:
-    """Lay out, write (110 dpi, parents created) and close a figure."""
-    fig.tight_layout()
+def save(fig, out_png: str | Path, rect: tuple[float, float, float, float] | None = None) -> None:
+    """Lay out (within ``rect`` of the figure when given: room for a figure legend), write (110 dpi,
+    parents created) and close a figure."""
+    if not fig.get_layout_engine():
+        fig.tight_layout(rect=rect)
     Path(out_png).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out_png, dpi=110)
     plt.close(fig)

@@ -19,7 +19,7 @@ def follow_progress(ts: pd.DataFrame, tp: pd.DataFrame, case: str, out_png: str 
     ax.plot(ts.t_s, ts.s_cmd_m, "--", color="tab:blue", lw=1.2, label="command s (S-curve)")
     ax.plot(ts.t_s, ts.s_m, color="black", lw=1.2, label="followed s")
     ax.plot(tp.t_s, tp.s_m, ":", color="tab:green", lw=1.2, label="TOPP-RA (time-optimal, no jerk limit)")
-    ax.set(ylabel="s [m]", title=f"{case}: path coordinate")
+    ax.set(ylabel="path coordinate s [m]", title=f"{case}: progress along the path")
     ax.legend(fontsize=8)
     ax = axes[1]
     ax.plot(ts.t_s, ts.sd_cmd_mps, "--", color="tab:blue", lw=1.2, label="command")
@@ -29,40 +29,70 @@ def follow_progress(ts: pd.DataFrame, tp: pd.DataFrame, case: str, out_png: str 
     if lim.any():
         ax.fill_between(ts.t_s, 0, ts.sd_mps.max() * 1.05, where=lim, color="tab:red", alpha=0.12, step="mid",
                         label="torque limit active")
-    ax.set(ylabel="sd [m/s]")
+    ax.set(ylabel="path speed ds/dt [m/s]")
     ax.legend(fontsize=8)
     axes[2].plot(ts.t_s, 1e3 * ts.lag_m, color="tab:purple")
-    axes[2].set(ylabel="lag s_cmd - s [mm]")
-    axes[3].plot(ts.t_s, 1e6 * ts.deviation_m, color="tab:brown", label="position")
-    axes[3].set(ylabel="path deviation [um]", xlabel="t [s]",
-                title=f"deviation of the joint command from the line: max {1e6 * ts.deviation_m.max():.2f} um, "
-                      f"{np.rad2deg(ts.deviation_rad.max()) * 3600:.3f} arcsec")
+    axes[2].set(ylabel="lag s_cmd - s [mm]", title="lag of the follower behind the command")
+    # deviation: the largest value in each window (a line, not a block of sample-to-sample rounding noise)
+    t_w, dev_w = _window_max(ts.t_s.to_numpy(), 1e6 * ts.deviation_m.to_numpy())
+    peak_um = 1e6 * ts.deviation_m.max()
+    axes[3].semilogy(t_w, np.maximum(dev_w, 1e-9), color="tab:brown", drawstyle="steps-post",
+                     label="largest deviation in each 0.5 s")
+    axes[3].axhline(1.0, color="0.4", ls=":", lw=1)
+    axes[3].set_ylim(1e-6, max(10.0, 3 * peak_um))
+    axes[3].legend(fontsize=8, loc="upper right")
+    axes[3].set(ylabel="path deviation [um]", xlabel="time t [s]",
+                title=f"deviation of the joint command from the path: max {peak_um:.3g} um, "
+                      f"{np.rad2deg(ts.deviation_rad.max()) * 3600:.3g} arcsec"
+                      + (" (numerical level, below the dotted 1 um line)" if peak_um < 1.0 else ""))
     for a in axes:
         a.grid(alpha=0.3)
     save(fig, out_png)
 
 
+def _window_max(t: np.ndarray, y: np.ndarray, window_s: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """Start time and largest value of each ``window_s`` window of a sampled series."""
+    idx = np.floor((t - t[0]) / window_s).astype(int)
+    starts = np.flatnonzero(np.r_[True, np.diff(idx) > 0])
+    return t[starts], np.maximum.reduceat(y, starts)
+
+
 def follow_torques(ts: pd.DataFrame, limits: dict, case: str, out_png: str | Path) -> None:
-    """Per joint: the torque the command would need (before limiting) and the follower's (after)."""
+    """Per joint: the torque the command would need (before limiting) and the follower's (after),
+    both limits in the scale of every panel, the periods with the limit active shaded, the
+    segment ends (rest at a waypoint) as vertical lines."""
     cols = list(limits)
     n = len(cols)
-    fig, axes = plt.subplots((n + 1) // 2, 2, figsize=(12, 2.6 * ((n + 1) // 2)), sharex=True, squeeze=False)
+    fig, axes = plt.subplots((n + 1) // 2, 2, figsize=(12, 2.7 * ((n + 1) // 2)), sharex=True, squeeze=False)
+    t = ts.t_s.to_numpy()
+    ends = t[np.flatnonzero(np.diff(ts.segment.to_numpy()))]
     for ax, col in zip(axes.ravel(), cols):
         lim = limits[col]
         before = ts[col.replace("tau_", "tau_cmd_")]
-        ax.plot(ts.t_s, before, "--", color="tab:blue", lw=1, label="command (before limiting)")
-        ax.plot(ts.t_s, ts[col], color="black", lw=1, label="followed (after)")
-        ax.axhline(lim, color="tab:red", ls=":", lw=1.2)
+        if ts.limited.any():
+            ax.fill_between(t, -1.2 * lim, 1.2 * lim, where=ts.limited.to_numpy(), color="tab:red", alpha=0.1,
+                            step="mid", lw=0, label="a torque limit active")
+        for e in ends:
+            ax.axvline(e, color="0.6", lw=0.8, ls="-")
+        ax.plot(t, before, "--", color="tab:blue", lw=1, label="command (before limiting)")
+        ax.plot(t, ts[col], color="black", lw=1, label="followed (after)")
+        ax.axhline(lim, color="tab:red", ls=":", lw=1.2, label="±limit")
         ax.axhline(-lim, color="tab:red", ls=":", lw=1.2)
         peak = ts[col].abs().max() / lim
-        top = 1.25 * max(lim if peak > 0.5 else 0, before.abs().max(), ts[col].abs().max(), 1e-9)
+        top = 1.2 * max(lim, before.abs().max(), ts[col].abs().max())
         ax.set_ylim(-top, top)
-        ax.set(ylabel="[N m]", title=f"{col}: limit {lim:g} N m, followed peak {100 * peak:.2f}%")
+        if max(before.abs().max(), ts[col].abs().max()) < 1e-6 * lim:
+            ax.text(0.5, 0.75, "no load on this path (|τ| < 1e-6 of the limit)", transform=ax.transAxes,
+                    ha="center", va="center", fontsize=9, color="0.3")
+        ax.set(ylabel="torque [N m]", title=f"joint {col.split('_')[1][1:]}: limit ±{lim:g} N m, "
+                                            f"followed peak {100 * peak:.1f}%")
         ax.grid(alpha=0.3)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
-    axes.ravel()[0].legend(fontsize=8)
+    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8, bbox_to_anchor=(0.5, 0.0))
     for ax in axes[-1]:
-        ax.set_xlabel("t [s]")
-    fig.suptitle(f"{case}: joint torques before and after limiting (red dotted: +-limit)")
-    save(fig, out_png)
+        ax.set_xlabel("time t [s]")
+    fig.suptitle(f"{case}: joint torques before and after limiting (grey lines: segment ends, where the arm rests "
+                 f"at a waypoint)")
+    save(fig, out_png, rect=(0, 0.04, 1, 1))

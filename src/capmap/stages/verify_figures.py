@@ -16,7 +16,8 @@ def stage_verify_plots(voxels: str, timeseries: str, out_workspace: str, out_tor
     vox, ts = datasets.read(voxels), datasets.read(timeseries)
     meta = ts.attrs["capmap"]
     payload, limits = meta["payload_kg"], meta["limits"]
-    workspace_paths(vox, ts, payload, out_workspace)
+    no_path = "" if meta.get("plan_status", "ok") == "ok" else meta.get("plan_reason", "")
+    workspace_paths(vox, ts, payload, out_workspace, no_path)
     for prefix, what, out in (("tau_", "Joint torques", out_torques), ("base_f", "Base disturbance force", out_force),
                               ("base_m", "Base disturbance moment", out_moment)):
         load_series(ts, [c for c in limits if c.startswith(prefix)], limits, f"{what} carrying {payload:g} kg", out)

@@ -1,0 +1,71 @@
+"""Run folders (stale outputs), the report's table pages and the interactive 3D map page."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pandas as pd
+
+from capmap.io.html_tables import quantity_label, table_html
+from capmap.io.runs import stale_outputs
+from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html, slider_levels
+
+
+def test_stale_outputs_are_what_the_config_no_longer_makes(tmp_path):
+    run = tmp_path / "results" / "default"
+    for d in ("verify/payload_1500kg", "verify/payload_4000kg", "tasks/a", "tasks/b"):
+        (run / d).mkdir(parents=True)
+    (run / "capacity").mkdir()
+    for f in ("shard_0_of_2.parquet", "shard_1_of_2.parquet", "shard_0_of_4.parquet"):
+        (run / "capacity" / f).touch()
+    stale = stale_outputs(run, {"verify/payload_*kg": ["verify/payload_1500kg"], "tasks/*": ["tasks/a"],
+                                "capacity/shard_*_of_*.parquet": ["capacity/shard_0_of_2.parquet",
+                                                                  "capacity/shard_1_of_2.parquet"],
+                                "dualarm": []})
+    assert stale == sorted(str(run / p) for p in ("verify/payload_4000kg", "tasks/b", "capacity/shard_0_of_4.parquet"))
+    assert stale_outputs(tmp_path / "results" / "other", {"tasks/*": []}) == []
+
+
+def test_quantity_labels_carry_the_unit_of_the_column_suffix():
+    assert quantity_label("capacity_kg") == "capacity [kg]"
+    assert quantity_label("tau_j3_nm") == "tau j3 [N m]"
+    assert quantity_label("qd_j2_deg_s") == "qd j2 [deg/s]"
+    assert quantity_label("base_fx_n") == "base fx [N]"
+    assert quantity_label("path") == "path" and quantity_label("binding") == "binding"
+
+
+def test_a_table_page_has_its_caption_and_escapes_cells():
+    df = pd.DataFrame({"payload_kg": [1500.0, 1500.0], "path": ["direct", "planned"],
+                       "capacity_kg": [1234.5678, 2000.0], "note": ["<b>x</b>", ""]})
+    page = table_html(df, "Verification", "What it shows.", transpose=True)
+    assert "<h2>Verification</h2>" in page and "What it shows." in page
+    assert "<th>1500 kg, direct</th>" in page and "<th>capacity [kg]</th>" in page
+    assert "&lt;b&gt;x&lt;/b&gt;" in page and "<b>x</b>" not in page
+    assert "1234.6" in page and "http" not in page
+
+
+def test_slider_levels_start_at_zero_reach_the_top_and_hold_the_payloads():
+    cap = np.array([0.0, 120.0, 3999.0])
+    lv = slider_levels(cap, (1500.0, 4000.0))
+    assert lv[0] == 0 and lv[-1] >= 3999.0 and {1500.0, 4000.0} <= set(lv) and np.all(np.diff(lv) > 0)
+    assert len(lv) <= 24
+
+
+def test_the_3d_page_is_offline_and_holds_every_voxel_and_path():
+    rng = np.random.default_rng(0)
+    xyz = rng.uniform(-5, 5, (300, 3))
+    cap = rng.uniform(0, 5000, 300)
+    path = PlannedPath("planned path, 1500 kg (3.00 m)", np.array([[0, 0, 0], [1, 0, 0], [1, 2, 0.0]]))
+    page = capacity_3d_html(xyz, cap, 0.75, np.zeros(3), np.array([1, 2, 0.0]), [path], (1500.0,), "test map")
+    assert not re.search(r"<script[^>]+src=", page)  # plotly.js inlined, nothing fetched at view time
+    assert "Plotly.restyle" in page and "plotly_sliderchange" in page
+    data = json.loads(re.search(r"const V = (\{.*?\});\n", page).group(1))
+    np.testing.assert_allclose(np.c_[data["x"], data["y"], data["z"]], xyz, atol=1e-4)
+    np.testing.assert_allclose(data["c"], cap, atol=0.01)
+    assert 1500.0 in data["levels"]
+    fig = json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
+    shown = next(t for t in fig if t.get("name") == "voxels carrying the payload")
+    assert len(shown["x"]) == int((cap >= 1500).sum()) and min(shown["marker"]["color"]) >= 1500
+    assert any(t.get("name") == path.label for t in fig) and {"start", "goal", "direct line"} <= {t.get("name") for t in fig}

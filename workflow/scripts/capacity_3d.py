@@ -1,0 +1,5 @@
+from capmap.io.logs import call
+from capmap.stages.capacity_figures import stage_capacity_3d
+
+call(stage_capacity_3d, voxels=snakemake.input.voxels, waypoints=list(snakemake.input.waypoints),
+     out_html=snakemake.output[0], slice_json=snakemake.params.slice, log=snakemake.log[0])
