@@ -7,7 +7,7 @@ IK, loads carrying the payload) and the verification's configurations at the way
 compared with the planned ones. Prints one line per task and the counts, with the time of each
 branch search (an exhaustive search, when there is no path, takes tens of seconds).
 
-    python tests/benchmarks/bench_branch_gain.py [--payload 3200] [--tasks 12] [--seed 1]
+    python -m tests.benchmarks.bench_branch_gain [--payload 3200] [--tasks 12] [--seed 1]
 
 Needs results/default/voxels/voxels.parquet and results/default/verify/payload_1500kg/ of the default run.
 """
@@ -30,6 +30,7 @@ from capmap.io import datasets
 from capmap.stages.arm import arm_task_from
 from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.verify import branch_deviation_deg
+from tests.benchmarks.machine import machine
 
 
 def main() -> None:
@@ -38,6 +39,7 @@ def main() -> None:
     ap.add_argument("--tasks", type=int, default=12)
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
+    print(f"machine: {machine()}")
     deps = datasets.read("results/default/verify/payload_1500kg/timeseries.parquet").attrs["capmap"]["config"]
     at = arm_task_from(deps)
     arm, rot, motion, limits = at.arm, at.rotation, at.motion, at.limits

@@ -1,6 +1,6 @@
 """Core-engine benchmark: IK points/s per core and capacity motion states/s on all cores.
 
-    python tests/benchmarks/bench_core.py [--points 20000] [--workers 2] [--step 10]
+    python -m tests.benchmarks.bench_core [--points 20000] [--workers 2] [--step 10]
 
 Prints its figures; targets: IK >= 14,000 points/s per core (closed form, all branches) and
 >= 1,000 for every locked joint; capacity >= 30 M states/s on this machine's 2 cores (state =
@@ -28,6 +28,7 @@ from capmap.config.robot_file import load  # noqa: E402
 from capmap.core import ik  # noqa: E402
 from capmap.core.dynamics import ArmDynamics  # noqa: E402
 from capmap.core.reduction import lock  # noqa: E402
+from tests.benchmarks.machine import machine  # noqa: E402
 
 ROBOT = Path(__file__).resolve().parents[2] / "config" / "robots" / "ssrms7.yaml"
 R_TASK = pin.rpy.rpyToMatrix(*np.deg2rad([90.0, 0.0, 90.0]))
@@ -68,6 +69,7 @@ def main():
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 2)
     ap.add_argument("--step", type=float, default=10.0)
     args = ap.parse_args()
+    print(f"machine: {machine()}")
     arm = _arm()
     rng = np.random.default_rng(0)
 

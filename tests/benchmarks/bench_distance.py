@@ -3,7 +3,7 @@ against coal (one call per pair, the reference library) measured in the same run
 cost of one optimal-control node of the default dual-arm problem (calc and calcDiff; an FDDP
 iteration runs both on all N + 1 nodes).
 
-    python tests/benchmarks/bench_distance.py [--pairs 2000000]
+    python -m tests.benchmarks.bench_distance [--pairs 2000000]
 
 Target (issue 11): >= 5 M segment pairs/s on one core. Prints its figures.
 """
@@ -34,6 +34,7 @@ from capmap.dualarm.ocp import Context, NodeModel  # noqa: E402
 from capmap.dualarm.robot import build_dual_arm, fit_capsules  # noqa: E402
 from capmap.dualarm.scene import nearest_solid, scan  # noqa: E402
 from capmap.dualarm.solver import initial_guess, node_pairs  # noqa: E402
+from tests.benchmarks.machine import machine  # noqa: E402
 from tests.reference.coal_shapes import capsule  # noqa: E402
 
 
@@ -51,6 +52,7 @@ def main():
     ap.add_argument("--pairs", type=int, default=2_000_000)
     ap.add_argument("--coal-pairs", type=int, default=20_000)
     args = ap.parse_args()
+    print(f"machine: {machine()}")
     rng = np.random.default_rng(0)
     n = args.pairs
     p0, p1, q0, q1, v2 = (rng.normal(size=(n, 3)) for _ in range(5))

@@ -1,6 +1,6 @@
 """Follower benchmark: wall time per control period of the online work, and path preparation.
 
-    python tests/benchmarks/bench_follow.py [--repeats 5]
+    python -m tests.benchmarks.bench_follow [--repeats 5]
 
 Per period the follower reads the command, interpolates the path dynamics a, b, c at s,
 computes the admissible acceleration interval from the torque limits, applies the speed
@@ -24,6 +24,7 @@ from capmap.core.reduction import free, lock
 from capmap.following.follower import follow
 from capmap.following.path import line_path
 from capmap.following.path_dynamics import path_dynamics, prepare
+from tests.benchmarks.machine import machine
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -45,6 +46,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
+    print(f"machine: {machine()}")
     print("follower: online work per control period (1 ms), path preparation once per path")
     for name, arm, p0, p1, R, q0, m, lim, (v, a, j), f in cases():
         t0 = time.perf_counter()

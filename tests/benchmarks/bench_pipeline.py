@@ -2,7 +2,7 @@
 alone (target ``capacity_map``) and the whole workflow (``all``), each in its own temporary copy
 of the workflow so that results/ of the checkout is untouched.
 
-    python tests/benchmarks/bench_pipeline.py [--config config/config.yaml] [--cores 2]
+    python -m tests.benchmarks.bench_pipeline [--config config/config.yaml] [--cores 2]
 
 Prints the wall times, the capacity engine's point count and motion states, and the longest
 jobs (from their logs: every job logs its wall time). Targets: the capacity map from clean in
@@ -23,6 +23,7 @@ import pandas as pd
 
 from capmap.config.run import run_name
 from capmap.config.validation import load_yaml
+from tests.benchmarks.machine import machine
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -56,6 +57,7 @@ def main():
     ap.add_argument("--config", default="config/config.yaml")
     ap.add_argument("--cores", type=int, default=2)
     args = ap.parse_args()
+    print(f"machine: {machine()}")
     cfg = (ROOT / args.config).resolve()
     name = run_name(load_yaml(cfg), str(cfg))  # the run's folder, results/<run>/
     wall, tmp, holder = _run("capacity_map", cfg, args.cores)
