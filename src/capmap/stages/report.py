@@ -51,7 +51,7 @@ def stage_report_tables(tables: dict[str, str], outputs: dict[str, str], stale: 
     outputs an earlier config of this run left behind (``stale``)."""
     log = stage_logger(__name__, "report tables")
     for name, src in tables.items():
-        df = pd.read_parquet(src) if src.endswith(".parquet") else pd.read_csv(src)
+        df = datasets.read(src) if src.endswith(".parquet") else pd.read_csv(src)
         title, transpose = TABLE_TITLES[name]
         caption = " ".join(captions[name].replace("``", "").split())
         extra = ""
