@@ -33,8 +33,9 @@ def _run(workdir, config, *extra):
 
 
 def _datasets(workdir):
-    cat = pd.concat([pd.read_parquet(workdir / "results" / "catalogue.parquet"),
-                     pd.read_parquet(workdir / "results" / "atlas" / "catalogue.parquet")], ignore_index=True)
+    run = workdir / "results" / "tiny"  # the tiny config's run folder
+    cat = pd.concat([pd.read_parquet(run / "catalogue.parquet"), pd.read_parquet(run / "atlas" / "catalogue.parquet")],
+                    ignore_index=True)
     return {p: workdir / p for p in cat.path}
 
 
