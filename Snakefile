@@ -52,7 +52,6 @@ rule capacity_map:
     # method family 1 alone: map, plans, verification and their figures
     input:
         CAPACITY_MAP,
-        [TABLE_PAGES[name] for name in ("capacity_summary", "verify_summary", "gain")],
 
 
 rule all:
