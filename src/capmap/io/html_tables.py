@@ -39,8 +39,10 @@ def _cell(v) -> str:
     return html.escape(fmt_value(v))
 
 
-def _is_num(v) -> bool:
-    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
+def _td(v) -> str:
+    """A cell; numbers right-aligned."""
+    num = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
+    return f"<td{' class=num' if num else ''}>{_cell(v)}</td>"
 
 
 def table_html(df: pd.DataFrame, title: str, caption: str, transpose: bool = False,
@@ -54,12 +56,12 @@ def table_html(df: pd.DataFrame, title: str, caption: str, transpose: bool = Fal
         head = "<tr><th>quantity</th>" + "".join(f"<th>{html.escape(h)}</th>" for h in heads) + "</tr>"
         body = "".join(
             "<tr><th>" + html.escape(quantity_label(c)) + "</th>"
-            + "".join(f"<td{' class=num' if _is_num(v) else ''}>{_cell(v)}</td>" for v in df[c]) + "</tr>"
+            + "".join(map(_td, df[c])) + "</tr>"
             for c in df.columns[2:])
     else:
         head = "<tr>" + "".join(f"<th>{html.escape(quantity_label(c))}</th>" for c in df.columns) + "</tr>"
         body = "".join(
-            "<tr>" + "".join(f"<td{' class=num' if _is_num(v) else ''}>{_cell(v)}</td>" for v in row) + "</tr>"
+            "<tr>" + "".join(map(_td, row)) + "</tr>"
             for row in df.itertuples(index=False))
     return (f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
             f"<style>{_STYLE}</style></head><body><h2>{html.escape(title)}</h2>"
