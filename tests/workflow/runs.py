@@ -34,10 +34,25 @@ def config_file(tmp: Path, **changes) -> Path:
     return path
 
 
-def snakemake_run(workdir: Path, config: Path, *extra: str) -> subprocess.CompletedProcess:
-    cmd = ["snakemake", "all", "-s", str(ROOT / "Snakefile"), "-d", str(workdir), "--cores", "2", *extra,
+def snakemake(workdir: Path, config: Path, *args: str, cores: int = 2, timeout: float = 600,
+              env: dict | None = None) -> subprocess.CompletedProcess:
+    """``snakemake *args`` of this checkout's workflow in ``workdir`` with ``config``."""
+    cmd = ["snakemake", *args, "-s", str(ROOT / "Snakefile"), "-d", str(workdir), "--cores", str(cores),
            "--configfile", str(config)]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+
+
+def snakemake_run(workdir: Path, config: Path, *extra: str) -> subprocess.CompletedProcess:
+    return snakemake(workdir, config, "all", *extra)
+
+
+def job_counts(out: str) -> dict[str, int]:
+    """Rules and job counts of a dry run's output (empty when nothing is to be done)."""
+    m = re.search(r"job\s+count\n-+\s+-+\n(.*?)\ntotal", out, re.S)
+    if not m:
+        assert "Nothing to be done" in out, out[-2000:]
+        return {}
+    return {line.split()[0]: int(line.split()[1]) for line in m.group(1).strip().splitlines()}
 
 
 def planned_jobs(workdir: Path, config: Path) -> dict[str, int]:
@@ -51,9 +66,4 @@ def planned_jobs_of(workdir: Path, config: Path, target: str, snakefile: Path = 
     res = subprocess.run(["snakemake", target, "-s", str(snakefile), "-d", str(workdir), "--cores", "2", "-n",
                           "--configfile", str(config)], capture_output=True, text=True, timeout=600, env=env)
     assert res.returncode == 0, res.stderr[-2000:]
-    out = res.stdout + res.stderr
-    m = re.search(r"job\s+count\n-+\s+-+\n(.*?)\ntotal", out, re.S)
-    if not m:
-        assert "Nothing to be done" in out, out[-2000:]
-        return {}
-    return {line.split()[0]: int(line.split()[1]) for line in m.group(1).strip().splitlines()}
+    return job_counts(res.stdout + res.stderr)

@@ -7,16 +7,10 @@ from __future__ import annotations
 import json
 import re
 import shutil
-import subprocess
 
 import pandas as pd
 
-from tests.scenario import ROOT
-
-
-def _snakemake(work, cfg, *args):
-    return subprocess.run(["snakemake", *args, "-s", str(ROOT / "Snakefile"), "-d", str(work), "--cores", "1",
-                           "--configfile", str(cfg)], capture_output=True, text=True, timeout=600)
+from tests.workflow.runs import snakemake
 
 
 def test_the_3d_map_holds_the_run_s_reachable_voxels(run_dir):
@@ -35,22 +29,22 @@ def test_outputs_of_a_removed_payload_are_named_and_the_report_shows_only_the_ru
     work, cfg = run_dir
     copy = tmp_path / "run"
     shutil.copytree(work, copy, ignore=shutil.ignore_patterns("locks", "incomplete"))
-    res = _snakemake(copy, cfg, "all", "-n")
+    res = snakemake(copy, cfg, "all", "-n")
     assert res.returncode == 0 and "not of this config" not in res.stderr, res.stderr[-2000:]
     old = copy / "results/tiny/verify/payload_999kg"
     old.mkdir()
     (old / "workspace.png").write_bytes(b"an earlier config's figure")
-    res = _snakemake(copy, cfg, "all", "-n")
+    res = snakemake(copy, cfg, "all", "-n")
     assert res.returncode == 0, res.stderr[-2000:]
     note = [ln for ln in res.stderr.splitlines() if "not of this config" in ln]
     assert len(note) == 1 and "results/tiny/verify/payload_999kg" in note[0]
     assert "report_tables" in res.stdout  # its page lists them: rebuilt with the new list
-    res = _snakemake(copy, cfg, "all")
+    res = snakemake(copy, cfg, "all")
     assert res.returncode == 0, res.stderr[-2000:]
     assert "payload_999kg" in (copy / "results/tiny/report/catalogue.html").read_text()
     assert not pd.read_parquet(copy / "results/tiny/catalogue.parquet").path.str.contains("999").any()
     # the report of the run: its description, every table as a captioned page, the 3D map; nothing stale
-    res = _snakemake(copy, cfg, "--report", str(tmp_path / "report.html"))
+    res = snakemake(copy, cfg, "--report", str(tmp_path / "report.html"))
     assert res.returncode == 0, res.stderr[-2000:]
     page = (tmp_path / "report.html").read_text()
     expected = ["What this workflow does", "capmap run", "results/tiny/summary/capacity_3d.html",

@@ -20,13 +20,12 @@ from capmap.capacity.voxels import Grid
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.limits import AffineLimits
-from capmap.core.tracking import MAX_STEP_RAD, follow_branches, nearest_branch
+from capmap.core.tracking import MAX_STEP_RAD, follow_branches, in_joint_range, nearest_branch
 
 __all__ = ["TRACK_STEP_M", "BranchProblem", "fractions", "solve_at", "track_moves", "line_capacity", "move_capacity",
            "MoveCache"]
 
 TRACK_STEP_M = 0.15  # m, the largest spacing of the tracked samples along a move (v_max * 1 s by default)
-_RANGE_TOL = 1e-9  # rad
 
 
 @dataclass(frozen=True)
@@ -69,7 +68,7 @@ def track_moves(problem: BranchProblem, q0: np.ndarray, sets: np.ndarray,
     within the joint ranges; and the tracked configurations (E, S, n) rad (NaN after a failure)."""
     arm = problem.dyn.arm
     path, failed_at, _ = follow_branches(sets, counts, q0, problem.max_step_rad)
-    ok = (failed_at < 0) & np.all((path >= arm.q_lower - _RANGE_TOL) & (path <= arm.q_upper + _RANGE_TOL), axis=(1, 2))
+    ok = (failed_at < 0) & np.all(in_joint_range(arm, path), axis=(1, 2))
     return ok, path
 
 
@@ -80,7 +79,7 @@ def line_capacity(dyn: ArmDynamics, q_active: np.ndarray, u: np.ndarray, motion:
     of the two states u and -u, from the exact coefficients of :func:`capmap.capacity.engine.coefficients`.
     0 for an exactly singular configuration."""
     coef = coefficients(dyn, q_active)
-    C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (B, n_out, 10)
+    C = coef.stacked()  # (B, n_out, 10)
     cap = np.full(len(coef.c0), np.inf)
     for sense in (1.0, -1.0):
         w = sense * np.asarray(u, dtype=float)

@@ -101,6 +101,10 @@ class Coefficients:
     S: np.ndarray
     singular: np.ndarray
 
+    def stacked(self) -> np.ndarray:
+        """[c0, L, Q] (B, n_out, 10): the outputs at rest are ``stacked() @ motion_features(u, motion).T``."""
+        return np.concatenate([self.c0[..., None], self.L, self.Q], axis=2)
+
 
 def coefficients(dyn: ArmDynamics, q_active: np.ndarray) -> Coefficients:
     """Coefficients for configurations q_active (B, n_active) rad, the whole batch at once
@@ -132,8 +136,7 @@ def direction_features(u: np.ndarray) -> np.ndarray:
 def affine_over_directions(coef: Coefficients, u: np.ndarray, motion: Motion,
                            gravity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(y0, s), each (B, n_out, D), for every configuration x direction u (D, 3)."""
-    C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (B, n_out, 10)
-    y0 = C @ motion_features(u, motion).T
+    y0 = coef.stacked() @ motion_features(u, motion).T
     s = coef.S @ (motion.a_max_mps2 * u - gravity).T
     return y0, s
 
@@ -202,7 +205,7 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
     if len(pts):
         coef = coefficients(dyn, q_sets[pts, brs])
         a = motion.a_max_mps2
-        C = np.concatenate([coef.c0[..., None], coef.L, coef.Q], axis=2)  # (M, n_out, 10)
+        C = coef.stacked()  # (M, n_out, 10)
         c_cfg, worst_dir, b_cfg = min_over_directions(C, coef.S, motion_features(directions.u, motion), a * directions.u,
                                                       dyn.gravity, limits.limit, directions.pairs)
         if axes is not None:

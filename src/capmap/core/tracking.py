@@ -19,11 +19,12 @@ from capmap.core import ik
 from capmap.core.reduction import LockedArm
 from capmap.errors import CapmapError
 
-__all__ = ["Tracking", "nearest_turn", "nearest_branch", "start_branch", "follow_branches", "track", "range_excursions",
-           "START_TOL_RAD", "MAX_STEP_RAD"]
+__all__ = ["Tracking", "nearest_turn", "nearest_branch", "start_branch", "follow_branches", "in_joint_range", "track",
+           "range_excursions", "START_TOL_RAD", "MAX_STEP_RAD", "RANGE_TOL_RAD"]
 
 START_TOL_RAD = np.deg2rad(2.0)  # a start configuration may be rounded: allow 2 deg to the nearest exact branch
 MAX_STEP_RAD = np.deg2rad(5.0)  # largest joint change between consecutive samples on one branch
+RANGE_TOL_RAD = 1e-9  # a joint at its stop up to rounding is within its range
 
 
 @dataclass(frozen=True)
@@ -104,6 +105,12 @@ def follow_branches(sets: np.ndarray, counts: np.ndarray, q0: np.ndarray,
     return q, failed_at, jump_at
 
 
+def in_joint_range(arm: LockedArm, q: np.ndarray) -> np.ndarray:
+    """(..., n_active) bool: each joint of configurations q (..., n_active) rad within its range
+    (up to :data:`RANGE_TOL_RAD`; False where q is NaN)."""
+    return (q >= arm.q_lower - RANGE_TOL_RAD) & (q <= arm.q_upper + RANGE_TOL_RAD)
+
+
 def track(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, q_start: np.ndarray,
           max_step_rad: float = MAX_STEP_RAD) -> Tracking:
     """Continuous-branch IK along positions (N, 3) m at a fixed rotation (3, 3).
@@ -119,8 +126,7 @@ def track(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, q_start: 
     if failed_at >= 0:
         failure = ("no IK solution at the task orientation (outside the workspace)" if np.isinf(jump) else
                    f"branch lost: nearest solution {np.rad2deg(jump):.1f} deg away (singularity or joint range)")
-    in_range = (q >= arm.q_lower - 1e-9) & (q <= arm.q_upper + 1e-9)
-    return Tracking(q, failed_at, failure, offset, in_range | np.isnan(q))
+    return Tracking(q, failed_at, failure, offset, in_joint_range(arm, q) | np.isnan(q))
 
 
 def range_excursions(in_range: np.ndarray) -> list[tuple[int, int, int]]:

@@ -13,14 +13,15 @@ from capmap.plots.common import plt, save
 __all__ = ["capacity_map", "workspace_paths", "load_series", "load_label", "PATH_STYLE"]
 
 
-def _layer(vox: pd.DataFrame, k: int) -> tuple[np.ndarray, list[float]]:
-    """Capacity image (ny, nx) of voxel layer ``k`` (NaN: unreachable) and its imshow extent [m]."""
+def _layer(vox: pd.DataFrame, k: int) -> tuple[np.ndarray, list[float], float]:
+    """Capacity image (ny, nx) of voxel layer ``k`` (NaN: unreachable), its imshow extent and the
+    height of its centres [m]."""
     grid = vox.attrs["capmap"]["grid"]
     dx, lo, (nx, ny, _) = grid["edge_m"], grid["lower_m"], grid["shape"]
     sl = vox[vox.k == k]
     img = np.full((ny, nx), np.nan)
     img[sl.j.to_numpy(), sl.i.to_numpy()] = np.where(sl.n_reachable > 0, sl.capacity_kg, np.nan)
-    return img, [lo[0], lo[0] + nx * dx, lo[1], lo[1] + ny * dx]
+    return img, [lo[0], lo[0] + nx * dx, lo[1], lo[1] + ny * dx], lo[2] + (k + 0.5) * dx
 
 
 def _layer_of(vox: pd.DataFrame, z_m: float) -> int:
@@ -56,8 +57,7 @@ def capacity_map(vox: pd.DataFrame, view, out_png: str | Path) -> None:
         layers.append(("fullest", int(reach.k.value_counts().idxmax())))
     im = None
     for ax, (what, k) in zip([axes[0, 1], axes[1, 0], axes[1, 1]], layers):
-        img, extent = _layer(vox, k)
-        z = grid["lower_m"][2] + (k + 0.5) * grid["edge_m"]
+        img, extent, z = _layer(vox, k)
         im = ax.imshow(img, origin="lower", cmap="viridis", vmin=0.0, vmax=vmax, extent=extent, interpolation="nearest")
         drawn = []
         for n, m in enumerate(view.payloads_kg):
@@ -126,7 +126,7 @@ def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_
     ax.set_box_aspect(hi - lo)
     ax.legend(loc="upper left", fontsize=7)
     ax2 = fig.add_subplot(1, 2, 2)
-    img, extent = _layer(vox, _layer_of(vox, last.z_m))
+    img, extent, z = _layer(vox, _layer_of(vox, last.z_m))
     im = ax2.imshow(img, origin="lower", cmap="viridis", vmin=0, vmax=vmax, extent=extent, interpolation="nearest")
     has_edge = np.nanmin(img, initial=np.inf) < payload_kg <= np.nanmax(img, initial=-np.inf)
     if has_edge:
@@ -138,7 +138,6 @@ def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_
     ax2.plot(first.x_m, first.y_m, "o", mfc="none", mec="tab:green", mew=2, ms=9, label="start (projected)")
     cb = fig.colorbar(im, ax=ax2, label="voxel capacity [kg] (white: unreachable)")
     cb.ax.axhline(payload_kg, color="k", lw=1.5)
-    z = vox.attrs["capmap"]["grid"]["lower_m"][2] + (_layer_of(vox, last.z_m) + 0.5) * dx
     edge = (f"white line: boundary of {payload_kg:g} kg" if has_edge else
             f"no voxel of this layer carries {payload_kg:g} kg" if np.nanmax(img, initial=0) < payload_kg else
             f"every voxel of this layer carries {payload_kg:g} kg")
