@@ -35,9 +35,9 @@ def config_file(tmp: Path, **changes) -> Path:
 
 
 def snakemake(workdir: Path, config: Path, *args: str, cores: int = 2, timeout: float = 600,
-              env: dict | None = None) -> subprocess.CompletedProcess:
-    """``snakemake *args`` of this checkout's workflow in ``workdir`` with ``config``."""
-    cmd = ["snakemake", *args, "-s", str(ROOT / "Snakefile"), "-d", str(workdir), "--cores", str(cores),
+              snakefile: Path = ROOT / "Snakefile", env: dict | None = None) -> subprocess.CompletedProcess:
+    """``snakemake *args`` of ``snakefile`` (this checkout's workflow) in ``workdir`` with ``config``."""
+    cmd = ["snakemake", *args, "-s", str(snakefile), "-d", str(workdir), "--cores", str(cores),
            "--configfile", str(config)]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
 
@@ -63,7 +63,6 @@ def planned_jobs(workdir: Path, config: Path) -> dict[str, int]:
 def planned_jobs_of(workdir: Path, config: Path, target: str, snakefile: Path = ROOT / "Snakefile",
                     env: dict | None = None) -> dict[str, int]:
     """Rules a dry run of ``target`` would execute (of ``snakefile``, in the environment ``env``)."""
-    res = subprocess.run(["snakemake", target, "-s", str(snakefile), "-d", str(workdir), "--cores", "2", "-n",
-                          "--configfile", str(config)], capture_output=True, text=True, timeout=600, env=env)
+    res = snakemake(workdir, config, target, "-n", snakefile=snakefile, env=env)
     assert res.returncode == 0, res.stderr[-2000:]
     return job_counts(res.stdout + res.stderr)
