@@ -7,21 +7,21 @@ from snakemake.utils import min_version
 min_version("8.0")
 
 
-# the default config only when no --configfile is given: a config file is complete on its own
-# (a deep merge over the default would leak keys such as directions.step_deg into other kinds)
-if not workflow.overwrite_configfiles:
-    import sys
+# The run's config, read once by capmap's own loader (bounded, no YTE templates, no duplicate keys):
+# the --configfile(s), else config/config.yaml, then the --config overrides. A config file is complete
+# on its own (a deep merge over the default would leak keys such as directions.step_deg into other
+# kinds). Snakemake has already parsed a --configfile itself (and evaluated YTE in it: see README).
+import sys
 
-    from capmap.config.validation import load_yaml
-    from capmap.errors import CapmapError
+from capmap.config.run import run_document
+from capmap.errors import CapmapError
 
-    try:  # a binary, empty or malformed default config: one line, not Snakemake's traceback
-        if not isinstance(load_yaml("config/config.yaml"), dict):
-            sys.exit("capmap: config/config.yaml: empty or not a mapping of keys")
-    except CapmapError as exc:
-        sys.exit(f"capmap: {exc}")
-
-    configfile: "config/config.yaml"
+try:
+    _doc = run_document([str(f) for f in workflow.overwrite_configfiles], workflow.config_settings.overwrite_config)
+except CapmapError as exc:
+    sys.exit(f"capmap: {exc}")
+config.clear()
+config.update(_doc)
 
 
 report: "workflow/report/workflow.rst"

@@ -23,7 +23,7 @@ ALLOWED = {
     "config": {"core", "capacity", "following", "reconfig", "dualarm", "io", "errors"},
     "plots": set(),
     "stages": {"core", "capacity", "following", "reconfig", "dualarm", "config", "io", "plots", "errors"},
-    "__main__": {"io", "errors"},  # the command line (python -m capmap check)
+    "__main__": {"config", "io", "errors"},  # the command line (python -m capmap check, check-config)
     "_lazy": set(),  # lazy package exports (PEP 562): any package may use it
 }
 for _part_name in ALLOWED:

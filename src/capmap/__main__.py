@@ -1,7 +1,13 @@
-"""Command line: ``python -m capmap check [results/<run> ...]`` verifies every catalogued dataset
-of the runs (the main catalogue's and the atlas'; default: every run under ``results/``) against
-its sha256 and row count; exit status 1 and one line per problem when any is missing, damaged or
-changed."""
+"""Command line.
+
+- ``python -m capmap check [results/<run> ...]`` verifies every catalogued dataset of the runs (the
+  main catalogue's and the atlas'; default: every run under ``results/``) against its sha256 and row
+  count; exit status 1 and one line per problem when any is missing, damaged or changed, when a
+  named run folder does not exist, or when a run has no catalogue.
+- ``python -m capmap check-config [FILE ...]`` reads and checks config files with capmap's own
+  loader (what the workflow checks before any job, without Snakemake reading the file first:
+  Snakemake evaluates YTE templates in a ``--configfile``); exit status 1 and one line on a problem.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +15,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from capmap.config.checks import check_run_config
+from capmap.config.validation import load_yaml
 from capmap.errors import CapmapError
 from capmap.io.datasets import verify_catalogue
 
@@ -20,12 +28,23 @@ def main(argv: list[str] | None = None) -> int:
     sub = ap.add_subparsers(dest="command", required=True)
     chk = sub.add_parser("check", help="verify the catalogued datasets (sha256, rows)")
     chk.add_argument("runs", nargs="*", help="run folders, results/<run> (default: every run under results/)")
+    cfg = sub.add_parser("check-config", help="read and check config files as the workflow does, before any job")
+    cfg.add_argument("files", nargs="*", default=["config/config.yaml"], help="config files (default: config/config.yaml)")
     args = ap.parse_args(argv)
+    if args.command == "check-config":
+        return _check_config(args.files)
     runs = [Path(r) for r in args.runs] or sorted(p for p in Path("results").glob("*") if p.is_dir())
+    absent = [r for r in runs if not r.is_dir()]
+    bare = [r for r in runs if r.is_dir() and not (r / "catalogue.parquet").is_file()]
+    for r in absent:
+        print(f"capmap: {r}: no such run folder", file=sys.stderr)
+    for r in bare:
+        print(f"capmap: {r}: no catalogue.parquet (the run has not finished: snakemake --cores 2 all"
+              f"{'' if r.name == 'default' else ' --configfile <its config>'})", file=sys.stderr)
     catalogues = [c for r in runs for c in (r / "catalogue.parquet", r / "atlas" / "catalogue.parquet") if c.is_file()]
-    if not catalogues:
-        print(f"capmap: no catalogue under {', '.join(map(str, runs)) or 'results/'} (run snakemake first)",
-              file=sys.stderr)
+    if absent or bare or not catalogues:
+        if not catalogues and not absent and not bare:
+            print("capmap: no run under results/ (run snakemake first)", file=sys.stderr)
         return 1
     try:  # catalogued paths are relative to the workflow's folder, two levels above results/<run>/
         problems = [p for c in catalogues for p in verify_catalogue(c, _run_folder(c).parent.parent)]
@@ -37,6 +56,17 @@ def main(argv: list[str] | None = None) -> int:
     if not problems:
         print(f"capmap: every catalogued dataset is intact ({', '.join(map(str, catalogues))})")
     return 1 if problems else 0
+
+
+def _check_config(files: list[str]) -> int:
+    for f in files:
+        try:
+            run = check_run_config(load_yaml(f), f)
+        except CapmapError as exc:
+            print(f"capmap: {exc}", file=sys.stderr)
+            return 1
+        print(f"capmap: {f}: valid; run {run.name!r}; {run.failure.describe()}")
+    return 0
 
 
 def _run_folder(catalogue: Path) -> Path:

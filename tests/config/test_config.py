@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config import check_run_config, load_config, parse_config, resolved_doc, stage_slices
+from capmap.config import check_run_config, load_config, parse_config
 from capmap.errors import CapmapError
 from tests.scenario import ROOT, TASK_R
 
@@ -18,14 +18,6 @@ def test_default_config_parses_to_the_spec_scenario():
     assert np.allclose(run.task.rotation, TASK_R, atol=1e-15)  # independent Rz Ry Rx in tests/scenario.py
     limits = run.limits.resolve(7)
     assert np.all(limits.joint_torque_nm == 700) and np.all(limits.base_moment_nm == 500)
-
-
-def test_slices_separate_the_stages():
-    s = stage_slices(resolved_doc(_doc(), check_run_config(_doc()).failure))
-    assert "payload_kg" not in str(s["voxels"]["upstream"])
-    assert "payload_kg" in str(s["plan"]["own"])
-    assert "limits" not in s["sample"]["upstream"] and "lock" not in s["model"]["upstream"]
-    assert s["capacity"]["upstream"]["sample"] == s["sample"]["own"]
 
 
 @pytest.mark.parametrize("mutate, expect", [

@@ -89,7 +89,7 @@ def test_coefficients_reproduce_direct_outputs(setup):
         u /= np.linalg.norm(u)
         v, a, m = 0.15, 0.03, 800.0
         phi = np.array([u[0] ** 2, u[1] ** 2, u[2] ** 2, u[0] * u[1], u[0] * u[2], u[1] * u[2]])
-        y_poly = co["c0"] + a * co["L"] @ u + v**2 * co["Q"] @ phi + m * co["S"] @ (a * u - robot.gravity)
+        y_poly = co.c0 + a * co.L @ u + v**2 * co.Q @ phi + m * co.S @ (a * u - robot.gravity)
         q, qd, qdd = dyn.motion(qa, v * u, a * u)
         tau, ee_acc, bf, bm = newton_euler(q, qd, qdd, robot.gravity, payload_kg=m, base_com=robot.base_com)
         expect = np.concatenate([tau[1:], bf, bm])

@@ -1,6 +1,5 @@
 # The fault atlas: one coarse capacity map per (locked joint, lock angle), then the atlas table.
 #   snakemake --cores 2 atlas
-ATLAS_SLICES = atlas_slices(DOC)
 ATLAS_CASES = RUN.atlas.cases if RUN.atlas else []  # (joint, angle label)
 ATLAS_DIRS = [out(f"atlas/joint{j}_angle{a}") for j, a in ATLAS_CASES]
 
@@ -8,12 +7,12 @@ ATLAS_DIRS = [out(f"atlas/joint{j}_angle{a}") for j, a in ATLAS_CASES]
 rule atlas_map:
     """Capacity map with joint {joint} locked at {angle} deg, and its summary per task payload."""
     input:
-        robot=config["robot"],
+        robot=RUN.robot,
     output:
         voxels=out("atlas/joint{joint}_angle{angle}/voxels.parquet"),
         summary=out("atlas/joint{joint}_angle{angle}/summary.parquet"),
     params:
-        slice=with_code(canonical(ATLAS_SLICES.get("map", {})), "atlas_map"),
+        slice=params("atlas_map", "atlas_map") if RUN.atlas else code_params("atlas_map"),
     log:
         out("logs/atlas/joint{joint}_angle{angle}.log"),
     wildcard_constraints:
@@ -36,7 +35,7 @@ rule atlas_tables:
         heatmap=report(out("atlas/heatmap.png"), category="Fault atlas", caption="../report/atlas_heatmap.rst"),
         curves_png=report(out("atlas/curves.png"), category="Fault atlas", caption="../report/atlas_curves.rst"),
     params:
-        slice=with_code(canonical(ATLAS_SLICES.get("atlas", {})), "atlas"),
+        slice=params("atlas", "atlas") if RUN.atlas else code_params("atlas"),
     log:
         out("logs/atlas/atlas.log"),
     conda:
@@ -54,7 +53,7 @@ rule atlas_catalogue:
     output:
         out("atlas/catalogue.parquet"),
     params:
-        code=with_code("{}", "catalogue"),
+        code=code_params("catalogue"),
     log:
         out("logs/atlas/catalogue.log"),
     conda:

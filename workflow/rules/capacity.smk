@@ -4,11 +4,11 @@
 rule model:
     """Load and validate the robot; write its joint/link table."""
     input:
-        robot=config["robot"],
+        robot=RUN.robot,
     output:
         out("model/joints.parquet"),
     params:
-        slice=with_code(slice_json("model"), "model"),
+        slice=params("model", "model"),
     log:
         out("logs/model.log"),
     conda:
@@ -24,7 +24,7 @@ rule sample:
     output:
         out("sample/points.parquet"),
     params:
-        slice=with_code(slice_json("sample"), "sample"),
+        slice=params("sample", "sample"),
     log:
         out("logs/sample.log"),
     conda:
@@ -40,7 +40,7 @@ rule capacity:
     output:
         out("capacity/shard_{k}_of_{n}.parquet"),
     params:
-        slice=with_code(slice_json("capacity"), "capacity"),
+        slice=params("capacity", "capacity"),
     log:
         out("logs/capacity/shard_{k}_of_{n}.log"),
     wildcard_constraints:
@@ -60,7 +60,7 @@ rule voxels:
         voxels=out("voxels/sampled.parquet"),
         points=out("voxels/points.parquet"),
     params:
-        slice=with_code(slice_json("voxels"), "voxels"),
+        slice=params("voxels", "voxels"),
     log:
         out("logs/voxels.log"),
     conda:
@@ -76,7 +76,7 @@ rule refine:
     output:
         out("voxels/refined_{k}_of_{n}.parquet"),
     params:
-        slice=with_code(slice_json("refine"), "refine"),
+        slice=params("refine", "refine"),
     log:
         out("logs/refine/shard_{k}_of_{n}.log"),
     wildcard_constraints:
@@ -96,7 +96,7 @@ rule voxel_map:
     output:
         out("voxels/voxels.parquet"),
     params:
-        slice=with_code(slice_json("refine"), "voxel_map"),
+        slice=params("refine", "voxel_map"),
     log:
         out("logs/voxel_map.log"),
     conda:
@@ -115,7 +115,7 @@ rule summary:
         md=out("summary/capacity_summary.md"),
         png=report(out("summary/capacity_map.png"), category="Capacity map", caption="../report/capacity_map.rst"),
     params:
-        slice=with_code(view_json("refine"), "summary"),
+        slice=params("view", "summary"),
     log:
         out("logs/summary.log"),
     conda:
@@ -132,7 +132,7 @@ rule capacity_3d:
     output:
         report(out("summary/capacity_3d.html"), category="Capacity map", caption="../report/capacity_3d.rst"),
     params:
-        slice=with_code(view_json("refine"), "capacity_3d"),
+        slice=params("view", "capacity_3d"),
     log:
         out("logs/capacity_3d.log"),
     conda:
@@ -148,7 +148,7 @@ rule plan:
     output:
         out("plan/payload_{payload}kg/waypoints.parquet"),
     params:
-        slice=lambda w: with_code(slice_json("plan", w.payload), "plan"),
+        slice=lambda w: params("plan", "plan", job_of(w)),
     log:
         out("logs/plan/payload_{payload}kg.log"),
     wildcard_constraints:
@@ -169,7 +169,7 @@ rule verify:
         csv=out("verify/payload_{payload}kg/summary.csv"),
         md=out("verify/payload_{payload}kg/summary.md"),
     params:
-        slice=lambda w: with_code(slice_json("verify", w.payload), "verify"),
+        slice=lambda w: params("verify", "verify", job_of(w)),
     log:
         out("logs/verify/payload_{payload}kg.log"),
     wildcard_constraints:
@@ -195,7 +195,7 @@ rule verify_plots:
         moment=report(out("verify/payload_{payload}kg/base_moment.png"), category="Verification",
                       subcategory="{payload} kg", caption="../report/loads.rst"),
     params:
-        slice=lambda w: with_code(slice_json("verify", w.payload), "verify_plots"),
+        slice=lambda w: params("verify", "verify_plots", job_of(w)),
     log:
         out("logs/verify/plots_payload_{payload}kg.log"),
     wildcard_constraints:
@@ -215,7 +215,7 @@ rule verify_summary:
         csv=out("verify/summary.csv"),
         md=out("verify/summary.md"),
     params:
-        code=with_code("{}", "verify_summary"),
+        code=code_params("verify_summary"),
     log:
         out("logs/verify/summary.log"),
     conda:
@@ -233,7 +233,7 @@ rule plan_gain:
         csv=out("plan/gain.csv"),
         md=out("plan/gain.md"),
     params:
-        slice=with_code(slice_json("gain"), "plan_gain"),
+        slice=params("gain", "plan_gain"),
     log:
         out("logs/plan/gain.log"),
     conda:
@@ -253,7 +253,7 @@ rule plan_task:
     output:
         out("tasks/{task}/waypoints.parquet"),
     params:
-        slice=lambda w: with_code(canonical(TASK_SLICES[w.task]["plan"]), "plan"),
+        slice=lambda w: params("plan", "plan", job_of(w)),
     log:
         out("logs/tasks/{task}_plan.log"),
     wildcard_constraints:
@@ -274,7 +274,7 @@ rule verify_task:
         csv=out("tasks/{task}/summary.csv"),
         md=out("tasks/{task}/summary.md"),
     params:
-        slice=lambda w: with_code(canonical(TASK_SLICES[w.task]["verify"]), "verify"),
+        slice=lambda w: params("verify", "verify", job_of(w)),
     log:
         out("logs/tasks/{task}_verify.log"),
     wildcard_constraints:
@@ -300,7 +300,7 @@ rule verify_task_plots:
         moment=report(out("tasks/{task}/base_moment.png"), category="Verification", subcategory="task {task}",
                       caption="../report/loads.rst"),
     params:
-        slice=lambda w: with_code(canonical(TASK_SLICES[w.task]["verify"]), "verify_plots"),
+        slice=lambda w: params("verify", "verify_plots", job_of(w)),
     log:
         out("logs/tasks/{task}_plots.log"),
     wildcard_constraints:

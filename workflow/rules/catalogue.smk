@@ -43,7 +43,7 @@ rule catalogue:
     output:
         out("catalogue.parquet"),
     params:
-        code=with_code("{}", "catalogue"),
+        code=code_params("catalogue"),
     log:
         out("logs/catalogue.log"),
     conda:
@@ -75,7 +75,7 @@ rule report_tables:
     output:
         **{name: report(TABLE_PAGES[name], category=cat, caption=f"../report/{rst}.rst") for name, _, cat, rst in TABLES},
     params:
-        code=with_code(canonical({"stale": STALE, "captions": CAPTIONS}), "report_tables"),
+        code=canonical({"stale": STALE, "captions": CAPTIONS, **json.loads(code_params("report_tables"))}),
     log:
         out("logs/report_tables.log"),
     conda:

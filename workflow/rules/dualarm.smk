@@ -1,6 +1,5 @@
 # Method family 4: dual arms in a confined space. scan -> envelope; capsules; -> optimise, check; -> plots, animation.
-DUALARM_SLICES = dualarm_slices(config)
-DUALARM = bool(DUALARM_SLICES)
+DUALARM = RUN.dualarm is not None
 
 
 rule dualarm_scan:
@@ -10,7 +9,7 @@ rule dualarm_scan:
     output:
         out("dualarm/cloud.parquet"),
     params:
-        slice=lambda w: with_code(dualarm_json("scan"), "dualarm_scan"),
+        slice=lambda w: params("dualarm_scan", "dualarm_scan"),
     log:
         out("logs/dualarm/scan.log"),
     conda:
@@ -27,7 +26,7 @@ rule dualarm_envelope:
     output:
         out("dualarm/environment.parquet"),
     params:
-        slice=lambda w: with_code(dualarm_json("envelope"), "dualarm_envelope"),
+        slice=lambda w: params("dualarm_envelope", "dualarm_envelope"),
     log:
         out("logs/dualarm/envelope.log"),
     conda:
@@ -43,7 +42,7 @@ rule dualarm_capsules:
     output:
         out("dualarm/robot_capsules.parquet"),
     params:
-        slice=lambda w: with_code(dualarm_json("capsules"), "dualarm_capsules"),
+        slice=lambda w: params("dualarm_capsules", "dualarm_capsules"),
     log:
         out("logs/dualarm/capsules.log"),
     conda:
@@ -65,7 +64,7 @@ rule dualarm_optimise:
         csv=out("dualarm/summary.csv"),
         md=out("dualarm/summary.md"),
     params:
-        slice=lambda w: with_code(dualarm_json("optimise"), "dualarm_optimise"),
+        slice=lambda w: params("dualarm_optimise", "dualarm_optimise"),
     log:
         out("logs/dualarm/optimise.log"),
     conda:
@@ -84,7 +83,7 @@ rule dualarm_check:
         csv=out("dualarm/csqp_check.csv"),
         md=out("dualarm/csqp_check.md"),
     params:
-        slice=lambda w: with_code(dualarm_json("check"), "dualarm_check"),
+        slice=lambda w: params("dualarm_check", "dualarm_check"),
     log:
         out("logs/dualarm/check.log"),
     conda:
@@ -110,7 +109,7 @@ rule dualarm_plots:
         convergence=report(out("dualarm/convergence.png"), category="Dual-arm assembly",
                            caption="../report/dualarm_convergence.rst"),
     params:
-        code=with_code("{}", "dualarm_plots"),
+        code=code_params("dualarm_plots"),
     log:
         out("logs/dualarm/plots.log"),
     conda:
@@ -128,7 +127,7 @@ rule dualarm_animation:
     output:
         report(out("dualarm/animation.html"), category="Dual-arm assembly", caption="../report/dualarm_animation.rst"),
     params:
-        slice=lambda w: with_code(dualarm_json("animation"), "dualarm_animation"),
+        slice=lambda w: params("dualarm_animation", "dualarm_animation"),
     log:
         out("logs/dualarm/animation.log"),
     conda:

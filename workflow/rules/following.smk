@@ -11,7 +11,7 @@ rule follow:
         csv=out("follow/{case}/summary.csv"),
         md=out("follow/{case}/summary.md"),
     params:
-        slice=lambda w: with_code(canonical(FOLLOW_SLICES[w.case]), "follow"),
+        slice=lambda w: params(f"follow_{w.case}", "follow", follow_job() if w.case == "space" else None),
     log:
         out("logs/follow/{case}.log"),
     wildcard_constraints:
@@ -33,7 +33,7 @@ rule follow_plots:
         torques=report(out("follow/{case}/torques.png"), category="Following", subcategory="{case}",
                        caption="../report/follow_torques.rst"),
     params:
-        slice=lambda w: with_code(canonical(FOLLOW_SLICES[w.case]), "follow_plots"),
+        slice=lambda w: params(f"follow_{w.case}", "follow_plots", follow_job() if w.case == "space" else None),
     log:
         out("logs/follow/plots_{case}.log"),
     wildcard_constraints:
@@ -52,7 +52,7 @@ rule follow_summary:
         csv=out("follow/summary.csv"),
         md=out("follow/summary.md"),
     params:
-        code=with_code("{}", "follow_summary"),
+        code=code_params("follow_summary"),
     log:
         out("logs/follow/summary.log"),
     conda:

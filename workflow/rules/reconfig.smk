@@ -1,17 +1,16 @@
 # Method family 3: reconfigurable robot, one boom reconfigured in a closed chain (one job per method).
-RECONFIG_SLICES = reconfig_slices(config)
-RECONFIG_METHODS = ["nullspace", "pinv"] if RECONFIG_SLICES else []
+RECONFIG_METHODS = ["nullspace", "pinv"] if RUN.reconfig else []
 
 
 rule reconfig:
     """Plan the boom reconfiguration: null-space singularity avoidance or the plain pseudo-inverse."""
     input:
-        robot=lambda w: config["reconfig"]["robot"],
+        robot=lambda w: RUN.reconfig.robot,
     output:
         table=out("reconfig/{method}.parquet"),
         timing=out("reconfig/{method}_timing.json"),
     params:
-        slice=lambda w: with_code(canonical(RECONFIG_SLICES[w.method]), "reconfig"),
+        slice=lambda w: params(f"reconfig_{w.method}", "reconfig"),
     log:
         out("logs/reconfig/{method}.log"),
     wildcard_constraints:
@@ -31,7 +30,7 @@ rule reconfig_summary:
         csv=out("reconfig/summary.csv"),
         md=out("reconfig/summary.md"),
     params:
-        code=with_code("{}", "reconfig_summary"),
+        code=code_params("reconfig_summary"),
     log:
         out("logs/reconfig/summary.log"),
     conda:
@@ -52,7 +51,7 @@ rule reconfig_plots:
         passive=report(out("reconfig/passive_joint.png"), category="Reconfiguration",
                        caption="../report/reconfig_passive.rst"),
     params:
-        code=with_code("{}", "reconfig_plots"),
+        code=code_params("reconfig_plots"),
     log:
         out("logs/reconfig/plots.log"),
     conda:
@@ -64,13 +63,13 @@ rule reconfig_plots:
 rule reconfig_animation:
     """Offline 3D animation (MeshCat static HTML) of the reconfiguration."""
     input:
-        robot=lambda w: config["reconfig"]["robot"],
+        robot=lambda w: RUN.reconfig.robot,
         tables=expand(out("reconfig/{method}.parquet"), method=RECONFIG_METHODS),
     output:
         report(out("reconfig/animation.html"), category="Reconfiguration",
                caption="../report/reconfig_animation.rst"),
     params:
-        slice=lambda w: with_code(canonical(RECONFIG_SLICES["animation"]), "reconfig_animation"),
+        slice=lambda w: params("reconfig_animation", "reconfig_animation"),
     log:
         out("logs/reconfig/animation.log"),
     conda:

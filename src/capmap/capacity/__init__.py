@@ -7,6 +7,7 @@
 - :mod:`~capmap.capacity.planning`     improved A* through the voxels that carry the payload
 - :mod:`~capmap.capacity.branch_planning` A* over (voxel, IK branch) states: plans on the branch that is executed
 - :mod:`~capmap.capacity.branch_moves` tracking a branch along moves, their capacity, the search's IK caches
+- :mod:`~capmap.capacity.search`       the searches' contract: start, goal, payload -> plan or reason
 - :mod:`~capmap.capacity.verification` the real motion along a path: loads, segment capacities, verdicts
 """
 
@@ -18,6 +19,7 @@ _EXPORTS = {
     'planning': 'planning',
     'branch_planning': 'branch_planning',
     'branch_moves': 'branch_moves',
+    'search': 'search',
     'plan_on_branch': 'branch_planning',
     'sampling': 'sampling',
     'verification': 'verification',
@@ -46,6 +48,7 @@ __all__ = [
     "planning",
     "point_capacity",
     "sampling",
+    "search",
     "verification",
     "verify_path",
     "voxelise",

@@ -24,6 +24,8 @@ screen, not a proof: :func:`capmap.capacity.verification.verify_path` samples th
 motion densely and is what says a plan carries the payload.
 
 Errors name the inputs by role (``start``, ``goal``, ``payload``; ``q_ini``: the start configuration).
+:class:`BranchSearch` is :func:`plan_on_branch` from a fixed start configuration, under the contract of
+:mod:`capmap.capacity.search`.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from capmap.core import ik
 from capmap.core.tracking import nearest_branch, start_branch
 from capmap.errors import NoPath
 
-__all__ = ["BranchProblem", "BranchPlan", "plan_on_branch"]
+__all__ = ["BranchProblem", "BranchPlan", "plan_on_branch", "BranchSearch"]
 
 PROGRESS_EVERY = 2000  # states expanded between progress lines
 
@@ -206,3 +208,16 @@ def plan_on_branch(problem: BranchProblem, start_m: np.ndarray, goal_m: np.ndarr
              else f"nor from any of the other {n - 1} IK branches at the start")
     raise NoPath(f"no path executable on the start's IK branch ({k0 + 1} of {n}) carrying {{payload}} = {payload_kg:g} "
                  f"({len(nodes)} states in {reached} voxels reached; {expanded} expanded); {where}", **ROLES)
+
+
+@dataclass(frozen=True)
+class BranchSearch:
+    """:func:`plan_on_branch` on a fixed problem from the IK branch nearest q_start (n_active,) rad, a
+    :class:`~capmap.capacity.search.Search`."""
+
+    problem: BranchProblem
+    q_start: np.ndarray
+
+    def plan(self, start_m: np.ndarray, goal_m: np.ndarray, payload_kg: float) -> BranchPlan:
+        """The shortest :class:`BranchPlan` from start_m to goal_m (3,) m carrying payload_kg; NoPath when none."""
+        return plan_on_branch(self.problem, start_m, goal_m, self.q_start, payload_kg)

@@ -7,7 +7,7 @@ y(m) = y0 + m s, with limits |y_k| <= L_k. The largest admissible m is therefore
 
 and m* = 0 when some |y0_k| > L_k already (the state violates a limit with no payload).
 Over a set of directions, y0 and s are evaluated from the exact polynomial coefficients
-of :meth:`capmap.core.dynamics.ArmDynamics.coefficients` with one matrix product.
+(:class:`capmap.core.coefficients.Coefficients`, batched; re-exported here) with one matrix product.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import numpy as np
 
 from capmap.capacity.directions import Directions
 from capmap.capacity.sweep import min_over_directions, min_per_pair
+from capmap.core.coefficients import Coefficients
 from capmap.core.dynamics import ArmDynamics, output_names
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
@@ -89,33 +90,14 @@ def state_capacity(dyn: ArmDynamics, q_active: np.ndarray, v_lin: np.ndarray, a_
     return float(cap), limits.names[int(k)]
 
 
-@dataclass(frozen=True)
-class Coefficients:
-    """Stacked exact coefficients for B configurations (see ArmDynamics.coefficients).
-
-    c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6), S (B, n_out, 3), singular (B,)."""
-
-    c0: np.ndarray
-    L: np.ndarray
-    Q: np.ndarray
-    S: np.ndarray
-    singular: np.ndarray
-
-    def stacked(self) -> np.ndarray:
-        """[c0, L, Q] (B, n_out, 10): the outputs at rest are ``stacked() @ motion_features(u, motion).T``."""
-        return np.concatenate([self.c0[..., None], self.L, self.Q], axis=2)
-
-
 def coefficients(dyn: ArmDynamics, q_active: np.ndarray) -> Coefficients:
     """Coefficients for configurations q_active (B, n_active) rad, the whole batch at once
     (:class:`capmap.core.batch_dynamics.BatchDynamics`; equal to the per-configuration Pinocchio
     computation :func:`coefficients_pinocchio` to ~1e-12)."""
     q_active = np.atleast_2d(q_active)
     if not len(q_active):
-        n = dyn.n_out
-        return Coefficients(np.zeros((0, n)), np.zeros((0, n, 3)), np.zeros((0, n, 6)), np.zeros((0, n, 3)),
-                            np.zeros(0, dtype=bool))
-    return Coefficients(*dyn.batch.coefficients(q_active))
+        return Coefficients.empty(dyn.n_out)
+    return dyn.batch.coefficients(q_active)
 
 
 def coefficients_pinocchio(dyn: ArmDynamics, q_active: np.ndarray) -> Coefficients:
@@ -123,8 +105,8 @@ def coefficients_pinocchio(dyn: ArmDynamics, q_active: np.ndarray) -> Coefficien
     configuration by configuration."""
     rows = [dyn.coefficients(q) for q in np.atleast_2d(q_active)]
     if not rows:
-        return coefficients(dyn, np.zeros((0, dyn.arm.n_active)))
-    return Coefficients(*(np.array([r[k] for r in rows]) for k in ("c0", "L", "Q", "S", "singular")))
+        return Coefficients.empty(dyn.n_out)
+    return Coefficients.stack(rows)
 
 
 def direction_features(u: np.ndarray) -> np.ndarray:

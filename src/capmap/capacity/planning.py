@@ -11,6 +11,7 @@ Waypoints: the true start, the centres of the voxels visited (start and goal vox
 included), the true goal; consecutive duplicates (e.g. a goal at a voxel centre) merged.
 
 Errors name the inputs by role (``start``, ``goal``, ``payload``; see :mod:`capmap.errors`).
+:class:`VoxelSearch` is :func:`plan` on a fixed map, under the contract of :mod:`capmap.capacity.search`.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from capmap.capacity.voxels import Grid
 from capmap.errors import CapmapError, NoPath
 
 __all__ = ["NEIGHBOURS", "AXIS_OF_NEIGHBOUR", "capacity_penalty", "SearchResult", "astar", "Plan", "locate", "plan",
-           "ROLES"]
+           "VoxelSearch", "ROLES"]
 
 ROLES = {"start": "start", "goal": "goal", "payload": "payload"}  # own-terms names of plan()'s inputs
 
@@ -194,3 +195,17 @@ def plan(grid: Grid, capacity_kg: np.ndarray, start_m: np.ndarray, goal_m: np.nd
     return Plan(voxel_path=res.path, waypoints=np.array([pts[i] for i in keep]),
                 waypoint_kind=tuple(kinds[i] for i in keep), waypoint_voxel=np.array([vox[i] for i in keep]),
                 cost_m=res.cost_m, expanded=res.expanded)
+
+
+@dataclass(frozen=True)
+class VoxelSearch:
+    """:func:`plan` on a fixed map, a :class:`~capmap.capacity.search.Search`: capacity_kg (V,) kg over
+    ``grid`` (C-ordered, NaN unreachable) and, for direction-aware moves, axis_capacity_kg (V, 13) kg."""
+
+    grid: Grid
+    capacity_kg: np.ndarray
+    axis_capacity_kg: np.ndarray | None = None
+
+    def plan(self, start_m: np.ndarray, goal_m: np.ndarray, payload_kg: float) -> Plan:
+        """The shortest :class:`Plan` from start_m to goal_m (3,) m carrying payload_kg; NoPath when none."""
+        return plan(self.grid, self.capacity_kg, start_m, goal_m, payload_kg, self.axis_capacity_kg)

@@ -9,7 +9,8 @@
 - :mod:`~capmap.config.scene_file`  scene files of the dual-arm family
 - :mod:`~capmap.config.platform_file` platform robot files (arms of revolute and passive joints)
 - :mod:`~capmap.config.run`         the whole run configuration
-- :mod:`~capmap.config.slices`      what each stage depends on (rule params, provenance)
+- :mod:`~capmap.config.typed`       typed objects <-> JSON (the generic rebuild of a job's config)
+- :mod:`~capmap.config.slices`      the fields each stage reads (rule params, provenance)
 - :mod:`~capmap.config.failure`     the failure in one edit: lock angle, start, start configuration
 - :mod:`~capmap.config.checks`      checks that need the robot, with errors naming config keys
 """
@@ -20,38 +21,19 @@ _EXPORTS = {
     'check_run_config': 'checks',
     'Failure': 'failure',
     'resolve_failure': 'failure',
-    'resolved_doc': 'failure',
+    'main_task': 'failure',
     'RunConfig': 'run',
     'load_config': 'run',
     'parse_config': 'run',
-    'atlas_slices': 'slices',
+    'STAGES': 'slices',
+    'StageConfig': 'slices',
     'canonical': 'slices',
     'config_hash': 'slices',
-    'dualarm_slices': 'slices',
-    'follow_slices': 'slices',
     'payload_label': 'slices',
-    'reconfig_slices': 'slices',
-    'stage_slices': 'slices',
-    'task_slices': 'slices',
+    'stage_config': 'slices',
+    'stage_slice': 'slices',
 }
 
-__all__ = [
-    "Failure",
-    "RunConfig",
-    "atlas_slices",
-    "canonical",
-    "check_run_config",
-    "config_hash",
-    "dualarm_slices",
-    "follow_slices",
-    "load_config",
-    "parse_config",
-    "payload_label",
-    "reconfig_slices",
-    "resolve_failure",
-    "resolved_doc",
-    "stage_slices",
-    "task_slices",
-]
+__all__ = sorted(_EXPORTS)
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

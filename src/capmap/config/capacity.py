@@ -3,7 +3,7 @@ voxels, verification. Frozen dataclasses built from the validated config documen
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -12,38 +12,81 @@ from capmap.capacity import directions
 from capmap.capacity.directions import Directions
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.refine import RefineSettings
+from capmap.config.typed import ROUND
 from capmap.config.validation import as_tuple, per_item
 from capmap.errors import CapmapError, ConfigError
 
 __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "DirectionsConfig", "VerificationConfig",
-           "rotation_from_rpy", "DEFAULT_DT_S", "REFINE_DEFAULTS", "refine_doc", "refine_settings", "PLAN_MOVES", "GAIN_TASKS"]
+           "RefineConfig", "PlanningConfig", "PlanTask", "rotation_from_rpy", "PLAN_MOVES",
+           "payload_label"]
 
-REFINE_DEFAULTS = {"rel_tol": 0.005, "min_points": 16, "max_points": 256, "near_band": 0.1, "near_min_points": 64,
-                   "seed": 0}
 PLAN_MOVES = ("branch", "axis", "isotropic")  # planning.moves; the first is the default
-GAIN_TASKS = 30  # planning.gain_tasks: random tasks per payload comparing the two kinds of moves
 
 
-def refine_doc(voxels_doc: dict) -> dict | None:
-    """``voxels.refine`` with its defaults filled in (None when refinement is off)."""
-    r = voxels_doc.get("refine", {})
-    return None if r is False else {**REFINE_DEFAULTS, **r}
+def payload_label(payload_kg: float) -> str:
+    """File-name label of a payload: 1500 -> '1500', 1250.5 -> '1250.5'."""
+    return f"{float(payload_kg):g}"
 
 
-def refine_settings(voxels_doc: dict, payloads_kg) -> RefineSettings | None:
-    """The refinement of ``voxels.refine`` around the task payloads; a one-line ConfigError
-    naming the key when its point counts contradict each other."""
-    r = refine_doc(voxels_doc)
-    if r is None:
-        return None
-    try:
-        return RefineSettings(rel_tol=float(r["rel_tol"]), min_points=int(r["min_points"]),
-                              max_points=int(r["max_points"]), payloads_kg=tuple(float(p) for p in payloads_kg),
-                              near_band=float(r["near_band"]), near_min_points=int(r["near_min_points"]))
-    except CapmapError:
-        raise ConfigError(f"voxels.refine: min_points = {r['min_points']}, near_min_points = {r['near_min_points']} "
-                          f"and max_points = {r['max_points']}: need min_points <= max_points and "
-                          "near_min_points <= max_points") from None
+@dataclass(frozen=True)
+class RefineConfig:
+    """``voxels.refine`` (absent: these defaults; ``false``: no refinement, RunConfig.refine None):
+    convergence tolerance, points per voxel (at least, at most, near a payload), the band around a
+    payload, the seed of the refinement's random points."""
+
+    rel_tol: float = 0.005
+    min_points: int = 16
+    max_points: int = 256
+    near_band: float = 0.1
+    near_min_points: int = 64
+    seed: int = 0
+
+    @classmethod
+    def from_doc(cls, voxels_doc: dict) -> "RefineConfig | None":
+        r = voxels_doc.get("refine", {})
+        if r is False:
+            return None
+        out = cls(**r)
+        if not 1 <= out.min_points <= out.max_points or out.near_min_points > out.max_points:
+            raise ConfigError(f"voxels.refine: min_points = {out.min_points}, near_min_points = {out.near_min_points} "
+                              f"and max_points = {out.max_points}: need min_points <= max_points and "
+                              "near_min_points <= max_points")
+        return out
+
+    def settings(self, payloads_kg) -> RefineSettings:
+        """The refinement's numerics settings around the task payloads."""
+        try:
+            return RefineSettings(rel_tol=float(self.rel_tol), min_points=int(self.min_points),
+                                  max_points=int(self.max_points), payloads_kg=tuple(float(p) for p in payloads_kg),
+                                  near_band=float(self.near_band), near_min_points=int(self.near_min_points))
+        except CapmapError as exc:
+            raise ConfigError(exc.in_terms(rel_tol="voxels.refine.rel_tol")) from None
+
+
+@dataclass(frozen=True)
+class PlanningConfig:
+    """``planning``: the kind of moves (``PLAN_MOVES``) and the random tasks per payload of the
+    plan_gain experiment."""
+
+    moves: str = PLAN_MOVES[0]
+    gain_tasks: int = 30
+
+
+@dataclass(frozen=True)
+class PlanTask:
+    """One plan/verify job: the main task at one of its payloads (``name`` None; start and start
+    configuration resolved, see :mod:`capmap.config.failure`) or a further task of ``tasks``."""
+
+    payload_kg: float
+    start_m: tuple[float, float, float] = field(metadata=ROUND)
+    goal_m: tuple[float, float, float]
+    q_start_deg: tuple[float, ...] = field(metadata=ROUND)
+    name: str | None = None
+
+    @classmethod
+    def from_doc(cls, d: dict) -> "PlanTask":
+        return cls(payload_kg=float(d["payload_kg"]), start_m=tuple(d["start_m"]), goal_m=tuple(d["goal_m"]),
+                   q_start_deg=tuple(d["q_start_deg"]), name=d["name"])
 
 DEFAULT_DT_S = 0.1  # verification.dt_s when not given
 
@@ -105,7 +148,9 @@ class LimitsConfig:
 
     @classmethod
     def from_doc(cls, d: dict) -> "LimitsConfig":
-        return cls(**{k: as_tuple(v) for k, v in d.items()})
+        """A list of equal values is the one value: ``[700] * 7`` and ``700`` are the same limits."""
+        return cls(**{k: (v[0] if isinstance(v, list) and v and all(x == v[0] for x in v) else as_tuple(v))
+                      for k, v in d.items()})
 
     def resolve(self, n_joints: int) -> LoadLimits:
         """:class:`LoadLimits` for an arm with n_joints joints (length checks here)."""

@@ -10,11 +10,12 @@ from dataclasses import replace
 import numpy as np
 
 from capmap.config.atlas import AtlasConfig
-from capmap.config.capacity import TaskConfig, refine_settings
+from capmap.config.capacity import PlanTask, TaskConfig
 from capmap.config.dualarm import load_dual_arm_file
-from capmap.config.estimate import estimate_map
+from capmap.config.estimate import Estimate, check_steps, estimate_map, line_duration_s
 from capmap.config.failure import Failure, locked_arm, resolve_failure
 from capmap.config.following import FollowConfig
+from capmap.config.inputs import check_cloud_file
 from capmap.config.reconfig import rate_limits, reconfig_problem
 from capmap.config.robot_file import load
 from capmap.config.run import RunConfig, parse_config
@@ -25,9 +26,11 @@ from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free
 from capmap.core.robot import Robot
 from capmap.core.tracking import start_branch
+from capmap.dualarm.scene import surface_points
 from capmap.errors import CapmapError, ConfigError
 
-__all__ = ["check_run_config", "check_goal", "check_dt", "check_follow", "check_atlas"]
+__all__ = ["check_run_config", "check_goal", "check_dt", "check_follow", "check_atlas", "check_on_grid", "check_motions",
+           "check_dualarm"]
 
 
 def check_run_config(doc: dict, source: str = "config") -> RunConfig:
@@ -39,32 +42,37 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     limits = cfg.limits.resolve(robot.n_joints).for_arm(arm)
     dirs = cfg.directions.build()
     check_goal(arm, cfg.task, failure, source)
-    check_tasks(doc.get("tasks", []), arm, cfg.task, failure, source)
+    check_tasks(cfg.tasks, arm, cfg.task, failure, source)
     check_dt(cfg, source)
-    try:
-        refine_settings(doc["voxels"], cfg.task.payload_kg)
-    except ConfigError as exc:
-        raise ConfigError(f"{source}: {exc}") from None
-    keys = {"n_points": "sampling.n_points", "edge_m": "voxels.edge_m"}
+    if cfg.refine is not None:
+        try:
+            cfg.refine.settings(cfg.task.payload_kg)
+        except ConfigError as exc:
+            raise ConfigError(f"{source}: {exc}") from None
+    keys = {"n_points": "sampling.n_points", "edge_m": "voxels.edge_m", "jitter": "sampling.jitter_per_voxel",
+            "directions": "directions.n" if cfg.directions.kind == "sphere" else "directions.step_deg"}
     try:
         estimate = estimate_map(arm, cfg.sampling, cfg.voxel_edge_m, len(dirs), len(limits.names), cfg.shards, keys)
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
+    check_on_grid(cfg, failure, estimate, source)
+    check_motions(cfg, failure, source)
     if cfg.follow is not None:
         check_follow(cfg.follow, cfg, source)
     if cfg.reconfig is not None:
         rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
     if cfg.atlas is not None:
         check_atlas(cfg.atlas, robot, source)
-        keys = {"n_points": "atlas.sampling.n_points", "edge_m": "atlas.edge_m"}
+        keys = {"n_points": "atlas.sampling.n_points", "edge_m": "atlas.edge_m",
+                "jitter": "atlas.sampling.jitter_per_voxel",
+                "directions": "atlas.directions.n" if cfg.atlas.directions.kind == "sphere" else "atlas.directions.step_deg"}
         try:
             estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(cfg.atlas.directions.build()),
                          len(limits.names), 1, keys)
         except ConfigError as exc:
             raise ConfigError(f"{source}: {exc}") from None
     if cfg.dualarm is not None:
-        load_dual_arm_file(cfg.dualarm.robot)
-        load_scene(cfg.dualarm.scene)
+        check_dualarm(cfg, source)
     return replace(cfg, failure=failure, estimate=estimate)
 
 
@@ -82,21 +90,26 @@ def check_goal(arm: LockedArm, task: TaskConfig, failure: Failure, source: str =
     """The goal (``task.goal_m``, or ``goal_m`` named ``key``) reachable at the task orientation by
     the locked arm (the start is, by resolution)."""
     goal = task.goal_m if goal_m is None else goal_m
+    start = failure.start_m if goal_m is None else None
+    if start is not None and np.linalg.norm(np.subtract(goal, start)) < 1e-6:
+        raise ConfigError(f"{source}: {key} = [{', '.join(f'{v:g}' for v in goal)}] is the start "
+                          f"({'task.start_m' if failure.start_given else 'FK(task.q_ini_deg)'}): nothing to plan")
     if ik.solve(arm, np.asarray(goal, dtype=float)[None], task.rotation).n_solutions[0] == 0:
         raise ConfigError(f"{source}: {key} = [{', '.join(f'{v:g}' for v in goal)}] is not reachable "
                           f"at task.orientation_rpy_deg = {list(task.orientation_rpy_deg)} with joint {failure.joint} "
                           f"locked at {failure.angle_deg:g} deg")
 
 
-def check_tasks(tasks: list, arm: LockedArm, task: TaskConfig, failure: Failure, source: str = "config") -> None:
+def check_tasks(tasks: tuple[PlanTask, ...], arm: LockedArm, task: TaskConfig, failure: Failure,
+                source: str = "config") -> None:
     """``tasks``: distinct names; every start configuration a branch at its start (the locked joint
     at the lock angle), every goal reachable, at the task's orientation."""
-    names = [t["name"] for t in tasks]
+    names = [t.name for t in tasks]
     if len(set(names)) < len(names):
         raise ConfigError(f"{source}: tasks: names must differ ({names})")
     for i, t in enumerate(tasks):
-        key = f"tasks[{i}] ({t['name']})"
-        q = np.asarray(t["q_start_deg"], dtype=float)
+        key = f"tasks[{i}] ({t.name})"
+        q = np.asarray(t.q_start_deg, dtype=float)
         if len(q) != arm.robot.n_joints:
             raise ConfigError(f"{source}: {key}.q_start_deg has {len(q)} values but {arm.robot.name} has "
                               f"{arm.robot.n_joints} joints")
@@ -104,10 +117,12 @@ def check_tasks(tasks: list, arm: LockedArm, task: TaskConfig, failure: Failure,
             raise ConfigError(f"{source}: {key}.q_start_deg[{failure.joint - 1}] = {q[failure.joint - 1]:g} but joint "
                               f"{failure.joint} is locked at {failure.angle_deg:g} deg")
         try:
-            start_branch(arm, np.asarray(t["start_m"], dtype=float), task.rotation, np.deg2rad(q)[arm.active])
+            start_branch(arm, np.asarray(t.start_m, dtype=float), task.rotation, np.deg2rad(q)[arm.active])
         except CapmapError as exc:
             raise ConfigError(f"{source}: {exc.in_terms(start=f'{key}.start_m', q_ini=f'{key}.q_start_deg')}") from None
-        check_goal(arm, task, failure, source, t["goal_m"], f"{key}.goal_m")
+        if np.linalg.norm(np.subtract(t.goal_m, t.start_m)) < 1e-6:
+            raise ConfigError(f"{source}: {key}.goal_m equals {key}.start_m: nothing to plan")
+        check_goal(arm, task, failure, source, t.goal_m, f"{key}.goal_m")
 
 
 def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> None:
@@ -123,8 +138,11 @@ def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> N
         raise ConfigError(f"{source}: follow.ground.q_start_deg has {len(g.q_start_deg)} values but "
                           f"{robot.name} has {robot.n_joints} joints")
     per_item(g.joint_torque_nm, robot.n_joints, "follow.ground.joint_torque_nm")
-    if not np.linalg.norm(g.line_m) > 0:
-        raise ConfigError(f"{source}: follow.ground.line_m must not be zero")
+    if not np.linalg.norm(g.line_m) >= 1e-3:
+        raise ConfigError(f"{source}: follow.ground.line_m = {list(g.line_m)} is {np.linalg.norm(g.line_m):.3g} m long: "
+                          "give a line of at least 1 mm")
+    check_steps(2 * line_duration_s(float(np.linalg.norm(g.line_m)), g.v_max_mps, g.a_max_mps2) / fol.period_s,
+                "follow.period_s", f"following follow.ground.line_m at follow.period_s = {fol.period_s:g} s")
     arm = free(robot)
     T0 = arm.fk(np.deg2rad(np.asarray(g.q_start_deg, dtype=float))[None])[0]
     end = T0[:3, 3] + np.asarray(g.line_m, dtype=float)
@@ -144,3 +162,58 @@ def check_atlas(at: AtlasConfig, robot: Robot, source: str = "config") -> None:
         for a in at.angles_deg:
             if not lo - 1e-9 <= a <= hi + 1e-9:
                 raise ConfigError(f"{source}: atlas.angles_deg: {a:g} is outside joint {j}'s range [{lo:g}, {hi:g}] deg")
+
+
+def check_on_grid(cfg: RunConfig, failure: Failure, estimate: Estimate, source: str = "config") -> None:
+    """Every start and goal lies inside the map's grid (known before any job: the grid covers the
+    seeded joint samples, as the voxels stage's will), else the planner could not place it."""
+    grid = estimate.grid
+    if grid is None:
+        return
+    ends = [("task.start_m" if failure.start_given else "the start (FK(task.q_ini_deg))", failure.start_m),
+            ("task.goal_m", cfg.task.goal_m)]
+    ends += [(f"tasks[{i}] ({t.name}).{k}", getattr(t, k)) for i, t in enumerate(cfg.tasks) for k in ("start_m", "goal_m")]
+    hi = grid.lower + np.asarray(grid.shape) * grid.edge_m
+    for key, p in ends:
+        if grid.index(np.asarray(p, dtype=float)[None])[0, 0] < 0:
+            raise ConfigError(f"{source}: {key} = [{', '.join(f'{v:.4g}' for v in p)}] lies outside the map's grid "
+                              f"[{', '.join(f'{v:.4g}' for v in grid.lower)}] .. [{', '.join(f'{v:.4g}' for v in hi)}] m, "
+                              f"which covers the sampling.n_points = {cfg.sampling.n_points:,} joint samples: raise "
+                              "sampling.n_points")
+
+
+def check_motions(cfg: RunConfig, failure: Failure, source: str = "config") -> None:
+    """The verified motions and the reconfiguration fit in MAX_STEPS samples (a planned path taken as
+    at most ten times its direct line; the reconfiguration at its slowest time scale)."""
+    v, a = cfg.task.v_max_mps, cfg.task.a_max_mps2
+    lines = [(failure.start_m, cfg.task.goal_m)] + [(t.start_m, t.goal_m) for t in cfg.tasks]
+    longest = max(line_duration_s(float(np.linalg.norm(np.subtract(g, s))), v, a) for s, g in lines)
+    dt = cfg.verification.dt_s
+    check_steps(10 * longest / dt, "verification.dt_s", f"verifying the task's motions at verification.dt_s = {dt:g} s")
+    if cfg.follow is not None and cfg.follow.space is not None:
+        check_steps(10 * longest / cfg.follow.period_s, "follow.period_s",
+                    f"following the planned path at follow.period_s = {cfg.follow.period_s:g} s")
+    rc = cfg.reconfig
+    if rc is not None:
+        check_steps(rc.duration_s / (rc.dt_s * rc.min_time_scale), "reconfig.dt_s",
+                    f"the reconfiguration (reconfig.law.duration_s = {rc.duration_s:g} s) at reconfig.dt_s = {rc.dt_s:g} s")
+
+
+def check_dualarm(cfg: RunConfig, source: str = "config") -> None:
+    """The dual-arm files load, a user's cloud file is one the scan job can read, and the horizons
+    and the synthetic scan fit."""
+    da = cfg.dualarm
+    load_dual_arm_file(da.robot)
+    scene = load_scene(da.scene)
+    if da.cloud_file is not None:
+        check_cloud_file(da.cloud_file)
+    for key, h in (("dualarm.horizon.nodes", da.horizon), ("dualarm.check.nodes", da.check.horizon)):
+        check_steps(h.nodes * 100, key, f"an optimal control problem of {h.nodes:,} nodes (~100 steps of work each)",
+                    "lower")
+    check_steps(da.horizon.nodes * da.fine_factor, "dualarm.fine_factor",
+                f"the re-check on a {da.fine_factor}x finer grid of {da.horizon.nodes:,} nodes", "lower")
+    if da.scan is not None:
+        coarse = 0.05  # points scale with 1 / spacing^2: count them at a coarse spacing
+        n = len(surface_points(scene, coarse)[0]) * (coarse / min(da.scan.spacing_m, coarse)) ** 2
+        check_steps(n, "dualarm.cloud.spacing_m", f"a synthetic scan at dualarm.cloud.spacing_m = {da.scan.spacing_m:g} m "
+                    f"(~{n:.3g} surface points)")

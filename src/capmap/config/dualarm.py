@@ -8,12 +8,13 @@ rules ``self_gap``, ``body_skip`` and ``hold`` (see :mod:`capmap.dualarm.assembl
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from capmap.config.robot_file import check_urdf, package_file
+from capmap.config.robot_file import check_meshes, check_urdf, package_file, urdf_package_dir
+from capmap.config.typed import FILE
 from capmap.config.validation import load_yaml
 from capmap.dualarm.cloud import FitSettings
 from capmap.dualarm.robot import CapsuleGroup, DualArmDescription
@@ -57,9 +58,9 @@ class DualArmConfig:
     overrides, the horizon, cost weights, the safety margin, solver settings, the CSQP check's
     horizon, the re-check's refinement and the animation's frame rate."""
 
-    robot: str
-    scene: str
-    cloud_file: str | None
+    robot: str = field(metadata=FILE)
+    scene: str = field(metadata=FILE)
+    cloud_file: str | None = field(metadata=FILE)
     scan: ScanSettings | None
     scan_seed: int
     fit: FitSettings
@@ -155,7 +156,8 @@ def load_dual_arm_file(path: str | Path) -> DualArmDescription:
         if not urdf_path.is_file():
             raise ConfigError(f"{src}: urdf.path = {urdf['path']!r}: no such file")
     check_urdf(urdf_path, src)
-    package_dir = next((p for p in urdf_path.parents if p.name == "share"), urdf_path.parent)
+    package_dir = urdf_package_dir(urdf_path)
+    check_meshes(urdf_path, [package_dir], src)
     arms = doc["arms"]
     if sorted(arms) != ["left", "right"]:
         raise ConfigError(f"{src}: arms must be exactly 'left' and 'right' (found {sorted(arms)})")

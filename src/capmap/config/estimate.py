@@ -20,13 +20,28 @@ from capmap.config.capacity import SamplingConfig
 from capmap.core.reduction import LockedArm
 from capmap.errors import ConfigError
 
-__all__ = ["Estimate", "estimate_map", "available_memory_mb", "BASE_MB"]
+__all__ = ["Estimate", "estimate_map", "available_memory_mb", "BASE_MB", "MAX_STEPS", "check_steps", "line_duration_s"]
 
 BASE_MB = 350.0  # a job's Python with numpy, pandas and Pinocchio imported
 _CHUNK = 500  # points per capacity chunk (capmap.stages.capacity.capacity_table)
 _MAX_BRANCHES = 16
 _POINT_BYTES = 700  # one point in the voxels stage's tables, with pandas' overhead
 _MAX_SAMPLES = 20_000_000
+MAX_STEPS = 5_000_000  # samples of a verified motion, control periods of a follow case, RK4 steps, OCP nodes x grid
+
+
+def line_duration_s(length_m: float, v_max_mps: float, a_max_mps2: float) -> float:
+    """Duration [s] of a rest-to-rest trapezoidal move of ``length_m`` (triangular when short)."""
+    return length_m / v_max_mps + v_max_mps / a_max_mps2 if length_m >= v_max_mps**2 / a_max_mps2 \
+        else 2.0 * np.sqrt(length_m / a_max_mps2)
+
+
+def check_steps(steps: float, key: str, what: str, fix: str = "raise") -> None:
+    """One ConfigError line naming ``key`` when ``what`` takes more than MAX_STEPS steps (``fix``:
+    what to do with the key, raise or lower)."""
+    if not steps <= MAX_STEPS:
+        raise ConfigError(f"{key}: {what} would take {steps:.3g} steps, more than this workflow handles "
+                          f"({MAX_STEPS:,}); {fix} {key}")
 
 
 @dataclass(frozen=True)
@@ -39,6 +54,7 @@ class Estimate:
     points: int
     states: float
     peak_mb: float
+    grid: Grid | None = None  # the map's grid (None when too large to build)
 
     def describe(self, edge_m: float) -> str:
         g = "x".join(map(str, self.grid_shape))
@@ -62,7 +78,8 @@ def estimate_map(arm: LockedArm, sampling: SamplingConfig, edge_m: float, n_dire
                  shards: int, keys: dict[str, str]) -> Estimate:
     """The size of one capacity map: the grid from the same seeded joint samples the sample stage
     draws (exact), the points voxel_fill adds, the states and the memory of its largest job.
-    ``keys``: the config keys of n_points, edge_m and jitter (named when the map is refused)."""
+    ``keys``: the config keys of n_points, edge_m, jitter and directions (the one driving the size is
+    named when the map is refused)."""
     if sampling.n_points > _MAX_SAMPLES:
         raise ConfigError(f"{keys['n_points']} = {sampling.n_points:,} joint samples is more than this workflow "
                           f"handles ({_MAX_SAMPLES:,})")
@@ -80,10 +97,25 @@ def estimate_map(arm: LockedArm, sampling: SamplingConfig, edge_m: float, n_dire
     shard_mb = points / max(shards, 1) * _POINT_BYTES / 2**20
     voxel_mb = points * _POINT_BYTES / 2**20 + voxels * 200 / 2**20
     peak = BASE_MB + max(chunk_mb + shard_mb, voxel_mb)
-    est = Estimate(grid_shape=shape, voxels=voxels, points=points, states=states, peak_mb=peak)
+    grid = Grid.covering(pos, edge_m) if voxels < 1e9 else None  # the grid of the voxels stage (all samples)
+    est = Estimate(grid_shape=shape, voxels=voxels, points=points, states=states, peak_mb=peak, grid=grid)
     free = available_memory_mb()
     if peak > 0.8 * free:
-        key = keys["edge_m"] if sampling.mode == "voxel_fill" and fill > sampling.n_points else keys["n_points"]
+        key, what = _blame(sampling, keys, chunk_mb > shard_mb and chunk_mb > voxel_mb, fill)
         raise ConfigError(f"{key}: this map needs {est.describe(edge_m)}; this machine has "
-                          f"{free / 1024:.1f} GB available: coarsen {key}")
+                          f"{free / 1024:.1f} GB available: {what}")
     return est
+
+
+def _blame(sampling: SamplingConfig, keys: dict[str, str], directions_dominate: bool, fill: int) -> tuple[str, str]:
+    """The key that drives the size most, and what to do about it: the direction count (a capacity
+    chunk's arrays), the jittered points per voxel, the voxel edge (the fill) or the joint samples."""
+    if directions_dominate:
+        key = keys.get("directions", "directions")
+        return key, f"use fewer motion directions ({key})"
+    if sampling.mode == "voxel_fill" and fill > sampling.n_points:
+        if sampling.jitter_per_voxel > 1:
+            key = keys.get("jitter", "sampling.jitter_per_voxel")
+            return key, f"lower {key}"
+        return keys["edge_m"], f"coarsen {keys['edge_m']}"
+    return keys["n_points"], f"lower {keys['n_points']}"

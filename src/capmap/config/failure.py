@@ -19,11 +19,12 @@ an error naming the key.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from capmap.config.capacity import LockConfig, TaskConfig
+from capmap.config.capacity import LockConfig, PlanTask, TaskConfig
+from capmap.config.typed import ROUND
 from capmap.core import ik
 from capmap.core.kinematics import rotation_log
 from capmap.core.reduction import LockedArm
@@ -32,7 +33,7 @@ from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError, ConfigError
 
-__all__ = ["Failure", "resolve_failure", "resolved_doc", "locked_arm"]
+__all__ = ["Failure", "resolve_failure", "main_task", "locked_arm"]
 
 
 def locked_arm(robot: Robot, joint: int, angle_deg: float) -> LockedArm:
@@ -49,9 +50,9 @@ class Failure:
     (every joint, deg; the locked one at ``angle_deg``), and which IK branch it is."""
 
     joint: int
-    angle_deg: float
-    start_m: tuple[float, float, float]
-    q_start_deg: tuple[float, ...]
+    angle_deg: float = field(metadata=ROUND)  # rounded in slices (1e-9): equal failures give equal slices
+    start_m: tuple[float, float, float] = field(metadata=ROUND)
+    q_start_deg: tuple[float, ...] = field(metadata=ROUND)
     branch: int  # index among the n_branches solutions at the start (ik.solve order)
     n_branches: int
     offset_deg: float  # largest |q_start - q_ini| over the joints that still move
@@ -110,12 +111,8 @@ def resolve_failure(robot: Robot, lock: LockConfig, task: TaskConfig, source: st
                    ini_miss_deg=float(np.rad2deg(np.linalg.norm(rotation_log(task.rotation @ T_ini[:3, :3].T)))))
 
 
-def resolved_doc(doc: dict, failure: Failure) -> dict:
-    """The config document with the failure resolved: ``lock.angle_deg`` and ``task.start_m``
-    filled in and ``task.q_start_deg`` (the start configuration) added, rounded so that equal
-    failures give equal stage slices (1e-9 m, 1e-9 deg)."""
-    out = dict(doc)
-    out["lock"] = {"joint": failure.joint, "angle_deg": round(failure.angle_deg, 9)}
-    out["task"] = {**doc["task"], "start_m": [round(v, 9) for v in failure.start_m],
-                   "q_start_deg": [round(v, 9) for v in failure.q_start_deg]}
-    return out
+def main_task(task: TaskConfig, failure: Failure, payload_kg: float) -> PlanTask:
+    """The plan/verify job of the main task at one of its payloads: the resolved start and start
+    configuration, the task's goal."""
+    return PlanTask(payload_kg=float(payload_kg), start_m=failure.start_m, goal_m=task.goal_m,
+                    q_start_deg=failure.q_start_deg)

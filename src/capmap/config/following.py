@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+from capmap.config.typed import FILE
 from capmap.config.validation import as_tuple
 
 __all__ = ["SpaceFollowConfig", "GroundFollowConfig", "FollowConfig"]
@@ -24,7 +25,7 @@ class SpaceFollowConfig:
 class GroundFollowConfig:
     """``follow.ground``: a ground arm follows a straight line from FK(q_start) by line_m."""
 
-    robot: str
+    robot: str = field(metadata=FILE)
     q_start_deg: tuple[float, ...]
     line_m: tuple[float, float, float]
     payload_kg: float

@@ -49,7 +49,7 @@ def parse_platform(doc: object, source: str) -> PlatformDescription:
     """Validate a platform document (parsed YAML) and convert it to SI / radians."""
     if not isinstance(doc, dict):
         raise ConfigError(f"{source}: a robot file must be a mapping of keys, got {type(doc).__name__}")
-    validate(doc, "robot", source)
+    doc = validate(doc, "robot", source)  # integral floats as ints where the schema says integer
     if "arms" not in doc or "dh" in doc or "urdf" in doc or "links" in doc:
         raise ConfigError(f"{source}: a platform robot is given by 'arms' (and 'captures'), without 'dh', 'urdf' "
                           "or 'links'")

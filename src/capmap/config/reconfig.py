@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from capmap.config.platform_file import load_platform
+from capmap.config.typed import FILE
 from capmap.config.validation import as_tuple, per_item
 from capmap.errors import CapmapError, ConfigError
 from capmap.reconfig.law import QuinticLaw
@@ -26,7 +27,7 @@ class ReconfigConfig:
     configuration (deg, per arm), the law (theta_deg, d_m, duration_s), the RK4 step, the
     null-space gain, the joint-rate limit(s) and the slowest time scale allowed."""
 
-    robot: str
+    robot: str = field(metadata=FILE)
     capture: str
     unlock: str
     configuration_deg: dict[str, tuple[float, ...]]

@@ -24,7 +24,7 @@ def parse_scene(doc: object, source: str) -> Scene:
     """Validate a scene document (parsed YAML) and convert it to SI / radians."""
     if not isinstance(doc, dict):
         raise ConfigError(f"{source}: a scene file must be a mapping of keys, got {type(doc).__name__}")
-    validate(doc, "scene", source)
+    doc = validate(doc, "scene", source)  # integral floats as ints where the schema says integer
     boxes = []
     for k, b in enumerate(doc["boxes"]):
         lim = np.array([_range(source, f"boxes[{k}].{ax}", b[ax]) for ax in ("x_m", "y_m", "z_m")])

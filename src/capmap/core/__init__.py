@@ -5,6 +5,7 @@
 - :mod:`~capmap.core.kinematics`  batched serial-chain FK and Jacobians, pose errors
 - :mod:`~capmap.core.ik`          every inverse-kinematics branch of a 6-joint arm
 - :mod:`~capmap.core.dynamics`    joint torques and base wrench (Pinocchio RNEA), payload models
+- :mod:`~capmap.core.coefficients` the exact capacity coefficients c0, L, Q, S (one type, batched or not)
 - :mod:`~capmap.core.tracking`    one IK branch followed continuously along a path
 - :mod:`~capmap.core.profiles`    trapezoid and jerk-limited S-curve timing of straight segments
 - :mod:`~capmap.core.limits`      limits |y0 + x s| <= L on outputs affine in a scalar
@@ -15,6 +16,7 @@ Nothing here reads files, config keys or plots; everything is SI with radians.
 from capmap._lazy import lazy_exports
 
 _EXPORTS = {
+    'coefficients': 'coefficients',
     'dynamics': 'dynamics',
     'ik': 'ik',
     'kinematics': 'kinematics',
@@ -42,6 +44,7 @@ __all__ = [
     "Robot",
     "RobotDescription",
     "build_robot",
+    "coefficients",
     "dynamics",
     "free",
     "ik",

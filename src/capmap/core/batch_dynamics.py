@@ -6,7 +6,8 @@ The model is read once from the Pinocchio model (serial chain of 1-DOF revolute 
 per joint its placement in the parent joint's frame, its axis, and its body's mass, centre of
 mass and rotational inertia; the end-effector frame's placement on its joint. Everything is
 in Pinocchio's own joint frames and spatial conventions (motion (v, w) at the frame origin,
-force (f, n) about it), so :class:`BatchDynamics.coefficients` returns the same c0, L, Q, S as
+force (f, n) about it), so :class:`BatchDynamics.coefficients` returns the same c0, L, Q, S (one
+:class:`~capmap.core.coefficients.Coefficients`, batched) as
 :meth:`capmap.core.dynamics.ArmDynamics.coefficients` (checked to 1e-12 against it, and so
 against Pinocchio and the independent Newton-Euler of the tests).
 
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from capmap.core.coefficients import Coefficients
 from capmap.core.ne_kernels import batch_coefficients
 from capmap.core.reduction import LockedArm
 
@@ -62,9 +64,10 @@ class BatchDynamics:
         self.locked_q = float(arm.locked_angle_rad)
         self.n_out = len(arm.active) + 6
 
-    def coefficients(self, q_active: np.ndarray):
-        """c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6), S (B, n_out, 3), singular (B,) for
-        configurations q_active (B, n_active) rad."""
+    def coefficients(self, q_active: np.ndarray) -> Coefficients:
+        """The :class:`~capmap.core.coefficients.Coefficients` of configurations q_active (B, n_active) rad
+        (a single (n_active,) is a batch of one): c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6),
+        S (B, n_out, 3), singular (B,)."""
         q_active = np.ascontiguousarray(np.atleast_2d(q_active), dtype=float)
         B = len(q_active)
         q = np.empty((B, self.n))
@@ -78,4 +81,4 @@ class BatchDynamics:
         singular = np.zeros(B, dtype=np.bool_)
         batch_coefficients(self.R0, self.p0, self.axis, self.mass, self.com, self.Ic, self.ee_joint, self.ee_p, self.gravity,
                self.base_com, self.active, q, c0, L, Q, S, singular)
-        return c0, L, Q, S, singular
+        return Coefficients(c0, L, Q, S, singular)

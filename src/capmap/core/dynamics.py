@@ -24,6 +24,7 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.core.batch_dynamics import BatchDynamics
+from capmap.core.coefficients import Coefficients
 from capmap.core.reduction import LockedArm
 
 __all__ = ["ArmDynamics", "output_names", "torque_names", "payload_models", "BASE_OUTPUTS"]
@@ -145,7 +146,7 @@ class ArmDynamics:
         qdd_a = Jinv @ (np.concatenate([a_lin, np.zeros(3)]) - self.drift(q, qd))
         return q, qd, self.arm.full_v(qdd_a)
 
-    def coefficients(self, q_active: np.ndarray) -> dict[str, np.ndarray]:
+    def coefficients(self, q_active: np.ndarray) -> Coefficients:
         """Exact polynomial form of the outputs over motion directions, for one configuration.
 
         With qd = v J^-1 [u; 0] and qdd = J^-1 ([a u; 0] - Jdot qd) for a unit direction u,
@@ -156,7 +157,9 @@ class ArmDynamics:
 
         because qdd is linear in u and the velocity terms (C(q, qd) qd, Jdot qd) are
         quadratic forms in qd. Q is obtained by polarisation of those quadratic forms.
-        Returns c0 (n_out,), L (n_out, 3), Q (n_out, 6), S (n_out, 3), singular (bool).
+        q_active (n_active,) rad. Returns the :class:`~capmap.core.coefficients.Coefficients` of this one
+        configuration (no leading axis): c0 (n_out,), L (n_out, 3), Q (n_out, 6), S (n_out, 3), singular
+        (numpy bool). For a batch, :meth:`capmap.core.batch_dynamics.BatchDynamics.coefficients`.
         """
         model, data, model_ng, data_ng = self.model, self.data, self.model_ng, self.data_ng
         q = self.arm.full_q(q_active)
@@ -168,7 +171,7 @@ class ArmDynamics:
             Jinv = None
         if Jinv is None or np.abs(J).sum(0).max() * np.abs(Jinv).sum(0).max() > 1e12:  # 1-norm condition number
             z = np.zeros
-            return dict(c0=z(n_out), L=z((n_out, 3)), Q=z((n_out, 6)), S=z((n_out, 3)), singular=True)
+            return Coefficients(c0=z(n_out), L=z((n_out, 3)), Q=z((n_out, 6)), S=z((n_out, 3)), singular=np.True_)
         A = np.array([self.arm.full_v(Jinv[:, i]) for i in range(3)])  # (3, nv) joint velocity per unit u_i
         X1 = data.oMi[1].toDualActionMatrix()
         p_ee = self._ee_position(data)
@@ -195,4 +198,4 @@ class ArmDynamics:
         Y = self._assemble(np.array(taus), np.array(f1s), X1)  # (16, n_out)
         Zd, Zp = Y[4:7], Y[7:10]
         Q = np.concatenate([Zd, Zp - Zd[[0, 0, 1]] - Zd[[1, 2, 2]]], axis=0)
-        return dict(c0=Y[0], L=Y[1:4].T, Q=Q.T, S=Y[10:13].T, singular=False)
+        return Coefficients(c0=Y[0], L=Y[1:4].T, Q=Q.T, S=Y[10:13].T, singular=np.False_)

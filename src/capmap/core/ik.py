@@ -38,22 +38,30 @@ Every solution is polished by two Newton steps, checked by forward kinematics
 de-duplicated. Other chain shapes use a multi-start Newton solver (a deterministic Halton
 set of starts): found solutions are exact, but completeness is not guaranteed (a
 warning is logged once per chain).
+
+Each method is one :class:`IKMethod` (one call signature, a ``complete`` property):
+:class:`ClosedForm` (raw branches in :mod:`capmap.core.ik_closed`), :class:`SemiAnalytic`
+(:mod:`capmap.core.ik_semi`, :mod:`capmap.core.ik_kernels`), each also ``reversed``, and
+:class:`MultiStartNewton` (:mod:`capmap.core.ik_numeric`); :func:`solve` takes the first of
+:data:`METHODS` that applies to the arm's chain.
 """
 
 from __future__ import annotations
 
 import logging
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik_semi
+from capmap.core import ik_closed, ik_semi
 from capmap.core.ik_numeric import multi_start, newton
 from capmap.core.kinematics import Chain, inverse_transform, pose_error
 from capmap.core.reduction import LockedArm
 
-__all__ = ["IKSolutions", "solve", "newton", "wrap_to_range", "method_for", "closed_form_shape",
-           "semi_analytic_shape", "COMPLETE_METHODS", "RESIDUAL_TOL", "SEARCH_STEPS"]
+__all__ = ["IKSolutions", "IKMethod", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
+           "newton", "wrap_to_range", "method_for", "closed_form_shape", "semi_analytic_shape", "COMPLETE_METHODS",
+           "RESIDUAL_TOL", "SEARCH_STEPS"]
 
 log = logging.getLogger(__name__)
 
@@ -61,8 +69,6 @@ RESIDUAL_TOL = 1e-9  # m and rad
 POLISHED = 1e-13  # m, rad: candidates with a larger residual get two Newton steps
 DUPLICATE_TOL = 1e-6  # rad: two solutions closer than this (wrapped) are one
 _GEOM_TOL = 1e-9
-COMPLETE_METHODS = ("closed_form", "closed_form_reversed", "semi_analytic", "semi_analytic_reversed")
-_CHUNK_EVALS = 400_000  # (target, grid point) pairs per batch of the search: bounds memory (~0.1 GB)
 SEARCH_STEPS = ik_semi.SEARCH_STEPS
 
 
@@ -106,120 +112,6 @@ def semi_analytic_shape(chain: Chain) -> bool:
     X = chain.X
     return (chain.n == 6 and not _parallel(X[2]) and _parallel(X[3]) and np.hypot(*X[3][:2, 3]) > _GEOM_TOL
             and not _parallel(X[4]) and _intersecting(X[5]))
-
-
-def method_for(chain: Chain) -> str:
-    """Which solver :func:`solve` uses for this chain."""
-    if closed_form_shape(chain):
-        return "closed_form"
-    if chain.n == 6 and closed_form_shape(chain.reversed()):
-        return "closed_form_reversed"
-    if semi_analytic_shape(chain):
-        return "semi_analytic"
-    if chain.n == 6 and semi_analytic_shape(chain.reversed()):
-        return "semi_analytic_reversed"
-    return "numeric"
-
-
-# --------------------------------------------------------------------------- closed form
-
-
-def _trig_roots(A, B, C):
-    """Both roots of A cos x + B sin x = C: (..., 2) angles and validity."""
-    rho = np.hypot(A, B)
-    ratio = C / np.where(rho > 0, rho, 1.0)
-    ok = (rho > 1e-12) & (np.abs(ratio) <= 1 + 1e-10)
-    phi = np.arctan2(B, A)
-    delta = np.arccos(np.clip(ratio, -1.0, 1.0))
-    roots = np.stack([phi + delta, phi - delta], axis=-1)
-    return roots, np.stack([ok, ok], axis=-1)
-
-
-def _rz(theta):
-    """Rotation matrices about z, (..., 3, 3)."""
-    c, s = np.cos(theta), np.sin(theta)
-    R = np.zeros(np.shape(theta) + (3, 3))
-    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1], R[..., 2, 2] = c, -s, s, c, 1.0
-    return R
-
-
-def _rz4(theta):
-    T = np.zeros(np.shape(theta) + (4, 4))
-    T[..., :3, :3] = _rz(theta)
-    T[..., 3, 3] = 1.0
-    return T
-
-
-def _closed_form(chain: Chain, T_target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Raw branches (N, 8, 6) and their validity (N, 8) for a ``closed_form_shape`` chain."""
-    X = chain.X
-    N = len(T_target)
-    # -- constants of the chain
-    p5, d5 = X[5][:3, 3], X[5][:3, 2]
-    s_star = -(p5[:2] @ d5[:2]) / (d5[:2] @ d5[:2])  # axis 5 meets axis 4 at (0, 0, s*) in frame 5
-    w3 = (X[4] @ np.array([0, 0, p5[2] + s_star * d5[2], 1.0]))[:3]  # that point, in link 3
-    h = (X[2] @ X[3] @ np.append(w3, 1.0))[2]  # its coordinate along the parallel axes
-    n1, t1 = X[1][:3, 2], X[1][:3, 3]
-    sigma = (X[2][:3, :3] @ X[3][:3, :3])[2, 2]
-    a = X[4][2, :3]  # n in frame 4 coordinates (R4^T e_z)
-    R2, t2, t3 = X[2][:3, :3], X[2][:3, 3], X[3][:3, 3]
-    R4, R5 = X[4][:3, :3], X[5][:3, :3]
-    p_ = t2 + R2 @ np.array([0, 0, t3[2]])
-    u1 = R2 @ np.array([t3[0], t3[1], 0])
-    u2 = R2 @ np.array([-t3[1], t3[0], 0])
-    # -- 1. joint 0 from the coordinate of w along n
-    w = (T_target @ (inverse_transform(X[6]) @ np.array([0, 0, s_star, 1.0])))[:, :3]  # (N, 3)
-    r = (inverse_transform(X[0]) @ np.concatenate([w, np.ones((N, 1))], 1).T).T[:, :3]
-    A0 = n1[0] * r[:, 0] + n1[1] * r[:, 1]
-    B0 = n1[0] * r[:, 1] - n1[1] * r[:, 0]
-    C0 = h + n1 @ t1 - n1[2] * r[:, 2]
-    q0, ok0 = _trig_roots(A0, B0, C0)  # (N, 2)
-    P1 = X[0] @ _rz4(q0) @ X[1]  # (N, 2, 4, 4) frame of joint 1 before its rotation
-    # -- 2. joints 4, 5 from the orientation: n maps to the target through them
-    W = np.swapaxes(P1[..., :3, :3], -1, -2) @ T_target[:, None, :3, :3] @ X[6][:3, :3].T  # (N, 2, 3, 3)
-    b = sigma * W[..., 2, :]  # (N, 2, 3)
-    A4 = d5[0] * a[0] + d5[1] * a[1]
-    B4 = d5[0] * a[1] - d5[1] * a[0]
-    C4 = b[..., 2] - d5[2] * a[2]
-    q4, ok4 = _trig_roots(np.full_like(C4, A4), np.full_like(C4, B4), C4)  # (N, 2, 2)
-    v = np.einsum("ji,...jk,k->...i", R5, _rz(-q4), a)  # R5^T Rz(-q4) a, (N, 2, 2, 3)
-    q5 = np.arctan2(v[..., 1], v[..., 0]) - np.arctan2(b[..., None, 1], b[..., None, 0])
-    ok45 = ok4 & (np.hypot(b[..., 0], b[..., 1]) > 1e-12)[..., None]
-    # -- 3. planar group: rotation Rg and point w known
-    Rg = W[:, :, None] @ _rz(-q5) @ R5.T @ _rz(-q4) @ R4.T  # (N, 2, 2, 3, 3)
-    w_P1 = np.einsum("...ij,...j->...i", inverse_transform(P1), np.concatenate([w, np.ones((N, 1))], 1)[:, None])[..., :3]
-    e = w_P1[:, :, None] - Rg @ w3  # (N, 2, 2, 3)
-    C2 = e[..., 0] ** 2 + e[..., 1] ** 2 - p_[:2] @ p_[:2] - u1[:2] @ u1[:2]
-    q2, ok2 = _trig_roots(np.full_like(C2, 2 * p_[:2] @ u1[:2]), np.full_like(C2, 2 * p_[:2] @ u2[:2]), C2)  # (N, 2, 2, 2)
-    k = p_ + np.cos(q2)[..., None] * u1 + np.sin(q2)[..., None] * u2  # (N, 2, 2, 2, 3)
-    q1 = np.arctan2(e[..., None, 1], e[..., None, 0]) - np.arctan2(k[..., 1], k[..., 0])
-    M = np.swapaxes(_rz(q1) @ R2 @ _rz(q2) @ X[3][:3, :3], -1, -2) @ Rg[..., None, :, :]
-    q3 = np.arctan2(M[..., 1, 0], M[..., 0, 0])
-    shape = q2.shape
-    theta = np.stack([np.broadcast_to(q0[:, :, None, None], shape), q1, q2, q3,
-                      np.broadcast_to(q4[..., None], shape), np.broadcast_to(q5[..., None], shape)], axis=-1)
-    ok = ok0[:, :, None, None] & ok45[..., None] & ok2
-    return theta.reshape(N, 8, 6), ok.reshape(N, 8)
-
-
-# --------------------------------------------------------------------------- semi-analytical
-
-
-def _semi_analytic(chain: Chain, T_target: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.ndarray, np.ndarray]:
-    """Candidate solutions (N, K, 6) and validity (N, K) by the 1-D search over joint 0."""
-    N = len(T_target)
-    per = max(1, _CHUNK_EVALS // steps)
-    parts = []
-    for s in range(0, N, per):
-        theta, ok, seed = ik_semi.search(chain, T_target[s:s + per], steps)
-        theta[seed] = newton(chain, theta[seed], np.repeat(T_target[s:s + per], seed.shape[1], 0)[seed.ravel()], iters=8)
-        parts.append((theta, ok))
-    K = max(1, max(p[0].shape[1] for p in parts))
-    theta = np.zeros((N, K, 6))
-    ok = np.zeros((N, K), dtype=bool)
-    for s, (th, o) in zip(range(0, N, per), parts):
-        theta[s:s + len(th), :th.shape[1]], ok[s:s + len(th), :th.shape[1]] = th, o
-    return theta, ok
 
 
 # --------------------------------------------------------------------------- driver
@@ -284,31 +176,158 @@ def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarra
     return IKSolutions(q=q[:, :width], n_solutions=count, method=method)
 
 
-def solve(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, tol: float = RESIDUAL_TOL) -> IKSolutions:
-    """Every distinct IK solution of the locked arm for each target position.
+# --------------------------------------------------------------------------- methods
 
-    positions: (N, 3) m. rotation: (3, 3) or (N, 3, 3), end-effector orientation in the
-    base frame. Returns active-joint angles within the joint ranges, residual <= tol.
-    """
+
+def _targets(positions: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """Target poses (N, 4, 4) from positions (N, 3) m and a rotation (3, 3) or (N, 3, 3)."""
     positions = np.atleast_2d(np.asarray(positions, dtype=float))
     N = len(positions)
     T = np.zeros((N, 4, 4))
     T[:, :3, :3] = rotation
     T[:, :3, 3] = positions
     T[:, 3, 3] = 1.0
-    chain, lower, upper = arm.chain, arm.q_lower, arm.q_upper
-    method = method_for(chain)
-    if method == "closed_form":
-        theta, ok = _closed_form(chain, T)
-    elif method == "closed_form_reversed":
-        theta_r, ok = _closed_form(chain.reversed(), inverse_transform(T))
-        theta = -theta_r[..., ::-1]
-    elif method == "semi_analytic":
-        theta, ok = _semi_analytic(chain, T)
-    elif method == "semi_analytic_reversed":
-        theta_r, ok = _semi_analytic(chain.reversed(), inverse_transform(T))
-        theta = -theta_r[..., ::-1]
-    else:
-        _warn_incomplete(chain)
-        theta, ok = multi_start(chain, T, lower, upper)
-    return _finish(chain, theta, ok, T, lower, upper, tol, method)
+    return T
+
+
+class IKMethod(ABC):
+    """An inverse-kinematics method: the contract of every solver, one subclass per method.
+
+    ``solve(arm, positions, rotation, tol)``: for N target poses (positions (N, 3) m, rotation
+    (3, 3) or (N, 3, 3) in the base frame) the :class:`IKSolutions` q (N, K, n_active) rad, NaN
+    beyond n_solutions (N,) in each row. Every returned solution is exact (position and orientation
+    residual <= tol by the chain's FK), inside the joint ranges and distinct from the others of its
+    row. ``complete``: every branch is found (a complete method's set is all solutions); an
+    incomplete one returns a subset. ``applies(chain)``: the chain has the shape the method solves.
+
+    A subclass gives its raw ``candidates``; :meth:`solve` polishes (two Newton steps), checks,
+    wraps into the ranges and de-duplicates them, the same for every method.
+    """
+
+    @property
+    @abstractmethod
+    def name(self) -> str:
+        """The method's name, as :attr:`IKSolutions.method` and :func:`method_for` give it."""
+
+    @property
+    @abstractmethod
+    def complete(self) -> bool:
+        """True when the method finds every IK branch."""
+
+    @abstractmethod
+    def applies(self, chain: Chain) -> bool:
+        """Whether the method solves this chain (its shape)."""
+
+    @abstractmethod
+    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Raw candidate solutions (N, K, n_active) rad and their validity (N, K) for targets T (N, 4, 4)."""
+
+    def solve(self, arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, tol: float = RESIDUAL_TOL) -> IKSolutions:
+        """Every solution this method finds for each target (see the class docstring); ValueError when
+        the method does not apply to ``arm``'s chain."""
+        if not self.applies(arm.chain):
+            raise ValueError(f"IK method {self.name} does not apply to the chain of {arm.robot.name}")
+        return self._solve(arm, _targets(positions, rotation), tol)
+
+    def _solve(self, arm: LockedArm, T: np.ndarray, tol: float) -> IKSolutions:
+        theta, ok = self.candidates(arm, T)
+        return _finish(arm.chain, theta, ok, T, arm.q_lower, arm.q_upper, tol, self.name)
+
+
+@dataclass(frozen=True)
+class ClosedForm(IKMethod):
+    """Closed form (complete, up to 8 branches; :mod:`capmap.core.ik_closed`) for chains
+    ``0 | 1 2 3 parallel | 4 5 intersecting``; ``reversed``: that shape from the tip, solved on the
+    inverse chain."""
+
+    reversed: bool = False
+
+    @property
+    def name(self) -> str:
+        return "closed_form_reversed" if self.reversed else "closed_form"
+
+    @property
+    def complete(self) -> bool:
+        return True
+
+    def applies(self, chain: Chain) -> bool:
+        return chain.n == 6 and closed_form_shape(chain.reversed()) if self.reversed else closed_form_shape(chain)
+
+    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if not self.reversed:
+            return ik_closed.branches(arm.chain, T)
+        theta_r, ok = ik_closed.branches(arm.chain.reversed(), inverse_transform(T))
+        return -theta_r[..., ::-1], ok
+
+
+@dataclass(frozen=True)
+class SemiAnalytic(IKMethod):
+    """The semi-analytical 1-D search over joint 0 (complete; :mod:`capmap.core.ik_semi`) for chains
+    ``0 | 1 | 2 3 parallel | 4 5 intersecting``; ``reversed``: that shape from the tip."""
+
+    reversed: bool = False
+
+    @property
+    def name(self) -> str:
+        return "semi_analytic_reversed" if self.reversed else "semi_analytic"
+
+    @property
+    def complete(self) -> bool:
+        return True
+
+    def applies(self, chain: Chain) -> bool:
+        return chain.n == 6 and semi_analytic_shape(chain.reversed()) if self.reversed else semi_analytic_shape(chain)
+
+    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if not self.reversed:
+            return ik_semi.candidates(arm.chain, T)
+        theta_r, ok = ik_semi.candidates(arm.chain.reversed(), inverse_transform(T))
+        return -theta_r[..., ::-1], ok
+
+
+@dataclass(frozen=True)
+class MultiStartNewton(IKMethod):
+    """Multi-start damped Newton from a deterministic Halton set of starts (:func:`capmap.core.ik_numeric.multi_start`):
+    any chain, exact solutions, but NOT complete (branches may be missed)."""
+
+    @property
+    def name(self) -> str:
+        return "numeric"
+
+    @property
+    def complete(self) -> bool:
+        return False
+
+    def applies(self, chain: Chain) -> bool:
+        return True
+
+    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return multi_start(arm.chain, T, arm.q_lower, arm.q_upper)
+
+
+METHODS: tuple[IKMethod, ...] = (ClosedForm(), ClosedForm(reversed=True), SemiAnalytic(), SemiAnalytic(reversed=True),
+                                 MultiStartNewton())  # in the order :func:`solve` tries them
+COMPLETE_METHODS = tuple(m.name for m in METHODS if m.complete)
+
+
+def method_of(chain: Chain) -> IKMethod:
+    """The method :func:`solve` uses for this chain: the first of :data:`METHODS` that applies."""
+    return next(m for m in METHODS if m.applies(chain))
+
+
+def method_for(chain: Chain) -> str:
+    """The name of the method :func:`solve` uses for this chain."""
+    return method_of(chain).name
+
+
+def solve(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, tol: float = RESIDUAL_TOL) -> IKSolutions:
+    """Every distinct IK solution of the locked arm for each target position, by :func:`method_of`
+    the arm's chain (a warning once per chain when that method is not complete).
+
+    positions: (N, 3) m. rotation: (3, 3) or (N, 3, 3), end-effector orientation in the
+    base frame. Returns active-joint angles within the joint ranges, residual <= tol.
+    """
+    method = method_of(arm.chain)
+    if not method.complete:
+        _warn_incomplete(arm.chain)
+    return method._solve(arm, _targets(positions, rotation), tol)

@@ -34,7 +34,7 @@ def pack(X: np.ndarray, u, wc, n1, t1, a, h: float, sigma: float, reach: float) 
 
 @_inline
 def _roots(A, B, C):
-    """A cos x + B sin x = C, as ``capmap.core.ik._trig_roots`` but as cosines and sines of the
+    """A cos x + B sin x = C, as ``capmap.core.ik_closed._trig_roots`` but as cosines and sines of the
     two roots phi + delta, phi - delta: (c1, s1, c2, s2, ok)."""
     rho = math.hypot(A, B)
     ok = rho > 1e-12

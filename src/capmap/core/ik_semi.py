@@ -11,11 +11,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.core import ik_kernels
+from capmap.core.ik_numeric import newton
 from capmap.core.kinematics import Chain, inverse_transform
 
-__all__ = ["search", "SEARCH_STEPS"]
+__all__ = ["search", "candidates", "SEARCH_STEPS"]
 
 SEARCH_STEPS = 720  # grid of the 1-D search over joint 0 (0.5 deg)
+_CHUNK_EVALS = 400_000  # (target, grid point) pairs per batch of the search: bounds memory (~0.1 GB)
 
 
 @dataclass(frozen=True)
@@ -116,6 +118,24 @@ def search(chain: Chain, T: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.n
     seed = np.r_[np.zeros(len(br.target), dtype=bool), np.ones(len(s_n), dtype=bool)]
     return _pack(np.concatenate([br.target, s_n]), np.concatenate([theta_r, theta_t]),
                  np.concatenate([ok_r, ok_t]), seed, N)
+
+
+def candidates(chain: Chain, T_target: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate solutions (N, K, 6) rad and validity (N, K) for targets T_target (N, 4, 4) by the 1-D
+    search over joint 0, in chunks of targets (:func:`search`), the (near-)double roots after 8 Newton steps."""
+    N = len(T_target)
+    per = max(1, _CHUNK_EVALS // steps)
+    parts = []
+    for s in range(0, N, per):
+        theta, ok, seed = search(chain, T_target[s:s + per], steps)
+        theta[seed] = newton(chain, theta[seed], np.repeat(T_target[s:s + per], seed.shape[1], 0)[seed.ravel()], iters=8)
+        parts.append((theta, ok))
+    K = max(1, max(p[0].shape[1] for p in parts))
+    theta = np.zeros((N, K, 6))
+    ok = np.zeros((N, K), dtype=bool)
+    for s, (th, o) in zip(range(0, N, per), parts):
+        theta[s:s + len(th), :th.shape[1]], ok[s:s + len(th), :th.shape[1]] = th, o
+    return theta, ok
 
 
 _REFINE_LEVELS = 4  # subdivisions of a suspect grid interval (0.5 deg / 8^4 at the finest)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
 import pandas as pd
@@ -76,7 +77,7 @@ def write(df: pd.DataFrame, path: str | Path, prov: dict) -> None:
 def read(path: str | Path) -> pd.DataFrame:
     """Read a dataset; a missing, truncated or foreign file is one :class:`DataError` line naming it
     and the command that rebuilds it."""
-    rebuild = f"rebuild it with: snakemake --cores 2 all --forcerun {path}"
+    rebuild = f"rebuild it with: snakemake --cores 2 all{os.environ.get('CAPMAP_CONFIG_ARGS', '')} --forcerun {path}"
     try:
         return pd.read_parquet(path)
     except FileNotFoundError:

@@ -9,6 +9,19 @@ every dataset the stage writes.
   does not.
 - :func:`file_fingerprints`: sha256 of files by content (a file restored with an old date is
   still a change when its content differs).
+
+Imports are followed from the syntax tree, so a name a package face (:mod:`capmap._lazy`)
+resolves only when first used is followed through the package's ``_EXPORTS`` dict literal
+(name -> the submodule that defines it), parsed from its ``__init__``:
+
+- ``from capmap.capacity import point_capacity`` counts ``capmap.capacity`` and
+  ``capmap.capacity.engine``; ``from capmap.capacity import *`` every submodule ``_EXPORTS`` names.
+- A package face imported as a module (``import capmap.capacity as c``, ``from capmap import
+  capacity``) counts conservatively with every submodule its ``_EXPORTS`` names, as code may
+  reach any of them through attributes (``c.point_capacity``). The parents of a dotted import
+  (``capmap.capacity`` of ``import capmap.capacity.engine``) count with their own code only.
+- A package whose ``__init__`` defines or assigns a module-level ``__getattr__`` without an
+  ``_EXPORTS`` dict literal of strings can resolve any name: every submodule in its folder counts.
 """
 
 from __future__ import annotations
@@ -39,7 +52,9 @@ def _imports(name: str, tree: ast.Module) -> set[str]:
     out = set()
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            out |= {a.name for a in node.names if a.name.split(".")[0] == "capmap"}
+            for a in node.names:
+                if a.name.split(".")[0] == "capmap":
+                    out |= {a.name} | _lazy_targets(a.name, "*")
         elif isinstance(node, ast.ImportFrom):
             if node.level:  # relative import
                 pkg = name.split(".")[: -node.level] if not _module_file(name).name == "__init__.py" else name.split(".")
@@ -48,11 +63,48 @@ def _imports(name: str, tree: ast.Module) -> set[str]:
                 mod = node.module or ""
             if mod.split(".")[0] != "capmap":
                 continue
-            subs = {f"{mod}.{a.name}" for a in node.names if _module_file(f"{mod}.{a.name}")}
-            out |= subs
-            if len(subs) < len(node.names):  # names defined or re-exported by mod itself
-                out.add(mod)
+            for a in node.names:
+                sub = f"{mod}.{a.name}"
+                if _module_file(sub):
+                    out |= {sub} | _lazy_targets(sub, "*")
+                else:  # a name defined or re-exported by mod itself, or resolved lazily from a submodule
+                    out |= {mod} | _lazy_targets(mod, a.name)
     return out
+
+
+@lru_cache(maxsize=None)
+def _lazy_exports(mod: str) -> dict[str, str] | None:
+    """A package face's names and the submodules defining them: its ``_EXPORTS`` dict literal of
+    strings; {} when it resolves no names lazily (no module-level ``__getattr__``); None when it does
+    but the dict cannot be read from the syntax tree."""
+    path = _module_file(mod)
+    if path is None or path.name != "__init__.py":
+        return {}
+    lazy = False
+    for node in _module_tree(mod).body:
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) else []
+        names = {n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)}
+        if "_EXPORTS" in names and isinstance(node.value, ast.Dict):
+            try:
+                exports = ast.literal_eval(node.value)
+            except ValueError:
+                continue
+            if all(isinstance(k, str) and isinstance(v, str) for k, v in exports.items()):
+                return exports
+        lazy |= "__getattr__" in names or (isinstance(node, ast.FunctionDef) and node.name == "__getattr__")
+    return None if lazy else {}
+
+
+def _lazy_targets(mod: str, name: str) -> set[str]:
+    """The submodules of package ``mod`` that importing ``name`` from it may run (``*``: any of its names)."""
+    exports = _lazy_exports(mod)
+    if exports is None:  # unreadable exports: every submodule in the package's folder
+        folder = _module_file(mod).parent
+        subs = {p.stem for p in folder.glob("*.py") if p.name != "__init__.py"}
+        subs |= {p.parent.name for p in folder.glob("*/__init__.py")}
+    else:
+        subs = set(exports.values()) if name == "*" else {exports[name]} if name in exports else set()
+    return {f"{mod}.{s}" for s in subs if _module_file(f"{mod}.{s}")}
 
 
 def _tree(path: Path) -> ast.Module:

@@ -1,5 +1,5 @@
 """What the stages of the capacity family (capacity, verify, follow) do first: build the robot
-and its locked arm from their config slice (and the task's rotation, motion and load limits)."""
+and its locked arm from their configuration (and the task's rotation, motion and load limits)."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.engine import Motion
-from capmap.config.capacity import LimitsConfig, LockConfig, rotation_from_rpy
 from capmap.config.failure import locked_arm
 from capmap.config.robot_file import load
+from capmap.config.run import RunConfig
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
 from capmap.core.robot import Robot
@@ -18,11 +18,10 @@ from capmap.core.robot import Robot
 __all__ = ["arm_from", "ArmTask", "arm_task_from"]
 
 
-def arm_from(deps: dict) -> tuple[Robot, LockedArm]:
-    """The robot (``model`` slice) and its arm locked as in the ``sample`` slice."""
-    robot = load(deps["model"]["robot"])
-    lk = LockConfig.from_doc(deps["sample"]["lock"])
-    return robot, locked_arm(robot, lk.joint, lk.angle_deg)
+def arm_from(run: RunConfig) -> tuple[Robot, LockedArm]:
+    """The robot and its arm locked as the resolved failure says."""
+    robot = load(run.robot)
+    return robot, locked_arm(robot, run.failure.joint, run.failure.angle_deg)
 
 
 @dataclass(frozen=True)
@@ -37,10 +36,7 @@ class ArmTask:
     limits: AffineLimits
 
 
-def arm_task_from(deps: dict) -> ArmTask:
-    """:func:`arm_from` and the ``capacity`` slice's task orientation, speed, acceleration and limits."""
-    robot, arm = arm_from(deps)
-    cs = deps["capacity"]
-    task = cs["task"]
-    return ArmTask(robot, arm, rotation_from_rpy(task["orientation_rpy_deg"]), Motion(task["v_max_mps"], task["a_max_mps2"]),
-                   LimitsConfig.from_doc(cs["limits"]).resolve(robot.n_joints).for_arm(arm))
+def arm_task_from(run: RunConfig) -> ArmTask:
+    """:func:`arm_from` and the task's orientation, speed, acceleration and load limits."""
+    robot, arm = arm_from(run)
+    return ArmTask(robot, arm, run.task.rotation, run.task.motion, run.limits.resolve(robot.n_joints).for_arm(arm))

@@ -11,7 +11,7 @@ import pandas as pd
 from capmap.capacity import planning
 from capmap.capacity.verification import judge, verify_path
 from capmap.capacity.voxels import capacity_volume
-from capmap.config.capacity import DirectionsConfig, LimitsConfig, LockConfig, SamplingConfig, TaskConfig
+from capmap.config.capacity import LockConfig
 from capmap.config.failure import locked_arm, resolve_failure
 from capmap.config.robot_file import load
 from capmap.core import ik
@@ -21,7 +21,7 @@ from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.atlas import atlas_curves_figure, atlas_heatmap
 from capmap.stages.capacity import capacity_table, grid_meta, sample_table, voxel_table
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 from capmap.stages.verify import PLAN_KEYS
 
 __all__ = ["stage_atlas_map", "stage_atlas", "CURVE_POINTS"]
@@ -33,15 +33,16 @@ def stage_atlas_map(out_voxels: str, out_summary: str, slice_json: str, joint: i
     """The capacity map of the arm with ``joint`` locked at ``angle_deg`` and its summary rows
     (one per task payload): reachable volume, capacity quantiles, volume carrying the payload,
     the direct line's capacity and whether a plan exists."""
-    deps = parse_slice(slice_json)
+    cfg = stage_config(slice_json)
+    run = cfg.run
     log = stage_logger(__name__, f"atlas joint {joint} at {angle_deg:g} deg")
-    robot = load(deps["model"]["robot"])
-    sc = SamplingConfig.from_doc(deps["atlas"]["sampling"])
-    dirs = DirectionsConfig.from_doc(deps["atlas"]["directions"]).build()
-    edge = float(deps["atlas"]["edge_m"])
-    task = TaskConfig.from_doc(deps["task"])
+    robot = load(run.robot)
+    sc = run.atlas.sampling
+    dirs = run.atlas.directions.build()
+    edge = run.atlas.edge_m
+    task = run.task
     arm = locked_arm(robot, joint, angle_deg)
-    limits = LimitsConfig.from_doc(deps["limits"]).resolve(robot.n_joints).for_arm(arm)
+    limits = run.limits.resolve(robot.n_joints).for_arm(arm)
     motion, rotation = task.motion, task.rotation
     log.info(f"IK method {ik.method_for(arm.chain)}; {len(dirs)} directions; edge {edge} m")
     pts = sample_table(arm, sc, edge, log)
@@ -67,7 +68,7 @@ def stage_atlas_map(out_voxels: str, out_summary: str, slice_json: str, joint: i
     if q_start is not None:
         try:
             direct = verify_path(ArmDynamics(arm), np.array([start, goal]), rotation, q_start, motion,
-                                 float(deps["verification"]["dt_s"]), limits)
+                                 run.verification.dt_s, limits)
         except CapmapError as exc:
             start_note = f"direct line: {exc}"
     rows = []
@@ -89,7 +90,7 @@ def stage_atlas_map(out_voxels: str, out_summary: str, slice_json: str, joint: i
         rows.append(row)
         log.info(f"{payload:g} kg: {row['volume_carrying_payload_m3']:.1f} m^3 carry it; direct line "
                  f"{row['direct_capacity_kg']:.1f} kg; plan {'found' if row['plan_exists'] else 'none'}")
-    prov = datasets.provenance("atlas_map", deps, seed=sc.seed, joint=joint, angle_deg=float(angle_deg),
+    prov = datasets.provenance("atlas_map", cfg.doc, seed=sc.seed, joint=joint, angle_deg=float(angle_deg),
                                grid=grid_meta(grid))
     datasets.write(vox, out_voxels, prov)
     datasets.write(pd.DataFrame(rows), out_summary, prov)
@@ -99,7 +100,7 @@ def stage_atlas(summaries: list[str], voxels: list[str], out_atlas: str, out_cur
                 out_curves_png: str, slice_json: str) -> None:
     """The atlas table (one row per joint x angle x task payload), the capacity-volume curves on a
     common payload axis, a heat map and the curves' figure."""
-    deps = parse_slice(slice_json)
+    doc = stage_config(slice_json).doc
     atlas = pd.concat([datasets.read(p) for p in summaries], ignore_index=True)
     atlas = atlas.sort_values(["joint", "angle_deg", "payload_kg"], ignore_index=True)
     maps = [datasets.read(p) for p in voxels]
@@ -112,7 +113,7 @@ def stage_atlas(summaries: list[str], voxels: list[str], out_atlas: str, out_cur
         curves.append(pd.DataFrame({"joint": meta["joint"], "angle_deg": meta["angle_deg"], "payload_kg": payloads,
                                     "volume_m3": capacity_volume(reach, meta["grid"]["edge_m"], payloads)}))
     curves = pd.concat(curves, ignore_index=True).sort_values(["joint", "angle_deg", "payload_kg"], ignore_index=True)
-    prov = datasets.provenance("atlas", deps)
+    prov = datasets.provenance("atlas", doc)
     datasets.write(atlas, out_atlas, prov)
     datasets.write(curves, out_curves, prov)
     atlas_heatmap(atlas, out_heatmap)

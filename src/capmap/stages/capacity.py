@@ -16,7 +16,7 @@ from capmap.capacity import sampling
 from capmap.capacity.directions import AXIS_LABELS, grid_axes
 from capmap.capacity.engine import Motion, point_capacity
 from capmap.capacity.voxels import Grid, voxelise
-from capmap.config.capacity import DirectionsConfig, SamplingConfig
+from capmap.config.capacity import SamplingConfig
 from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
@@ -26,7 +26,7 @@ from capmap.core.robot import Robot
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.stages.arm import arm_from, arm_task_from
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 
 __all__ = ["AXIS_COLUMNS", "model_table", "stage_model", "sample_table", "stage_sample", "capacity_table", "stage_capacity",
            "voxel_table", "grid_meta", "grid_of", "stage_voxels"]
@@ -59,10 +59,10 @@ def model_table(robot: Robot) -> pd.DataFrame:
 
 
 def stage_model(robot_yaml: str, out: str, slice_json: str) -> None:
-    deps = parse_slice(slice_json)
+    sc = stage_config(slice_json)
     robot = load(robot_yaml)
     df = model_table(robot)
-    datasets.write(df, out, datasets.provenance("model", deps, robot=robot.name,
+    datasets.write(df, out, datasets.provenance("model", sc.doc, robot=robot.name,
                                                  gravity_mps2=robot.gravity.tolist(), base_com_m=robot.base_com.tolist()))
     stage_logger(__name__, "model").info(f"{robot.name}: {robot.n_joints} joints, total mass {df.mass_kg.sum():.1f} kg "
                                          f"-> {out}")
@@ -89,12 +89,12 @@ def sample_table(arm: LockedArm, sc: SamplingConfig, edge_m: float | None, log) 
 
 
 def stage_sample(out: str, slice_json: str) -> None:
-    deps = parse_slice(slice_json)
+    cfg = stage_config(slice_json)
     log = stage_logger(__name__, "sample")
-    _, arm = arm_from(deps)
-    sc = SamplingConfig.from_doc(deps["sample"]["sampling"])
-    df = sample_table(arm, sc, deps["sample"].get("voxels", {}).get("edge_m"), log)
-    datasets.write(df, out, datasets.provenance("sample", deps, seed=sc.seed))
+    _, arm = arm_from(cfg.run)
+    sc = cfg.run.sampling
+    df = sample_table(arm, sc, cfg.run.voxel_edge_m if sc.mode == "voxel_fill" else None, log)
+    datasets.write(df, out, datasets.provenance("sample", cfg.doc, seed=sc.seed))
     log.info(f"{len(df)} points ({sc.n_points} joint samples, mode {sc.mode}, seed {sc.seed}) -> {out}")
 
 
@@ -147,17 +147,17 @@ def capacity_table(arm: LockedArm, ids: np.ndarray, pos: np.ndarray, rotation: n
 
 def stage_capacity(points: str, out: str, slice_json: str, shard: int, shards: int) -> None:
     """Shard ``shard`` (0-based) of ``shards``: points with point_id % shards == shard."""
-    deps = parse_slice(slice_json)
+    cfg = stage_config(slice_json)
     log = stage_logger(__name__, f"capacity shard {shard + 1}/{shards}")
-    at = arm_task_from(deps)  # limits checked before the long work
+    at = arm_task_from(cfg.run)  # limits checked before the long work
     arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
-    dirs = DirectionsConfig.from_doc(deps["capacity"]["directions"]).build()
+    dirs = cfg.run.directions.build()
     pts = datasets.read(points)
     mine = pts[pts.point_id % shards == shard]
     log.info(f"{len(mine)} of {len(pts)} points, {len(dirs)} directions ({dirs.kind})")
     df = capacity_table(arm, mine.point_id.to_numpy(), mine[["x_m", "y_m", "z_m"]].to_numpy(), rotation, motion,
                         limits, dirs, log)
-    datasets.write(df, out, datasets.provenance("capacity", deps, seed=deps["sample"]["sampling"]["seed"],
+    datasets.write(df, out, datasets.provenance("capacity", cfg.doc, seed=cfg.run.sampling.seed,
                                                  shard=shard, shards=shards, directions=dirs.kind))
     n_reach = int(df.reachable.sum()) if len(df) else 0
     log.info(f"done: {n_reach} reachable, min capacity "
@@ -203,13 +203,13 @@ def grid_meta(grid: Grid) -> dict:
 
 
 def stage_voxels(shards: list[str], out_voxels: str, out_points: str, slice_json: str) -> None:
-    deps = parse_slice(slice_json)
+    cfg = stage_config(slice_json)
     pts = pd.concat([datasets.read(p) for p in shards], ignore_index=True).sort_values("point_id", ignore_index=True)
-    vox, grid = voxel_table(pts, deps["voxels"]["voxels"]["edge_m"])
+    vox, grid = voxel_table(pts, cfg.run.voxel_edge_m)
     meta = grid_meta(grid)
-    seed = deps["sample"]["sampling"]["seed"]
-    datasets.write(vox, out_voxels, datasets.provenance("voxels", deps, seed=seed, grid=meta))
-    datasets.write(pts, out_points, datasets.provenance("voxels", deps, seed=seed, grid=meta))
+    seed = cfg.run.sampling.seed
+    datasets.write(vox, out_voxels, datasets.provenance("voxels", cfg.doc, seed=seed, grid=meta))
+    datasets.write(pts, out_points, datasets.provenance("voxels", cfg.doc, seed=seed, grid=meta))
     reach = vox.n_reachable > 0
     stage_logger(__name__, "voxels").info(
         f"grid {grid.shape} x {grid.edge_m} m: {int(reach.sum())} reachable voxels of {grid.n_voxels}; "

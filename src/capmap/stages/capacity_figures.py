@@ -14,7 +14,7 @@ from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
 from capmap.plots.capacity import capacity_map
 from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 
 __all__ = ["stage_summary", "stage_capacity_3d", "MapView"]
 
@@ -29,9 +29,8 @@ class MapView:
 
     @classmethod
     def from_slice(cls, slice_json: str) -> MapView:
-        view = parse_slice(slice_json)["view"]
-        return cls(np.asarray(view["start_m"], float), np.asarray(view["goal_m"], float),
-                   tuple(float(m) for m in view["payloads_kg"]))
+        run = stage_config(slice_json).run
+        return cls(np.asarray(run.failure.start_m, float), np.asarray(run.task.goal_m, float), run.task.payload_kg)
 
 
 def stage_summary(voxels: str, points: str, out_csv: str, out_md: str, out_png: str, slice_json: str) -> None:

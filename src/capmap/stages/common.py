@@ -1,12 +1,8 @@
-"""What every stage does first: read its config slice (its canonical JSON from the rule's params)."""
+"""What every stage does first: rebuild its typed configuration from its rule's params (the
+canonical JSON of its slice; see :mod:`capmap.config.slices`)."""
 
 from __future__ import annotations
 
-import json
+from capmap.config.slices import StageConfig, stage_config
 
-__all__ = ["parse_slice"]
-
-
-def parse_slice(slice_json: str) -> dict:
-    """A stage's config slice (see :func:`capmap.config.slices.stage_slices`) from its canonical JSON."""
-    return json.loads(slice_json)
+__all__ = ["StageConfig", "stage_config"]

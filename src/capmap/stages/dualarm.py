@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from capmap.config.dualarm import cloud_source, fit_settings, load_dual_arm_file
+from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.scene_file import load_scene
 from capmap.dualarm.cloud import Envelope, fit_envelope, uncovered
 from capmap.dualarm.robot import DualArm, LinkCapsule, build_dual_arm, fit_capsules
@@ -14,7 +14,7 @@ from capmap.dualarm.scene import nearest_solid, scan
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 
 __all__ = ["stage_dualarm_scan", "stage_dualarm_envelope", "stage_dualarm_capsules", "envelope_from", "robot_from",
            "XYZ"]
@@ -45,33 +45,34 @@ def _read_cloud(path: str) -> np.ndarray:
 
 def stage_dualarm_scan(out: str, slice_json: str) -> None:
     """The scene's point cloud: a synthetic scan (seeded), or the user's file."""
-    deps = parse_slice(slice_json)
+    sc = stage_config(slice_json)
     log = stage_logger(__name__, "dualarm scan")
-    cloud_file, settings, seed = cloud_source(deps["dualarm"])
+    da = sc.run.dualarm
+    cloud_file, settings, seed = da.cloud_file, da.scan, da.scan_seed
     if cloud_file is not None:
         pts = _read_cloud(cloud_file)
         view = np.full(len(pts), -1)
         source = f"file {cloud_file}"
     else:
-        pts, view = scan(load_scene(deps["dualarm"]["scene"]), settings, np.random.default_rng(seed))
+        pts, view = scan(load_scene(da.scene), settings, np.random.default_rng(seed))
         source = f"synthetic scan from {len(settings.viewpoints)} viewpoints, noise {settings.noise_m:g} m"
     df = pd.DataFrame({"x_m": pts[:, 0], "y_m": pts[:, 1], "z_m": pts[:, 2], "viewpoint": view})
-    datasets.write(df, out, datasets.provenance("dualarm_scan", deps, seed=seed, source=source))
+    datasets.write(df, out, datasets.provenance("dualarm_scan", sc.doc, seed=seed, source=source))
     log.info(f"{len(df)} points ({source}) -> {out}")
 
 
 def stage_dualarm_envelope(cloud: str, out: str, slice_json: str) -> None:
     """Swept triangles and capsules covering the cloud; every point checked inside one."""
-    deps = parse_slice(slice_json)
+    sc = stage_config(slice_json)
     log = stage_logger(__name__, "dualarm envelope")
     pts = datasets.read(cloud)[XYZ].to_numpy()
-    fit, seed = fit_settings(deps["dualarm"])
+    fit, seed = sc.run.dualarm.fit, sc.run.dualarm.fit_seed
     env = fit_envelope(pts, fit, np.random.default_rng(seed))
     left = uncovered(pts, env)
     if len(left):
         raise DataError(f"{cloud}: {len(left)} of {len(pts)} points lie inside no fitted volume (e.g. "
                         f"{np.round(pts[left[0]], 3).tolist()})")
-    scene = load_scene(deps["dualarm"]["scene"])
+    scene = load_scene(sc.run.dualarm.scene)
     tri_label = nearest_solid(scene, env.tri.mean(axis=1))
     seg_label = nearest_solid(scene, env.seg.mean(axis=1))
     rows = []
@@ -83,7 +84,7 @@ def stage_dualarm_envelope(cloud: str, out: str, slice_json: str) -> None:
                      **_vertices(np.vstack([s, np.full((1, 3), np.nan)])), "radius_m": env.seg_radius[k],
                      "n_points": int(env.seg_points[k])})
     df = pd.DataFrame(rows)
-    datasets.write(df, out, datasets.provenance("dualarm_envelope", deps, seed=seed, cloud_points=len(pts),
+    datasets.write(df, out, datasets.provenance("dualarm_envelope", sc.doc, seed=seed, cloud_points=len(pts),
                                                  uncovered_points=0))
     log.info(f"{len(env.patch_points)} faces ({len(env.tri)} triangles, radius {_span(env.tri_radius)}), "
              f"{len(env.seg)} capsules (radius {_span(env.seg_radius)}); all {len(pts)} points covered -> {out}")
@@ -113,9 +114,9 @@ def envelope_from(df: pd.DataFrame) -> tuple[Envelope, tuple[np.ndarray, np.ndar
 
 def stage_dualarm_capsules(out: str, slice_json: str) -> None:
     """A minimum-volume capsule per group of the robot's collision geometry; coverage checked."""
-    deps = parse_slice(slice_json)
+    sc = stage_config(slice_json)
     log = stage_logger(__name__, "dualarm capsules")
-    robot = _build(deps["dualarm"]["robot"])
+    robot = _build(sc.run.dualarm.robot)
     robot, balls = fit_capsules(robot)
     rows = []
     for c in robot.capsules:
@@ -129,7 +130,7 @@ def stage_dualarm_capsules(out: str, slice_json: str) -> None:
                      **{f"a{x}_m": c.a[i] for i, x in enumerate("xyz")}, **{f"b{x}_m": c.b[i] for i, x in enumerate("xyz")},
                      "radius_m": c.r, "length_m": float(np.linalg.norm(d)), "covered_balls": len(centres),
                      "max_excess_m": excess})
-    datasets.write(pd.DataFrame(rows), out, datasets.provenance("dualarm_capsules", deps, robot=robot.description.name))
+    datasets.write(pd.DataFrame(rows), out, datasets.provenance("dualarm_capsules", sc.doc, robot=robot.description.name))
     log.info(f"{len(rows)} capsules over {robot.description.name}'s collision geometry, every ball covered -> {out}")
 
 

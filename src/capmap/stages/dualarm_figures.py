@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from capmap.config.dualarm import horizon
 from capmap.config.scene_file import load_scene
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
@@ -16,7 +15,7 @@ from capmap.plots.dualarm import (
     distances,
     joints,
 )
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 from capmap.stages.dualarm import envelope_from
 from capmap.stages.dualarm_solve import setup
 
@@ -39,11 +38,11 @@ def stage_dualarm_plots(trajectory: str, fine: str, outer: str, out_errors: str,
 
 def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, out_html: str, slice_json: str) -> None:
     """MeshCat static HTML of the motion (capsules, the panel, the fitted environment)."""
-    d = parse_slice(slice_json)["dualarm"]
-    robot, asm = setup(d, environment, capsules, horizon(d))
+    da = stage_config(slice_json).run.dualarm
+    robot, asm = setup(da, environment, capsules, da.horizon)
     traj = datasets.read(trajectory)
     q = traj[[f"q_{j}_rad" for j in robot.joint_names]].to_numpy()
-    step = max(1, int(round(1.0 / (float(d.get("animation_fps", 25)) * asm.task.dt))))
+    step = max(1, int(round(1.0 / (da.animation_fps * asm.task.dt))))
     model = asm.model
     data = model.createData()
     frames = []
@@ -54,7 +53,7 @@ def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, ou
     caps = [(c.name, jid.get(c.joint, 0), c.a, c.b, c.r) for c in robot.capsules]
     fp = model.frames[asm.task.panel]
     env, _ = envelope_from(datasets.read(environment))
-    scene = load_scene(d["scene"])
+    scene = load_scene(da.scene)
     panel = (fp.parentJoint, fp.placement.homogeneous, scene.panel.size)
     animation(caps, np.array(frames), panel, env.tri, [(a, b, r) for (a, b), r in zip(env.seg, env.seg_radius)],
               1.0 / (step * asm.task.dt), f"{robot.description.name}: {scene.name}", out_html)

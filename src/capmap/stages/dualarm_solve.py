@@ -10,17 +10,17 @@ from dataclasses import asdict, replace
 import numpy as np
 import pandas as pd
 
-from capmap.config.dualarm import Horizon, check_settings, horizon, weights
+from capmap.config.dualarm import DualArmConfig, Horizon
 from capmap.config.scene_file import load_scene
 from capmap.dualarm.assembly import Assembly, assemble, clearance_at, warm_start
 from capmap.dualarm.evaluate import active_pairs, fine_grid, node_errors, safety
-from capmap.dualarm.settings import ALSettings
+from capmap.dualarm.settings import Weights
 from capmap.dualarm.solver import equality_cost, initial_guess, solve, solve_csqp
 from capmap.errors import ConfigError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities, write_table
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 from capmap.stages.dualarm import envelope_from, robot_from
 
 __all__ = ["setup", "stage_dualarm_optimise", "stage_dualarm_check", "ACTIVE_WITHIN_M"]
@@ -28,11 +28,11 @@ __all__ = ["setup", "stage_dualarm_optimise", "stage_dualarm_check", "ACTIVE_WIT
 ACTIVE_WITHIN_M = 0.01  # a collision constraint is reported active within 1 cm
 
 
-def setup(d: dict, environment: str, capsules: str, h: Horizon):
-    """(robot, assembly) of a dual-arm job: its ``dualarm`` slice ``d`` names the robot and scene files."""
-    robot = robot_from(d["robot"], datasets.read(capsules))
+def setup(da: DualArmConfig, environment: str, capsules: str, h: Horizon):
+    """(robot, assembly) of a dual-arm job on horizon ``h``: ``da`` names the robot and scene files."""
+    robot = robot_from(da.robot, datasets.read(capsules))
     env, labels = envelope_from(datasets.read(environment))
-    return robot, assemble(robot, load_scene(d["scene"]), env, labels, h.nodes, h.dt_s, h.pre_insertion_node)
+    return robot, assemble(robot, load_scene(da.scene), env, labels, h.nodes, h.dt_s, h.pre_insertion_node)
 
 
 def _key_poses(asm: Assembly, qs: np.ndarray, scene_file: str, log) -> dict[str, tuple[float, str]]:
@@ -52,19 +52,19 @@ def _key_poses(asm: Assembly, qs: np.ndarray, scene_file: str, log) -> dict[str,
 def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str, out_fine: str, out_outer: str,
                            out_csv: str, out_md: str, slice_json: str) -> None:
     """The satellite-panel assembly by augmented-Lagrangian DDP, then checked on a finer grid."""
-    deps = parse_slice(slice_json)
-    d = deps["dualarm"]
+    sc = stage_config(slice_json)
+    da = sc.run.dualarm
     log = stage_logger(__name__, "dualarm optimise")
-    robot, asm = setup(d, environment, capsules, horizon(d))
-    w, fine_factor = weights(d), int(d.get("fine_factor", 5))
+    robot, asm = setup(da, environment, capsules, da.horizon)
+    w, fine_factor = da.weights, da.fine_factor
     if np.any(asm.q_start < robot.q_lower) or np.any(asm.q_start > robot.q_upper):
-        raise ConfigError(f"dualarm.scene = {d['scene']!r}: start_configuration_rad is outside the joint limits")
+        raise ConfigError(f"dualarm.scene = {da.scene!r}: start_configuration_rad is outside the joint limits")
     t0 = time.perf_counter()
     qs = warm_start(asm)
-    clear = _key_poses(asm, qs, d["scene"], log)
+    clear = _key_poses(asm, qs, da.scene, log)
     xs0, us0 = initial_guess(qs, asm.task.dt)
     t1 = time.perf_counter()
-    sol = solve(asm, w, (robot.q_lower, robot.q_upper, robot.v_max), ALSettings(**d["solver"]), xs0, us0, log=log.info)
+    sol = solve(asm, w, (robot.q_lower, robot.q_upper, robot.v_max), da.solver, xs0, us0, log=log.info)
     solve_s = time.perf_counter() - t1
     xs, us = sol.xs, sol.us
     nq = asm.model.nq
@@ -112,7 +112,7 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
         *((f"active within 1 cm: {name}", f"{1e3 * d:.1f} mm at {tm:.2f} s (within 1 cm {t0_:.2f}-{t1_:.2f} s)")
           for name, d, tm, t0_, t1_ in active),
     ]
-    prov = datasets.provenance("dualarm_optimise", deps, converged=sol.converged, message=sol.message,
+    prov = datasets.provenance("dualarm_optimise", sc.doc, converged=sol.converged, message=sol.message,
                                joints=list(joints), q_lower=robot.q_lower.tolist(), q_upper=robot.q_upper.tolist(),
                                v_max=robot.v_max.tolist(), margin_m=w.margin_m,
                                active=[list(a) for a in active])
@@ -130,13 +130,13 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
 def stage_dualarm_check(environment: str, capsules: str, out_csv: str, out_md: str, slice_json: str) -> None:
     """The equality-only problem (closed chain and path, no collisions or limits) on the check's
     horizon, solved by AL-FDDP and by mim-solvers CSQP from the same warm start."""
-    deps = parse_slice(slice_json)
-    d = deps["dualarm"]
+    da = stage_config(slice_json).run.dualarm
     log = stage_logger(__name__, "dualarm check")
-    check = check_settings(d)
-    robot, asm = setup(d, environment, capsules, check.horizon)
-    w = weights({**d, "margin_m": 0.0})  # the equality-only problem has no safety constraints
-    settings = replace(ALSettings(**d["solver"]), tolerance=check.al_tolerance)
+    check = da.check
+    robot, asm = setup(da, environment, capsules, check.horizon)
+    dw = da.weights  # the equality-only problem has no safety constraints: no margin
+    w = Weights(dw.control, dw.velocity, dw.panel, 0.0)
+    settings = replace(da.solver, tolerance=check.al_tolerance)
     xs0, us0 = initial_guess(warm_start(asm), asm.task.dt)
     limits = (robot.q_lower, robot.q_upper, robot.v_max)
     t0 = time.perf_counter()

@@ -10,8 +10,6 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
-from capmap.config.capacity import rotation_from_rpy
-from capmap.config.following import FollowConfig
 from capmap.config.robot_file import load
 from capmap.config.validation import per_item
 from capmap.core.reduction import LockedArm, free
@@ -22,7 +20,7 @@ from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
 from capmap.stages.arm import arm_from
-from capmap.stages.common import parse_slice
+from capmap.stages.common import StageConfig, stage_config
 
 __all__ = ["FollowCase", "follow_case", "stage_follow"]
 
@@ -40,24 +38,24 @@ class FollowCase:
     label: str
 
 
-def follow_case(case: str, deps: dict, waypoints: str | None) -> FollowCase:
+def follow_case(case: str, sc: StageConfig, waypoints: str | None) -> FollowCase:
     """The ``space`` case follows its payload's verified path (planned, else the direct line);
     the ``ground`` case a straight line from FK(q_start)."""
-    fol = FollowConfig.from_doc(deps["follow"])
+    fol = sc.run.follow
     if case == "space":
         sp = fol.space
-        robot, arm = arm_from(deps)
-        task, vt = deps["capacity"]["task"], deps["verify"]["task"]
+        robot, arm = arm_from(sc.run)
+        task, vt = sc.run.task, sc.job
         wp = datasets.read(waypoints)
         if wp.attrs["capmap"]["status"] == "ok":
             pts, label = wp[["x_m", "y_m", "z_m"]].to_numpy(), "planned path"
         else:
-            pts, label = np.array([vt["start_m"], vt["goal_m"]], dtype=float), "direct line (no planned path)"
+            pts, label = np.array([vt.start_m, vt.goal_m], dtype=float), "direct line (no planned path)"
         tau = per_item(sp.joint_torque_nm, robot.n_joints, "follow.space.joint_torque_nm")[arm.active]
-        settings = FollowSettings(float(sp.payload_kg), tau, task["v_max_mps"], task["a_max_mps2"], sp.j_max_mps3,
+        settings = FollowSettings(float(sp.payload_kg), tau, task.v_max_mps, task.a_max_mps2, sp.j_max_mps3,
                                   fol.period_s, sp.catch_up_hz)
-        q0 = np.deg2rad(np.asarray(vt["q_start_deg"], dtype=float))[arm.active]
-        return FollowCase(arm, pts, rotation_from_rpy(task["orientation_rpy_deg"]), q0, settings, label)
+        q0 = np.deg2rad(np.asarray(vt.q_start_deg, dtype=float))[arm.active]
+        return FollowCase(arm, pts, task.rotation, q0, settings, label)
     g = fol.ground
     robot = load(g.robot)
     arm = free(robot)
@@ -73,9 +71,9 @@ def follow_case(case: str, deps: dict, waypoints: str | None) -> FollowCase:
 def stage_follow(case: str, out_timeseries: str, out_toppra: str, out_csv: str, out_md: str, slice_json: str,
                  waypoints: str | None = None) -> None:
     """Torque-limited following of a case's path, segment by segment, and TOPP-RA on the same."""
-    deps = parse_slice(slice_json)
+    sc = stage_config(slice_json)
     log = stage_logger(__name__, f"follow {case}")
-    fc = follow_case(case, deps, waypoints)
+    fc = follow_case(case, sc, waypoints)
     arm, st, pts = fc.arm, fc.settings, fc.waypoints
     limits = st.torque_limits(arm)
     joints = arm.active_joint_numbers
@@ -119,7 +117,7 @@ def stage_follow(case: str, out_timeseries: str, out_toppra: str, out_csv: str, 
     cmp = compare(followed, optimal, limits)
     summary = pd.DataFrame([{"case": case, "robot": arm.robot.name, "path": fc.label, "payload_kg": st.payload_kg,
                              **asdict(cmp), "period_s": st.period_s}])
-    prov = datasets.provenance("follow", deps, case=case, torque_limits_nm=dict(zip(limits.names, limits.limit.tolist())),
+    prov = datasets.provenance("follow", sc.doc, case=case, torque_limits_nm=dict(zip(limits.names, limits.limit.tolist())),
                                payload_kg=st.payload_kg)
     datasets.write(ts, out_timeseries, prov)
     datasets.write(tp, out_toppra, prov)

@@ -22,7 +22,7 @@ from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
 from capmap.stages.arm import arm_task_from
 from capmap.stages.capacity import AXIS_COLUMNS, grid_of
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 
 __all__ = ["stage_plan_gain"]
 
@@ -38,31 +38,32 @@ def _try(fn):
 
 
 def stage_plan_gain(voxels: str, out_tasks: str, out_csv: str, out_md: str, slice_json: str) -> None:
-    deps = parse_slice(slice_json)
-    g = deps["gain"]
+    sc = stage_config(slice_json)
+    run = sc.run
     log = stage_logger(__name__, "plan gain")
-    at = arm_task_from(deps)
+    at = arm_task_from(run)
     arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
-    dt = float(g["verification"]["dt_s"])
+    dt = run.verification.dt_s
     vox = datasets.read(voxels)
     grid = grid_of(vox)
     cap = vox.capacity_kg.to_numpy()
     axis_cap = vox[AXIS_COLUMNS].to_numpy()
     idx = vox[["i", "j", "k"]].to_numpy()
-    rng = np.random.default_rng(int(deps["sample"]["sampling"]["seed"]))
+    rng = np.random.default_rng(run.sampling.seed)
     rows = []
     positive = cap[np.nan_to_num(cap, nan=0.0) > 0]
     sweep = [float(np.round(np.percentile(positive, q), -2)) for q in SWEEP_PERCENTILES] if len(positive) else []
-    payloads = sorted(set(map(float, g["payloads_kg"])) | set(sweep))
-    log.info(f"payloads: the task's {g['payloads_kg']} and the map's percentiles {SWEEP_PERCENTILES} of the positive "
+    task_payloads = sorted(run.task.payload_kg)
+    payloads = sorted(set(task_payloads) | set(sweep))
+    log.info(f"payloads: the task's {task_payloads} and the map's percentiles {SWEEP_PERCENTILES} of the positive "
              f"voxel capacities, {sweep} kg")
     for M in payloads:
         ends = np.flatnonzero(np.nan_to_num(cap, nan=-1.0) >= M)
         if len(ends) < 2:
             log.info(f"{M:g} kg: fewer than 2 voxels carry it in every direction; no tasks")
             continue
-        for t in range(int(g["gain_tasks"])):
+        for t in range(run.planning.gain_tasks):
             for _ in range(100):  # a pair far enough apart
                 a, b = rng.choice(ends, 2, replace=False)
                 if np.abs(idx[a] - idx[b]).max() >= MIN_SEPARATION:
@@ -90,7 +91,7 @@ def stage_plan_gain(voxels: str, out_tasks: str, out_csv: str, out_md: str, slic
                                    direct_feasible=line.feasible)
                         break
             rows.append(row)
-        log.info(f"{M:g} kg: {g['gain_tasks']} tasks planned both ways")
+        log.info(f"{M:g} kg: {run.planning.gain_tasks} tasks planned both ways")
     tasks = pd.DataFrame(rows)
     summary = []
     for M, grp in tasks.groupby("payload_kg") if len(tasks) else []:
@@ -104,7 +105,7 @@ def stage_plan_gain(voxels: str, out_tasks: str, out_csv: str, out_md: str, slic
             "gained_min_verified_capacity_kg": round(float(gained.verified_capacity_kg.min()), 1) if len(gained) else np.nan,
             "axis_path_verified_carrying": int(grp.verified_feasible.sum()),
             "direct_line_fails_detour_carries": int((grp.verified_feasible & ~grp.direct_feasible).sum())})
-    datasets.write(tasks, out_tasks, datasets.provenance("plan_gain", deps))
+    datasets.write(tasks, out_tasks, datasets.provenance("plan_gain", sc.doc))
     write_table(pd.DataFrame(summary), out_csv, out_md)
     for r in summary:
         log.info(f"{r['payload_kg']:g} kg: {r['tasks']} tasks, isotropic A* finds {r['isotropic_path']}, direction-aware "

@@ -11,14 +11,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from capmap.config.reconfig import ReconfigConfig, rate_limits, reconfig_problem
+from capmap.config.reconfig import rate_limits, reconfig_problem
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
 from capmap.reconfig.multiarm import platform_model
 from capmap.reconfig.planner import reconfigure
 from capmap.reconfig.problem import closure_errors, summarise
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 
 __all__ = ["column", "stage_reconfig", "stage_reconfig_summary"]
 
@@ -30,12 +30,13 @@ def column(joint: str) -> str:
 
 def stage_reconfig(method: str, out: str, out_timing: str, slice_json: str) -> None:
     """Plan the reconfiguration with one method; a table row per step (the whole loop's joints)."""
-    deps = parse_slice(slice_json)
-    cfg = ReconfigConfig.from_doc(deps["reconfig"])
+    sc = stage_config(slice_json)
+    cfg = sc.run.reconfig
     log = stage_logger(__name__, f"reconfig {method}")
     problem = reconfig_problem(cfg)
     split = problem.split
-    settings = problem.settings(method, cfg.dt_s, cfg.kappa0, rate_limits(cfg, problem), cfg.min_time_scale)
+    kappa0 = cfg.kappa0 if method == "nullspace" else 0.0  # the pseudo-inverse has no null-space gain
+    settings = problem.settings(method, cfg.dt_s, kappa0, rate_limits(cfg, problem), cfg.min_time_scale)
     log.info(f"{split.unlocked} unlocked in the loop of capture {split.capture}: moving side {split.moving.dof} "
              f"joints ({', '.join(split.moving.joints)}), fixed side {split.fixed.dof}; capture closed by IK with a "
              f"change of {np.rad2deg(np.abs(problem.correction_rad).max()):.2e} deg")
@@ -64,7 +65,7 @@ def stage_reconfig(method: str, out: str, out_timing: str, slice_json: str) -> N
     df["task_rot_err_rad"] = np.linalg.norm(run.task_error[:, 3:], axis=1)
     summary = summarise(run, closure, settings, split.moving.joints)
     prov = datasets.provenance(
-        "reconfig", deps, method=method, status=run.status, message=run.message, unlocked=split.unlocked,
+        "reconfig", sc.doc, method=method, status=run.status, message=run.message, unlocked=split.unlocked,
         capture=split.capture, moving_joints=list(split.moving.joints), fixed_joints=list(split.fixed.joints),
         rate_limits_deg_s={f"qd_{column(j)}_deg_s": float(np.rad2deg(v)) for j, v in
                            zip(split.moving.joints, settings.rate_limit)},

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from capmap.config.reconfig import ReconfigConfig, reconfig_problem
+from capmap.config.reconfig import reconfig_problem
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.reconfig import animation, joint_rates, manipulability, passive_joint
 from capmap.reconfig.multiarm import link_segments, platform_model
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 from capmap.stages.reconfig import column
 
 __all__ = ["stage_reconfig_plots", "stage_reconfig_animation"]
@@ -28,8 +28,7 @@ def stage_reconfig_plots(tables: list[str], out_manipulability: str, out_rates: 
 def stage_reconfig_animation(tables: list[str], out_html: str, slice_json: str) -> None:
     """MeshCat static HTML: the robot during the null-space reconfiguration (the pseudo-inverse's
     motion as a translucent ghost), sampled at ``reconfig.animation_fps`` frames per second."""
-    deps = parse_slice(slice_json)
-    cfg = ReconfigConfig.from_doc(deps["reconfig"])
+    cfg = stage_config(slice_json).run.reconfig
     problem = reconfig_problem(cfg)
     model = platform_model(problem.description)
     segments = link_segments(problem.description)

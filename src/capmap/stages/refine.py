@@ -11,12 +11,11 @@ import pandas as pd
 
 from capmap.capacity.engine import SINGULAR
 from capmap.capacity.refine import Evaluation, VoxelMinima, refine
-from capmap.config.capacity import DirectionsConfig, refine_settings
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.stages.arm import arm_task_from
 from capmap.stages.capacity import AXIS_COLUMNS, capacity_table, grid_of
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 
 __all__ = ["REFINED_COLUMNS", "stage_refine", "stage_voxel_map"]
 
@@ -26,13 +25,13 @@ REFINED_COLUMNS = ["capacity_kg", "binding", "n_points", "n_reachable", "last_ch
 
 def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int) -> None:
     """Refine the reachable voxels with flat index % shards == shard; write one row per voxel."""
-    deps = parse_slice(slice_json)
+    cfg = stage_config(slice_json)
     log = stage_logger(__name__, f"refine shard {shard + 1}/{shards}")
-    at = arm_task_from(deps)
+    at = arm_task_from(cfg.run)
     arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
-    rf = deps["refine"]
-    settings = refine_settings({"refine": rf["refine"]}, rf.get("payloads_kg", ()))
-    dirs = DirectionsConfig.from_doc(deps["capacity"]["directions"]).build()
+    rf = cfg.run.refine
+    settings = rf.settings(sorted(cfg.run.task.payload_kg))
+    dirs = cfg.run.directions.build()
     names = list(limits.names) + [SINGULAR]
     index = {n: i for i, n in enumerate(names)}
 
@@ -62,7 +61,7 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
         log.info(f"round {rnd}: {active} of {len(mine)} voxels not converged, {points} new points "
                  f"({time.perf_counter() - t0:.1f} s so far)")
 
-    rng = np.random.default_rng([int(rf["refine"]["seed"]), shard, shards])
+    rng = np.random.default_rng([rf.seed, shard, shards])
     res = refine(grid, start, evaluate, settings, rng, progress)
     i, j, k = np.unravel_index(res.voxel, grid.shape)
     df = pd.DataFrame({"i": i, "j": j, "k": k, "capacity_kg": res.capacity_kg,
@@ -71,7 +70,7 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
                        "worst_x_m": res.worst_m[:, 0], "worst_y_m": res.worst_m[:, 1], "worst_z_m": res.worst_m[:, 2]})
     for c, col in enumerate(AXIS_COLUMNS):
         df[col] = res.axis_capacity_kg[:, c]
-    datasets.write(df, out, datasets.provenance("refine", deps, shard=shard, shards=shards, rounds=res.rounds,
+    datasets.write(df, out, datasets.provenance("refine", cfg.doc, shard=shard, shards=shards, rounds=res.rounds,
                                                  points_evaluated=res.n_evaluated))
     drop = (start.capacity_kg - res.capacity_kg) / np.where(start.capacity_kg > 0, start.capacity_kg, 1.0)
     log.info(f"done: {len(df)} voxels in {res.rounds} rounds, {res.n_evaluated} points evaluated "
@@ -83,7 +82,7 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
 def stage_voxel_map(sampled: str, refined: list[str], out: str, slice_json: str) -> None:
     """The sampled voxel table with each refined voxel's values (``capacity_sampled_kg`` keeps the
     sampled minimum); without refinement (``voxels.refine: false``) the sampled table as is."""
-    deps = parse_slice(slice_json)
+    cfg = stage_config(slice_json)
     vox = datasets.read(sampled)
     grid = grid_of(vox)
     vox["capacity_sampled_kg"] = vox.capacity_kg
@@ -96,7 +95,7 @@ def stage_voxel_map(sampled: str, refined: list[str], out: str, slice_json: str)
         for col in REFINED_COLUMNS:
             vox.loc[rows, col] = ref[col].to_numpy()
         vox["binding"] = vox.binding.astype("category")
-    datasets.write(vox, out, datasets.provenance("voxels", deps, grid=vox.attrs["capmap"]["grid"],
+    datasets.write(vox, out, datasets.provenance("voxels", cfg.doc, grid=vox.attrs["capmap"]["grid"],
                                                   refined=bool(refined)))
     reach = vox.n_reachable > 0
     drop = (vox.capacity_sampled_kg - vox.capacity_kg)[reach] / vox.capacity_sampled_kg[reach].where(

@@ -11,6 +11,8 @@ import pandas as pd
 from capmap.capacity import branch_planning, planning
 from capmap.capacity.directions import AXIS_LABELS, axis_of
 from capmap.capacity.verification import PathResult, judge, verify_path
+from capmap.config.capacity import PlanTask
+from capmap.config.slices import StageConfig
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.limits import AffineLimits
 from capmap.core.profiles import PHASES
@@ -21,7 +23,7 @@ from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
 from capmap.stages.arm import arm_task_from
 from capmap.stages.capacity import AXIS_COLUMNS, grid_of
-from capmap.stages.common import parse_slice
+from capmap.stages.common import stage_config
 
 __all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "branch_deviation_deg", "stage_verify"]
 
@@ -39,11 +41,11 @@ def _waypoint_frame(p, grid, capacity_kg: np.ndarray) -> pd.DataFrame:
                          "voxel_capacity_kg": capacity_kg[grid.flat(wv)]})
 
 
-def _grid_plan(grid, vox: pd.DataFrame, task: dict, payload: float, moves: str) -> tuple[pd.DataFrame, float, int, str]:
+def _grid_plan(grid, vox: pd.DataFrame, task: PlanTask, payload: float, moves: str) -> tuple[pd.DataFrame, float, int, str]:
     """A* on the voxel map (``axis`` or ``isotropic`` moves): waypoints table, cost, expansions, log line."""
     cap = vox.capacity_kg.to_numpy()
     axis_cap = vox[AXIS_COLUMNS].to_numpy() if moves == "axis" else None
-    p = planning.plan(grid, cap, task["start_m"], task["goal_m"], payload, axis_cap)
+    p = planning.plan(grid, cap, task.start_m, task.goal_m, payload, axis_cap)
     wv = p.waypoint_voxel
     df = _waypoint_frame(p, grid, cap)
     if axis_cap is not None:  # the capacity along the move that arrives at each voxel (both voxels)
@@ -63,15 +65,16 @@ def _grid_plan(grid, vox: pd.DataFrame, task: dict, payload: float, moves: str) 
     return df, p.cost_m, p.expanded, line
 
 
-def _branch_plan(deps: dict, grid, vox: pd.DataFrame, task: dict, payload: float) -> tuple[pd.DataFrame, float, int, str]:
+def _branch_plan(sc: StageConfig, grid, vox: pd.DataFrame, task: PlanTask,
+                 payload: float) -> tuple[pd.DataFrame, float, int, str]:
     """A* over (voxel, IK branch) states on the start configuration's branch: waypoints table with
     the planned configuration at each waypoint, cost, expansions, log line."""
-    at = arm_task_from(deps)
+    at = arm_task_from(sc.run)
     arm = at.arm
     problem = branch_planning.BranchProblem(ArmDynamics(arm), grid, at.rotation, at.motion, at.limits,
                                             (vox.n_reachable > 0).to_numpy())
-    q_start = np.deg2rad(np.asarray(task["q_start_deg"], dtype=float))[arm.active]
-    p = branch_planning.plan_on_branch(problem, task["start_m"], task["goal_m"], q_start, payload)
+    q_start = np.deg2rad(np.asarray(task.q_start_deg, dtype=float))[arm.active]
+    p = branch_planning.plan_on_branch(problem, task.start_m, task.goal_m, q_start, payload)
     df = _waypoint_frame(p, grid, vox.capacity_kg.to_numpy())
     df["move_capacity_kg"] = p.move_capacity_kg
     for c, j in enumerate(arm.active_joint_numbers):
@@ -86,17 +89,17 @@ def stage_plan(voxels: str, out: str, slice_json: str) -> None:
     """Plan through the voxels that carry the task payload (``planning.moves``: on the executed
     branch, or A* on the map's axis or isotropic values); a payload with no path is recorded
     (status ``no_path`` and the reason in the provenance, zero waypoints), not an error."""
-    deps = parse_slice(slice_json)
-    task = deps["plan"]["task"]
-    payload = float(task["payload_kg"])
+    sc = stage_config(slice_json)
+    task = sc.job
+    payload = task.payload_kg
     log = stage_logger(__name__, f"plan {payload:g} kg")
-    moves = deps["plan"]["planning"]["moves"]
+    moves = sc.run.planning.moves
     vox = datasets.read(voxels)
     grid = grid_of(vox)
     status, reason, cost, expanded = "ok", "", float("nan"), 0
     try:
         if moves == "branch":
-            df, cost, expanded, line = _branch_plan(deps, grid, vox, task, payload)
+            df, cost, expanded, line = _branch_plan(sc, grid, vox, task, payload)
         else:
             df, cost, expanded, line = _grid_plan(grid, vox, task, payload, moves)
         log.info(line)
@@ -106,7 +109,7 @@ def stage_plan(voxels: str, out: str, slice_json: str) -> None:
         log.info(f"no path: {reason}")
     except CapmapError as exc:  # start or goal outside the map: the config's fault
         raise ConfigError(exc.in_terms(**PLAN_KEYS)) from None
-    datasets.write(df, out, datasets.provenance("plan", deps, payload_kg=payload, status=status, reason=reason,
+    datasets.write(df, out, datasets.provenance("plan", sc.doc, payload_kg=payload, status=status, reason=reason,
                                                  cost_m=cost, expanded=expanded, moves=moves))
 
 
@@ -146,18 +149,18 @@ def branch_deviation_deg(res: PathResult, q_plan_deg: np.ndarray) -> float:
 def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv: str, out_md: str,
                  slice_json: str) -> None:
     """Verify the direct line and the planned path (if any) carrying the task payload."""
-    deps = parse_slice(slice_json)
-    at = arm_task_from(deps)
+    sc = stage_config(slice_json)
+    at = arm_task_from(sc.run)
     arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
-    vt = deps["verify"]["task"]
-    payload = float(vt["payload_kg"])
+    vt = sc.job
+    payload = vt.payload_kg
     log = stage_logger(__name__, f"verify {payload:g} kg")
-    q_start = np.deg2rad(np.asarray(vt["q_start_deg"], dtype=float))[arm.active]
-    dt = float(deps["verify"]["verification"]["dt_s"])
+    q_start = np.deg2rad(np.asarray(vt.q_start_deg, dtype=float))[arm.active]
+    dt = sc.run.verification.dt_s
     wp = datasets.read(waypoints)
     plan_meta = wp.attrs["capmap"]
-    paths = {"direct": np.array([vt["start_m"], vt["goal_m"]], dtype=float)}
+    paths = {"direct": np.array([vt.start_m, vt.goal_m], dtype=float)}
     if plan_meta["status"] == "ok":
         paths["planned"] = wp[["x_m", "y_m", "z_m"]].to_numpy()
     ts_parts, seg_parts, rows = [], [], []
@@ -182,14 +185,14 @@ def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv
         log.info(f"planned: none ({plan_meta['reason']})")
     summary = pd.DataFrame(rows)
     summary.insert(0, "payload_kg", payload)
-    summary["task"] = vt.get("name", "task")  # "task": the config's task; else its name under `tasks`
-    if "name" in vt:
-        summary["path"] = vt["name"] + ": " + summary.path  # headed "3200 kg, around_singularity: direct"
+    summary["task"] = vt.name or "task"  # "task": the config's task; else its name under `tasks`
+    if vt.name is not None:
+        summary["path"] = vt.name + ": " + summary.path  # headed "3200 kg, around_singularity: direct"
     ts = pd.concat(ts_parts, ignore_index=True)
     ts["path"] = ts.path.astype("category")
     ts["binding"] = ts.binding.astype("category")
     seg = pd.concat(seg_parts, ignore_index=True)
-    prov = datasets.provenance("verify", deps, payload_kg=payload, limits=dict(zip(limits.names, limits.limit.tolist())),
+    prov = datasets.provenance("verify", sc.doc, payload_kg=payload, limits=dict(zip(limits.names, limits.limit.tolist())),
                                plan_status=plan_meta["status"], plan_reason=plan_meta["reason"])
     datasets.write(ts, out_timeseries, prov)
     datasets.write(seg, out_segments, prov)

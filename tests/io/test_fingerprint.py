@@ -1,0 +1,108 @@
+"""Code fingerprints follow what a job runs, including names a package face resolves lazily."""
+
+import textwrap
+
+import pytest
+
+from capmap.io import fingerprint as fp
+
+_CACHED = (fp.module_closure, fp._module_tree, fp._module_imports, fp._module_digest, fp._lazy_exports,
+           fp.code_fingerprint, fp.script_fingerprint)
+
+
+@pytest.fixture
+def fresh():
+    """Empty the per-process caches before and after (a test changes the tree or the digests)."""
+    for f in _CACHED:
+        f.cache_clear()
+    yield
+    for f in _CACHED:
+        f.cache_clear()
+
+
+def _tree(root, files: dict[str, str]) -> None:
+    for rel, text in files.items():
+        path = root / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(textwrap.dedent(text))
+
+
+@pytest.fixture
+def fake(tmp_path, monkeypatch, fresh):
+    """A throwaway ``capmap`` tree: a lazy face ``pkg`` (exports f from a, g from b, sub a subpackage),
+    a face ``dyn`` whose exports are not a literal, a plain package, and modules importing them."""
+    root = tmp_path / "capmap"
+    lazy = "from capmap._lazy import lazy_exports\n__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)\n"
+    _tree(root, {
+        "__init__.py": "",
+        "_lazy.py": "def lazy_exports(p, e):\n    return None, None\n",
+        "pkg/__init__.py": "_EXPORTS = {'f': 'a', 'g': 'b', 'sub': 'sub'}\n" + lazy,
+        "pkg/a.py": '"""Defines f."""\ndef f():\n    return 1\n',
+        "pkg/b.py": "def g():\n    return 2\n",
+        "pkg/sub/__init__.py": "",
+        "dyn/__init__.py": "_EXPORTS = dict(f='a')\n" + lazy,
+        "dyn/a.py": "def f():\n    return 1\n",
+        "dyn/deep/__init__.py": "",
+        "plain/__init__.py": "X = 1\n",
+        "plain/c.py": "Y = 2\n",
+        "uses_f.py": "from capmap.pkg import f\n",
+        "uses_star.py": "from capmap.pkg import *\n",
+        "uses_module.py": "import capmap.pkg as p\n",
+        "uses_from_module.py": "from capmap import pkg\n",
+        "uses_submodule.py": "import capmap.pkg.b\n",
+        "uses_dyn.py": "from capmap.dyn import f\n",
+        "uses_plain.py": "from capmap.plain import X\n",
+        "pkg/rel.py": "from . import f\n",
+    })
+    monkeypatch.setattr(fp, "_SRC", root)
+    return root
+
+
+def test_names_from_a_package_face_follow_its_exports(fake):
+    assert fp.module_closure("capmap.uses_f") == ("capmap", "capmap._lazy", "capmap.pkg", "capmap.pkg.a", "capmap.uses_f")
+    assert "capmap.pkg.a" in fp.module_closure("capmap.pkg.rel")
+    assert "capmap.pkg.b" not in fp.module_closure("capmap.pkg.rel")
+
+
+def test_a_package_face_as_a_module_counts_every_export(fake):
+    every = {"capmap.pkg.a", "capmap.pkg.b", "capmap.pkg.sub"}
+    for name in ("capmap.uses_star", "capmap.uses_module", "capmap.uses_from_module"):
+        assert every <= set(fp.module_closure(name)), name
+    # the parent of a dotted import counts with its own code only
+    assert set(fp.module_closure("capmap.uses_submodule")) & every == {"capmap.pkg.b"}
+
+
+def test_unreadable_exports_count_every_submodule_and_plain_packages_none(fake):
+    assert {"capmap.dyn.a", "capmap.dyn.deep"} <= set(fp.module_closure("capmap.uses_dyn"))
+    assert fp.module_closure("capmap.uses_plain") == ("capmap", "capmap.plain", "capmap.uses_plain")
+
+
+def test_an_exported_module_s_code_changes_the_fingerprint(fake):
+    before = fp.code_fingerprint("capmap.uses_f")
+    (fake / "pkg/b.py").write_text("def g():\n    return 3\n")  # not used
+    (fake / "pkg/a.py").write_text('"""Reworded."""\ndef f():\n    return 1\n')  # a docstring only
+    for f in _CACHED:
+        f.cache_clear()
+    assert fp.code_fingerprint("capmap.uses_f") == before
+    (fake / "pkg/a.py").write_text("def f():\n    return 2\n")
+    for f in _CACHED:
+        f.cache_clear()
+    assert fp.code_fingerprint("capmap.uses_f") != before
+
+
+def test_a_script_importing_through_the_capacity_face_follows_the_engine(tmp_path, monkeypatch, fresh):
+    script = tmp_path / "job.py"
+    script.write_text("from capmap.capacity import point_capacity\n\npoint_capacity\n")
+    assert "capmap.capacity.engine" in fp.module_closure("capmap.capacity.engine")  # sanity: a module
+    assert "capmap.capacity.engine" in fp._imports("__main__", fp._tree(script))
+    before = fp.script_fingerprint(script)
+    digest = fp._module_digest
+
+    def changed(which):
+        monkeypatch.setattr(fp, "_module_digest", lambda mod: b"edited" if mod == which else digest(mod))
+        fp.code_fingerprint.cache_clear()
+        fp.script_fingerprint.cache_clear()
+        return fp.script_fingerprint(script)
+
+    assert changed("capmap.capacity.planning") == before  # named by the face, not imported
+    assert changed("capmap.capacity.engine") != before
