@@ -22,13 +22,13 @@ import numpy as np
 from capmap.capacity import planning
 from capmap.capacity.branch_moves import MoveCache
 from capmap.capacity.branch_planning import BranchProblem, _result, _search
+from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.capacity.verification import judge, verify_path
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.errors import NoPath
 from capmap.io import datasets
 from capmap.stages.arm import arm_task_from
-from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.verify import branch_deviation_deg
 from tests.benchmarks.machine import machine
 

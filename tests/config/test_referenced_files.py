@@ -107,3 +107,12 @@ def test_a_point_cloud_is_hashed_not_parsed(tmp_path, monkeypatch):
     assert referenced_files(cloud) == [cloud]
     with pytest.raises(AssertionError):
         referenced_files(tmp_path / "robot.YML")
+
+
+def test_a_mesh_that_is_not_a_mesh_is_one_line_before_any_job(local):
+    """A collision mesh named /etc/shadow (or any file of no mesh kind) is refused by the check, not
+    handed to assimp inside a job (whose outputs Snakemake would have deleted)."""
+    urdf = local / "baxter.urdf"
+    (local / "secret").write_text("root:x:0:0\n")
+    urdf.write_text(urdf.read_text().replace(MESHES[1], f"file://{local}/secret"))
+    assert "is not a mesh file (.3ds, .dae" in _error(local / "robot.yaml")

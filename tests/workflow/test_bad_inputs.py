@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 import subprocess
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -98,6 +99,66 @@ CONFIG_CASES = [
     ({"limits.base_moment_nm": [500, 500]}, "limits.base_moment_nm has 2 values"),
 ]
 
+_START = [0.379, 4.8432, 1.8878]
+_Q = [100, 124, 98, 130, 146, 174, 57]
+# issue 23: checks moved before any job, sizes blaming the key that drives them, names and templates
+NEW_CONFIG_CASES = [
+    ({"verification.dt_s": 1e-9}, "verification.dt_s: verifying the task's motions at verification.dt_s = 1e-09 s"),
+    ({"task.goal_m": _START}, "task.goal_m = [0.379, 4.8432, 1.8878] is the start (task.start_m): nothing to plan"),
+    ({"tasks": [{**_TASK, "goal_m": _TASK["start_m"]}]}, "tasks[0] (t).goal_m equals tasks[0] (t).start_m"),
+    ({"sampling.n_points": 1}, "lies outside the map's grid"),
+    ({"sampling.jitter_per_voxel": 1_000_000_000}, "sampling.jitter_per_voxel: this map needs"),
+    ({"directions.n": 1_000_000}, "directions.n: this map needs"),
+    ({"directions.kind": "paper_grid", "directions.n": None, "directions.step_deg": 0.01},
+     "directions.step_deg = 0.01 gives 1.3e+09 directions to build"),
+    ({"directions.n": 5_000_000}, "directions.n = 5e+06 gives 5e+06 directions to build"),
+    ({"follow.ground.line_m": [0, 1e-12, 0]}, "follow.ground.line_m = [0, 1e-12, 0] is 1e-12 m long"),
+    ({"follow.period_s": 1e-9}, "follow.period_s: following"),
+    ({"follow.ground.v_max_mps": 1e-9}, "follow.ground.v_max_mps, follow.ground.a_max_mps2: follow.ground.line_m would take"),
+    ({"task.v_max_mps": 1e-6, "task.a_max_mps2": 1e-6, "verification.dt_s": 0.05},
+     "task.v_max_mps, task.a_max_mps2: the task's straight lines would take"),
+    ({"reconfig.dt_s": 1e-9}, "reconfig.dt_s: the reconfiguration"),
+    ({"dualarm.horizon.nodes": 10_000_000}, "dualarm.horizon.nodes: an optimal control problem of 10,000,000 nodes"),
+    ({"dualarm.check.nodes": 10_000_000}, "dualarm.check.nodes: an optimal control problem"),
+    ({"dualarm.fine_factor": 1_000_000}, "dualarm.fine_factor: the re-check"),
+    ({"dualarm.cloud.spacing_m": 1e-5}, "dualarm.cloud.spacing_m: a synthetic scan"),
+    ({"dualarm.cloud": {"file": "missing.csv"}}, "dualarm.cloud.file = missing.csv: no such file"),
+    ({"dualarm.cloud": {"file": "/etc/shadow"}}, "dualarm.cloud.file = /etc/shadow: not a cloud file"),
+    ({"dualarm.cloud": {"file": "/dev/null.csv"}}, "dualarm.cloud.file = /dev/null.csv: no such file"),
+    ({"dualarm.scene": "/dev/zero"}, "/dev/zero: is a character device"),
+    ({"robot": "/dev/zero"}, "/dev/zero: is a character device"),
+    ({"follow.ground.robot": "/etc"}, "/etc: is a directory"),
+    ({"run": "tinyx\n"}, "run"),
+    ({"tasks": [{**_TASK, "name": "t\n"}]}, "tasks[0].name"),
+    ({"shards": 2.5}, "shards: 2.5 is not of type 'integer'"),
+    ({"sampling.seed": 7.5}, "sampling.seed: 7.5 is not of type 'integer'"),
+    ({"__use_yte__": True}, "__use_yte__: capmap does not evaluate YTE templates"),
+    ({"atlas.sampling.jitter_per_voxel": 1_000_000_000}, "atlas.sampling.jitter_per_voxel: this map needs"),
+    ({"tasks": [{**_TASK, "q_start_deg": _Q, "start_m": [90, 0, 0]}]}, "tasks[0] (t).start_m"),
+]
+
+
+def _cloud(tmp: Path, name: str, data: bytes | None = None, fifo: bool = False, folder: bool = False) -> str:
+    path = tmp / name
+    if fifo:
+        os.mkfifo(path)
+    elif folder:
+        path.mkdir()
+    else:
+        path.write_bytes(data)
+    return str(path)
+
+
+CLOUD_CASES = [  # (file maker, expected text); every case names dualarm.cloud.file
+    (lambda t: _cloud(t, "nocols.csv", b"a,b,c\n1,2,3\n"), "no column x_m"),
+    (lambda t: _cloud(t, "binary.csv", bytes(range(128, 256)) * 8), "not a text (UTF-8) CSV file"),
+    (lambda t: _cloud(t, "nul.csv", b"x_m,y_m\x00,z_m\n"), "contains NUL bytes"),
+    (lambda t: _cloud(t, "fifo.csv", fifo=True), "not a regular file"),
+    (lambda t: _cloud(t, "folder.csv", folder=True), "not a regular file"),
+    (lambda t: _cloud(t, "garbage.parquet", b"PAR1 not really"), "not a Parquet file"),
+    (lambda t: _cloud(t, "points.txt", b"x_m,y_m,z_m\n0,0,0\n"), "not a cloud file"),
+]
+
 
 def _robot_doc():
     return yaml.safe_load(SSRMS_YAML.read_text())
@@ -157,6 +218,35 @@ ROBOT_CASES = [  # (file maker, expected text in the one line); the file's name 
     (lambda t: _urdf_robot(t, "binaryurdf", "\x00\x01garbage"), "not valid XML"),
 ]
 
+NEW_ROBOT_CASES = [  # issue 23: special, huge, deep, aliased, templated, duplicated files; URDFs that are not files
+    (lambda t: _robot(t, "yte.yaml", _set(["__use_yte__"], True)), "capmap does not evaluate YTE templates"),
+    (lambda t: _robot(t, "deep.yaml", text="a: " + "[" * 20000 + "]" * 20000 + "\n"), "nested deeper than 64 levels"),
+    (lambda t: _robot(t, "bomb.yaml", text=_BOMB), "more than 100,000 values"),
+    (lambda t: _robot(t, "twice.yaml", text=SSRMS_YAML.read_text() + "\nname: again\n"), "is given twice"),
+    (lambda t: _robot(t, "huge.yaml", text="# " + "x" * (5 << 20) + "\n"), "larger than 4 MiB"),
+    (lambda t: _special(t, "fifo.yaml", fifo=True), "is a FIFO"),
+    (lambda t: _special(t, "folder.yaml", folder=True), "is a directory"),
+    (lambda t: _robot(t, "list.yaml", text="- name: arm\n- dh: {}\n"), "a robot file must be a mapping"),
+    (lambda t: _robot(t, "python_tag.yaml", text="name: !!python/object/apply:os.system ['true']\n"), "malformed YAML"),
+    (lambda t: _urdf_at(t, "urdf_dev.yaml", "/dev/zero"), "urdf.path = '/dev/zero': not a regular file"),
+    (lambda t: _urdf_at(t, "urdf_fifo.yaml", _special(t, "arm.urdf", fifo=True)), "not a regular file"),
+    (lambda t: _urdf_at(t, "urdf_dir.yaml", str(t)), "not a regular file"),
+]
+
+_BOMB = "name: r\nz: &a [x, x, x, x, x, x, x, x, x]\n" + "".join(
+    f"z{k}: &a{k} [{', '.join([f'*a{k - 1}' if k > 1 else '*a'] * 9)}]\n" for k in range(1, 9))
+
+
+def _special(tmp: Path, name: str, fifo: bool = False, folder: bool = False) -> str:
+    path = tmp / name
+    os.mkfifo(path) if fifo else path.mkdir()
+    return str(path)
+
+
+def _urdf_at(tmp: Path, name: str, urdf: str) -> str:
+    (tmp / name).write_text(yaml.safe_dump({"name": "arm", "urdf": {"path": urdf, "ee_frame": "tool0"}}))
+    return str(tmp / name)
+
 
 def _tree_digest(root: Path) -> dict[str, str]:
     return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
@@ -189,10 +279,17 @@ def test_bad_inputs_are_one_line_and_cost_no_output(run_dir, tmp_path):
     jobs = []
     for i, (changes, expect) in enumerate(CONFIG_CASES):
         jobs.append((config_file(tmp_path, **changes), expect, None, f"config {changes}"))
-    for make, expect in ROBOT_CASES:
+    for changes, expect in NEW_CONFIG_CASES:
+        jobs.append((config_file(tmp_path, **changes), expect, None, f"config {changes}"))
+    for make, expect in ROBOT_CASES + NEW_ROBOT_CASES:
         robot = make(tmp_path)
         jobs.append((config_file(tmp_path, robot=robot), expect, Path(robot).name, f"robot file {Path(robot).name}"))
-    assert len(jobs) >= 60
+    for make, expect in CLOUD_CASES:
+        cloud = make(tmp_path)
+        jobs.append((config_file(tmp_path, **{"dualarm.cloud": {"file": cloud}}), expect, "dualarm.cloud.file",
+                     f"cloud file {Path(cloud).name}"))
+    assert len(NEW_CONFIG_CASES) + len(NEW_ROBOT_CASES) + len(CLOUD_CASES) >= 40
+    assert len(jobs) >= 100
     with ThreadPoolExecutor(max_workers=3) as pool:
         results = list(pool.map(lambda j: (j, _run(work, j[0])), jobs))
     failures = [f"{j[3]}: {err}" for j, res in results if (err := _check(res, j[1], j[2]))]

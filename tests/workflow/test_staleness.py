@@ -89,6 +89,12 @@ def test_a_damaged_shard_is_one_line_and_check_finds_it(run_dir, tmp_path):
     assert any("shard_1_of_2.parquet: missing" in ln for ln in lines)
     ok = subprocess.run(["python", "-m", "capmap", "check", str(work / "results" / "tiny")], capture_output=True, text=True)
     assert ok.returncode == 0, ok.stderr
+    (copy / "results" / "bare").mkdir()  # a run folder without a catalogue, and one that does not exist
+    res = subprocess.run(["python", "-m", "capmap", "check", str(copy / "results" / "bare"), str(copy / "results" / "nope"),
+                          str(work / "results" / "tiny")], capture_output=True, text=True)
+    lines = res.stderr.splitlines()
+    assert res.returncode == 1 and len(lines) == 2, res.stderr
+    assert "nope: no such run folder" in lines[0] and "bare: no catalogue.parquet" in lines[1]
 
 
 def test_a_deleted_intermediate_is_named_with_the_command_that_rebuilds_it(run_dir, tmp_path):
@@ -101,7 +107,8 @@ def test_a_deleted_intermediate_is_named_with_the_command_that_rebuilds_it(run_d
                           str(cfg)], capture_output=True, text=True, timeout=600)
     warn = [ln for ln in res.stderr.splitlines() if "shard_1_of_2.parquet is in the catalogue but missing" in ln]
     assert res.returncode == 0 and len(warn) >= 1
-    assert "snakemake --cores 2 all --forcerun results/tiny/capacity/shard_1_of_2.parquet" in warn[0]
+    # the printed command carries the run's config: run as printed, it rebuilds the shard
+    assert f"snakemake --cores 2 all --configfile {cfg} --forcerun results/tiny/capacity/shard_1_of_2.parquet" in warn[0]
     res = subprocess.run(["snakemake", "all", "-n", "-s", str(ROOT / "Snakefile"), "-d", str(copy), "--configfile",
                           str(cfg), "--forcerun", "results/tiny/capacity/shard_1_of_2.parquet"],
                          capture_output=True, text=True, timeout=600)

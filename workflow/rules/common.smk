@@ -1,17 +1,16 @@
 # Validation and config slices: run once, before any job (snakemake-workflows' common.smk).
 import json
-import os
 import sys
 from pathlib import Path
 
 from capmap.config import canonical, check_run_config, main_task, payload_label, stage_slice
 from capmap.errors import CapmapError
-from capmap.io.datasets import missing_catalogued
+from capmap.io.datasets import missing_catalogued, rebuild_hint_config
 from capmap.io.fingerprint import script_fingerprint
 from capmap.io.runs import stale_outputs
 
 CONFIG_ARGS = "".join(f" --configfile {f}" for f in workflow.overwrite_configfiles)  # repeated in printed commands
-os.environ["CAPMAP_CONFIG_ARGS"] = CONFIG_ARGS  # the jobs' rebuild hints (capmap.io.datasets.read) name the config too
+rebuild_hint_config(CONFIG_ARGS)  # the jobs' rebuild hints (capmap.io.datasets.read) name the config too
 
 # validate once, before any job: schema, robot file, locked joint, limits, task poses, follow cases
 try:
@@ -54,7 +53,7 @@ def params(stage, script, job=None):
 
 
 def code_params(script):
-    """The params of a rule that reads no config (tables, figures of upstream outputs): its code."""
+    """Params that hold only the code: for rules reading no config (tables, figures of upstream outputs)."""
     path = Path(workflow.basedir) / "workflow" / "scripts" / f"{script}.py"
     return canonical({"code": script_fingerprint(path)})
 

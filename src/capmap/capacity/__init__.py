@@ -9,6 +9,9 @@
 - :mod:`~capmap.capacity.branch_moves` tracking a branch along moves, their capacity, the search's IK caches
 - :mod:`~capmap.capacity.search`       the searches' contract: start, goal, payload -> plan or reason
 - :mod:`~capmap.capacity.verification` the real motion along a path: loads, segment capacities, verdicts
+- :mod:`~capmap.capacity.tables`       the family's tables and column schemas (model, points, capacities, voxels)
+- :mod:`~capmap.capacity.gain`         the plan-gain experiment (isotropic vs direction-aware moves, verified)
+- :mod:`~capmap.capacity.atlas`        one coarse map per (locked joint, angle) and its summary rows
 """
 
 from capmap._lazy import lazy_exports
@@ -24,6 +27,9 @@ _EXPORTS = {
     'sampling': 'sampling',
     'verification': 'verification',
     'voxels': 'voxels',
+    'tables': 'tables',
+    'gain': 'gain',
+    'atlas': 'atlas',
     'LoadLimits': 'engine',
     'Motion': 'engine',
     'point_capacity': 'engine',
@@ -53,6 +59,9 @@ __all__ = [
     "verify_path",
     "voxelise",
     "voxels",
+    "tables",
+    "gain",
+    "atlas",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -21,6 +21,7 @@ __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "Direct
            "payload_label"]
 
 PLAN_MOVES = ("branch", "axis", "isotropic")  # planning.moves; the first is the default
+MAX_DIRECTIONS = 1_000_000  # directions a set may be built from (the paper's grid before its duplicates go)
 
 
 def payload_label(payload_kg: float) -> str:
@@ -148,9 +149,14 @@ class LimitsConfig:
 
     @classmethod
     def from_doc(cls, d: dict) -> "LimitsConfig":
-        """A list of equal values is the one value: ``[700] * 7`` and ``700`` are the same limits."""
-        return cls(**{k: (v[0] if isinstance(v, list) and v and all(x == v[0] for x in v) else as_tuple(v))
-                      for k, v in d.items()})
+        return cls(**{k: as_tuple(v) for k, v in d.items()})
+
+    def canonical(self) -> "LimitsConfig":
+        """The same limits with a list of equal values written as the one value (``[700] * 7`` and
+        ``700`` are the same limits, so the same slices); call once the lengths are checked."""
+        one = {k: (v[0] if isinstance(v, tuple) and v and all(x == v[0] for x in v) else v)
+               for k, v in vars(self).items()}
+        return LimitsConfig(**one)
 
     def resolve(self, n_joints: int) -> LoadLimits:
         """:class:`LoadLimits` for an arm with n_joints joints (length checks here)."""
@@ -190,7 +196,14 @@ class DirectionsConfig:
         extra = {"paper_grid": "n", "sphere": "step_deg"}[d["kind"]]
         if extra in d:
             raise ConfigError(f"directions.{extra} does not apply to kind {d['kind']}")
-        return cls(**d)
+        out = cls(**d)
+        raw = np.ceil(360.0 / out.step_deg) ** 2 if out.kind == "paper_grid" else out.n
+        if raw > MAX_DIRECTIONS:
+            key = "directions.step_deg" if out.kind == "paper_grid" else "directions.n"
+            raise ConfigError(f"{key} = {out.step_deg if out.kind == 'paper_grid' else out.n:g} gives {raw:.3g} "
+                              f"directions to build (at most {MAX_DIRECTIONS:,}): "
+                              f"{'raise' if out.kind == 'paper_grid' else 'lower'} {key}")
+        return out
 
     def build(self) -> Directions:
         return directions.paper_grid(self.step_deg) if self.kind == "paper_grid" else directions.sphere(self.n)

@@ -12,7 +12,7 @@ import numpy as np
 from capmap.config.atlas import AtlasConfig
 from capmap.config.capacity import PlanTask, TaskConfig
 from capmap.config.dualarm import load_dual_arm_file
-from capmap.config.estimate import Estimate, check_steps, estimate_map, line_duration_s
+from capmap.config.estimate import Estimate, check_duration, check_steps, estimate_map, line_duration_s
 from capmap.config.failure import Failure, locked_arm, resolve_failure
 from capmap.config.following import FollowConfig
 from capmap.config.inputs import check_cloud_file
@@ -26,6 +26,7 @@ from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free
 from capmap.core.robot import Robot
 from capmap.core.tracking import start_branch
+from capmap.dualarm.robot import build_dual_arm
 from capmap.dualarm.scene import surface_points
 from capmap.errors import CapmapError, ConfigError
 
@@ -73,7 +74,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
             raise ConfigError(f"{source}: {exc}") from None
     if cfg.dualarm is not None:
         check_dualarm(cfg, source)
-    return replace(cfg, failure=failure, estimate=estimate)
+    return replace(cfg, failure=failure, estimate=estimate, limits=cfg.limits.canonical())
 
 
 def check_dt(cfg: RunConfig, source: str = "config") -> None:
@@ -109,6 +110,8 @@ def check_tasks(tasks: tuple[PlanTask, ...], arm: LockedArm, task: TaskConfig, f
         raise ConfigError(f"{source}: tasks: names must differ ({names})")
     for i, t in enumerate(tasks):
         key = f"tasks[{i}] ({t.name})"
+        if np.linalg.norm(np.subtract(t.goal_m, t.start_m)) < 1e-6:
+            raise ConfigError(f"{source}: {key}.goal_m equals {key}.start_m: nothing to plan")
         q = np.asarray(t.q_start_deg, dtype=float)
         if len(q) != arm.robot.n_joints:
             raise ConfigError(f"{source}: {key}.q_start_deg has {len(q)} values but {arm.robot.name} has "
@@ -120,8 +123,6 @@ def check_tasks(tasks: tuple[PlanTask, ...], arm: LockedArm, task: TaskConfig, f
             start_branch(arm, np.asarray(t.start_m, dtype=float), task.rotation, np.deg2rad(q)[arm.active])
         except CapmapError as exc:
             raise ConfigError(f"{source}: {exc.in_terms(start=f'{key}.start_m', q_ini=f'{key}.q_start_deg')}") from None
-        if np.linalg.norm(np.subtract(t.goal_m, t.start_m)) < 1e-6:
-            raise ConfigError(f"{source}: {key}.goal_m equals {key}.start_m: nothing to plan")
         check_goal(arm, task, failure, source, t.goal_m, f"{key}.goal_m")
 
 
@@ -141,8 +142,10 @@ def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> N
     if not np.linalg.norm(g.line_m) >= 1e-3:
         raise ConfigError(f"{source}: follow.ground.line_m = {list(g.line_m)} is {np.linalg.norm(g.line_m):.3g} m long: "
                           "give a line of at least 1 mm")
-    check_steps(2 * line_duration_s(float(np.linalg.norm(g.line_m)), g.v_max_mps, g.a_max_mps2) / fol.period_s,
-                "follow.period_s", f"following follow.ground.line_m at follow.period_s = {fol.period_s:g} s")
+    t_line = line_duration_s(float(np.linalg.norm(g.line_m)), g.v_max_mps, g.a_max_mps2)
+    check_duration(t_line, "follow.ground.v_max_mps", "follow.ground.a_max_mps2", "follow.ground.line_m")
+    check_steps(2 * t_line / fol.period_s, "follow.period_s",
+                f"following follow.ground.line_m ({t_line:.3g} s) at follow.period_s = {fol.period_s:g} s")
     arm = free(robot)
     T0 = arm.fk(np.deg2rad(np.asarray(g.q_start_deg, dtype=float))[None])[0]
     end = T0[:3, 3] + np.asarray(g.line_m, dtype=float)
@@ -188,6 +191,7 @@ def check_motions(cfg: RunConfig, failure: Failure, source: str = "config") -> N
     v, a = cfg.task.v_max_mps, cfg.task.a_max_mps2
     lines = [(failure.start_m, cfg.task.goal_m)] + [(t.start_m, t.goal_m) for t in cfg.tasks]
     longest = max(line_duration_s(float(np.linalg.norm(np.subtract(g, s))), v, a) for s, g in lines)
+    check_duration(longest, "task.v_max_mps", "task.a_max_mps2", "the task's straight lines")
     dt = cfg.verification.dt_s
     check_steps(10 * longest / dt, "verification.dt_s", f"verifying the task's motions at verification.dt_s = {dt:g} s")
     if cfg.follow is not None and cfg.follow.space is not None:
@@ -203,8 +207,17 @@ def check_dualarm(cfg: RunConfig, source: str = "config") -> None:
     """The dual-arm files load, a user's cloud file is one the scan job can read, and the horizons
     and the synthetic scan fit."""
     da = cfg.dualarm
-    load_dual_arm_file(da.robot)
+    try:
+        robot = build_dual_arm(load_dual_arm_file(da.robot))
+    except ConfigError:
+        raise
+    except CapmapError as exc:
+        raise ConfigError(f"{source}: dualarm.robot = {da.robot!r}: {exc.in_terms(urdf='its URDF')}") from None
     scene = load_scene(da.scene)
+    if len(scene.q_start) != len(robot.q_lower) or np.any(scene.q_start < robot.q_lower) or \
+            np.any(scene.q_start > robot.q_upper):
+        raise ConfigError(f"{source}: dualarm.scene = {da.scene!r}: start_configuration_rad is outside the joint limits "
+                          f"of {robot.description.name} (or has not {len(robot.q_lower)} values)")
     if da.cloud_file is not None:
         check_cloud_file(da.cloud_file)
     for key, h in (("dualarm.horizon.nodes", da.horizon), ("dualarm.check.nodes", da.check.horizon)):

@@ -24,10 +24,8 @@ from capmap.errors import ConfigError
 
 __all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "CheckSettings",
            "check_settings",
-           "weights", "DEFAULT_FINE_FACTOR", "DEFAULT_ANIMATION_FPS"]
+           "weights"]
 
-DEFAULT_FINE_FACTOR = 5
-DEFAULT_ANIMATION_FPS = 25.0
 _ROBOT_KEYS = {"name", "description", "urdf", "arms", "locked", "capsules", "self_gap", "body_skip", "hold"}
 
 
@@ -69,8 +67,8 @@ class DualArmConfig:
     weights: Weights
     solver: ALSettings
     check: CheckSettings
-    fine_factor: int = DEFAULT_FINE_FACTOR
-    animation_fps: float = DEFAULT_ANIMATION_FPS
+    fine_factor: int = 5  # the defaults of dualarm.fine_factor and dualarm.animation_fps
+    animation_fps: float = 25.0
 
     @classmethod
     def from_doc(cls, d: dict) -> "DualArmConfig":
@@ -79,11 +77,10 @@ class DualArmConfig:
         fit, fit_seed = fit_settings(d)
         return cls(robot=d["robot"], scene=d["scene"], cloud_file=cloud_file, scan=scan, scan_seed=scan_seed, fit=fit,
                    fit_seed=fit_seed, horizon=horizon(d), weights=weights(d), solver=ALSettings(**d["solver"]),
-                   check=check_settings(d), fine_factor=int(d.get("fine_factor", DEFAULT_FINE_FACTOR)),
-                   animation_fps=float(d.get("animation_fps", DEFAULT_ANIMATION_FPS)))
+                   check=check_settings(d), **{k: d[k] for k in ("fine_factor", "animation_fps") if k in d})
 
 
-# --------------------------------------------------------------------------- pieces (a job reads only its own)
+# --------------------------------------------------------------------------- the section's pieces (from the YAML)
 
 
 def cloud_source(d: dict) -> tuple[str | None, ScanSettings | None, int]:
@@ -123,9 +120,9 @@ def horizon(d: dict) -> Horizon:
 
 def check_settings(d: dict) -> CheckSettings:
     """``dualarm.check``."""
-    c = dict(d["check"])
-    iterations, tolerance = int(c.pop("max_iterations", 100)), float(c.pop("tolerance", 1e-6))
-    return CheckSettings(_horizon("check", c), iterations, tolerance, float(c.pop("al_tolerance", 1e-9)))
+    c = d["check"]
+    return CheckSettings(_horizon("check", c), **{k: c[k] for k in ("max_iterations", "tolerance", "al_tolerance")
+                                                   if k in c})  # else CheckSettings' defaults
 
 
 def weights(d: dict) -> Weights:

@@ -20,10 +20,11 @@ from capmap.config.capacity import SamplingConfig
 from capmap.core.reduction import LockedArm
 from capmap.errors import ConfigError
 
-__all__ = ["Estimate", "estimate_map", "available_memory_mb", "BASE_MB", "MAX_STEPS", "check_steps", "line_duration_s"]
+__all__ = ["Estimate", "estimate_map", "available_memory_mb", "BASE_MB", "MAX_STEPS", "MAX_MOTION_S", "check_steps",
+           "check_duration", "line_duration_s"]
 
 BASE_MB = 350.0  # a job's Python with numpy, pandas and Pinocchio imported
-_CHUNK = 500  # points per capacity chunk (capmap.stages.capacity.capacity_table)
+_CHUNK = 500  # points per capacity chunk (capmap.capacity.tables.capacity_table)
 _MAX_BRANCHES = 16
 _POINT_BYTES = 700  # one point in the voxels stage's tables, with pandas' overhead
 _MAX_SAMPLES = 20_000_000
@@ -34,6 +35,16 @@ def line_duration_s(length_m: float, v_max_mps: float, a_max_mps2: float) -> flo
     """Duration [s] of a rest-to-rest trapezoidal move of ``length_m`` (triangular when short)."""
     return length_m / v_max_mps + v_max_mps / a_max_mps2 if length_m >= v_max_mps**2 / a_max_mps2 \
         else 2.0 * np.sqrt(length_m / a_max_mps2)
+
+
+MAX_MOTION_S = 1e5  # a verified or followed straight line: about a day
+
+
+def check_duration(t_s: float, v_key: str, a_key: str, what: str) -> None:
+    """One ConfigError line naming the speed and acceleration keys when a move lasts over MAX_MOTION_S."""
+    if not t_s <= MAX_MOTION_S:
+        raise ConfigError(f"{v_key}, {a_key}: {what} would take {t_s:.3g} s at this speed and acceleration (at most "
+                          f"{MAX_MOTION_S:.0e} s): raise {v_key} or {a_key}")
 
 
 def check_steps(steps: float, key: str, what: str, fix: str = "raise") -> None:

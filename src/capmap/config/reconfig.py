@@ -14,11 +14,7 @@ from capmap.reconfig.law import QuinticLaw
 from capmap.reconfig.multiarm import PlatformDescription, PlatformState
 from capmap.reconfig.problem import ReconfigProblem, build_problem
 
-__all__ = ["ReconfigConfig", "platform_state", "reconfig_problem", "rate_limits", "DEFAULT_MIN_TIME_SCALE",
-           "DEFAULT_ANIMATION_FPS"]
-
-DEFAULT_MIN_TIME_SCALE = 0.05
-DEFAULT_ANIMATION_FPS = 5.0
+__all__ = ["ReconfigConfig", "platform_state", "reconfig_problem", "rate_limits"]
 
 
 @dataclass(frozen=True)
@@ -37,8 +33,8 @@ class ReconfigConfig:
     dt_s: float
     kappa0: float
     joint_rate_limit_deg_s: float | tuple[float, ...]
-    min_time_scale: float = DEFAULT_MIN_TIME_SCALE
-    animation_fps: float = DEFAULT_ANIMATION_FPS
+    min_time_scale: float = 0.05  # the defaults of reconfig.min_time_scale and reconfig.animation_fps
+    animation_fps: float = 5.0
 
     @classmethod
     def from_doc(cls, d: dict) -> "ReconfigConfig":
@@ -46,10 +42,8 @@ class ReconfigConfig:
         return cls(robot=d["robot"], capture=d["capture"], unlock=d["unlock"],
                    configuration_deg={arm: tuple(v) for arm, v in d["configuration_deg"].items()},
                    theta_deg=law["theta_deg"], d_m=law["d_m"], duration_s=law["duration_s"], dt_s=d["dt_s"],
-                   kappa0=d.get("kappa0", 0.0),  # absent from the pinv job's slice: it does not use it
                    joint_rate_limit_deg_s=as_tuple(d["joint_rate_limit_deg_s"]),
-                   min_time_scale=d.get("min_time_scale", DEFAULT_MIN_TIME_SCALE),
-                   animation_fps=d.get("animation_fps", DEFAULT_ANIMATION_FPS))
+                   **{k: d[k] for k in ("kappa0", "min_time_scale", "animation_fps") if k in d})  # else the defaults
 
     def law(self) -> QuinticLaw:
         """The motion law, from the locked values (0, 0) to (theta, d)."""

@@ -123,7 +123,8 @@ def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> Robot
             if not path.is_absolute() and base_dir is not None:
                 path = base_dir / path
         if not path.is_file():
-            raise ConfigError(f"{source}: urdf.path = {doc['urdf']['path']!r}: no such file")
+            raise ConfigError(f"{source}: urdf.path = {doc['urdf']['path']!r}: "
+                              f"{'not a regular file' if path.exists() else 'no such file'}")
         check_urdf(path, source)
         return RobotDescription(convention=None, dh=None, links=(), joint_range_rad=ranges,
                                 urdf_path=path, urdf_ee_frame=doc["urdf"]["ee_frame"], **common)

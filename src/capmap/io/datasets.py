@@ -18,7 +18,7 @@ import capmap
 from capmap.errors import DataError
 from capmap.io.fingerprint import file_sha256
 
-__all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "read", "catalogue",
+__all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "read", "rebuild_hint_config", "catalogue",
            "verify_catalogue", "missing_catalogued"]
 
 UNITS = [("_deg", "deg"), ("_rad", "rad"), ("_kg", "kg"), ("_nm", "N m"), ("_n", "N"), ("_mps2", "m/s^2"),
@@ -74,10 +74,19 @@ def write(df: pd.DataFrame, path: str | Path, prov: dict) -> None:
     tmp.replace(path)
 
 
+_CONFIG_ARGS_ENV = "CAPMAP_CONFIG_ARGS"  # set by the workflow, inherited by its jobs
+
+
+def rebuild_hint_config(config_args: str) -> None:
+    """The workflow's ``--configfile`` arguments (" --configfile my.yaml", or "") for the rebuild
+    commands that :func:`read` prints, in this process and the jobs it starts."""
+    os.environ[_CONFIG_ARGS_ENV] = config_args
+
+
 def read(path: str | Path) -> pd.DataFrame:
     """Read a dataset; a missing, truncated or foreign file is one :class:`DataError` line naming it
     and the command that rebuilds it."""
-    rebuild = f"rebuild it with: snakemake --cores 2 all{os.environ.get('CAPMAP_CONFIG_ARGS', '')} --forcerun {path}"
+    rebuild = f"rebuild it with: snakemake --cores 2 all{os.environ.get(_CONFIG_ARGS_ENV, '')} --forcerun {path}"
     try:
         return pd.read_parquet(path)
     except FileNotFoundError:

@@ -56,9 +56,7 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
     da = sc.run.dualarm
     log = stage_logger(__name__, "dualarm optimise")
     robot, asm = setup(da, environment, capsules, da.horizon)
-    w, fine_factor = da.weights, da.fine_factor
-    if np.any(asm.q_start < robot.q_lower) or np.any(asm.q_start > robot.q_upper):
-        raise ConfigError(f"dualarm.scene = {da.scene!r}: start_configuration_rad is outside the joint limits")
+    w, fine_factor = da.weights, da.fine_factor  # the start within the joint limits: checked before any job
     t0 = time.perf_counter()
     qs = warm_start(asm)
     clear = _key_poses(asm, qs, da.scene, log)

@@ -11,10 +11,10 @@ import pandas as pd
 
 from capmap.capacity.engine import SINGULAR
 from capmap.capacity.refine import Evaluation, VoxelMinima, refine
+from capmap.capacity.tables import AXIS_COLUMNS, capacity_table, grid_of
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.stages.arm import arm_task_from
-from capmap.stages.capacity import AXIS_COLUMNS, capacity_table, grid_of
 from capmap.stages.common import stage_config
 
 __all__ = ["REFINED_COLUMNS", "stage_refine", "stage_voxel_map"]

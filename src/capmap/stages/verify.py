@@ -10,6 +10,7 @@ import pandas as pd
 
 from capmap.capacity import branch_planning, planning
 from capmap.capacity.directions import AXIS_LABELS, axis_of
+from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.capacity.verification import PathResult, judge, verify_path
 from capmap.config.capacity import PlanTask
 from capmap.config.slices import StageConfig
@@ -22,7 +23,6 @@ from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
 from capmap.stages.arm import arm_task_from
-from capmap.stages.capacity import AXIS_COLUMNS, grid_of
 from capmap.stages.common import stage_config
 
 __all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "branch_deviation_deg", "stage_verify"]

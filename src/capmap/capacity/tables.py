@@ -1,0 +1,149 @@
+"""The capacity family's tables and their column schemas (units in the names): the robot model's
+joints, the sampled points, the per-point capacities (every IK branch x every direction), the voxel
+map; and the grid a voxel table records in its provenance. Built from numerics results, no file I/O."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+import pinocchio as pin
+
+from capmap.capacity import sampling
+from capmap.capacity.directions import AXIS_LABELS, grid_axes
+from capmap.capacity.engine import Motion, point_capacity
+from capmap.capacity.voxels import Grid, voxelise
+from capmap.core import ik
+from capmap.core.dynamics import ArmDynamics
+from capmap.core.limits import AffineLimits
+from capmap.core.reduction import LockedArm
+from capmap.core.robot import Robot
+
+__all__ = ["AXIS_COLUMNS", "model_table", "sample_table", "capacity_table", "voxel_table", "grid_meta", "grid_of"]
+
+AXIS_COLUMNS = [f"capacity_along_{label}_kg" for label in AXIS_LABELS]  # moves along the 13 grid axes
+
+
+def model_table(robot: Robot) -> pd.DataFrame:
+    """Joint/link table of a built robot (angles in deg)."""
+    m = robot.model
+    rows = []
+    for j in range(1, m.njoints):
+        inertia = m.inertias[j]
+        I = inertia.inertia
+        M = m.jointPlacements[j]
+        rpy = np.rad2deg(pin.rpy.matrixToRpy(M.rotation))
+        rows.append({
+            "joint": j, "name": m.names[j], "type": m.joints[j].shortname(),
+            "lower_deg": np.rad2deg(robot.q_lower[j - 1]), "upper_deg": np.rad2deg(robot.q_upper[j - 1]),
+            "placement_x_m": M.translation[0], "placement_y_m": M.translation[1], "placement_z_m": M.translation[2],
+            "placement_roll_deg": rpy[0], "placement_pitch_deg": rpy[1], "placement_yaw_deg": rpy[2],
+            "mass_kg": inertia.mass, "com_x_m": inertia.lever[0], "com_y_m": inertia.lever[1], "com_z_m": inertia.lever[2],
+            "ixx_kgm2": I[0, 0], "iyy_kgm2": I[1, 1], "izz_kgm2": I[2, 2], "ixy_kgm2": I[0, 1], "ixz_kgm2": I[0, 2],
+            "iyz_kgm2": I[1, 2],
+        })
+    return pd.DataFrame(rows)
+
+
+def sample_table(arm: LockedArm, sc, edge_m: float | None, log) -> pd.DataFrame:
+    """The sampled points of the locked arm: joint-space Monte Carlo (seeded), plus for
+    ``voxel_fill`` every voxel (of edge_m) of their bounding box. ``sc``: the sampling settings
+    (mode, n_points, seed, jitter_per_voxel: a :class:`capmap.config.capacity.SamplingConfig`)."""
+    rng = np.random.default_rng(sc.seed)
+    _, pos = sampling.joint_samples(arm, sc.n_points, rng)
+    source = np.zeros(len(pos), dtype=int)
+    if sc.mode == "voxel_fill":
+        grid = Grid.covering(pos, edge_m)
+        fill, kind = sampling.voxel_fill(grid, sc.jitter_per_voxel, rng)
+        pos = np.concatenate([pos, fill])
+        source = np.concatenate([source, kind + 1])
+        log.info(f"voxel_fill: grid {grid.shape} of {grid.edge_m} m = {grid.n_voxels} voxels, "
+                 f"+{len(fill)} points (centre + {sc.jitter_per_voxel} jittered each)")
+    return pd.DataFrame({"point_id": np.arange(len(pos)), "x_m": pos[:, 0], "y_m": pos[:, 1], "z_m": pos[:, 2],
+                         "source": pd.Categorical.from_codes(source, ["joint_sample", "voxel_centre", "voxel_jitter"])})
+
+
+def capacity_table(arm: LockedArm, ids: np.ndarray, pos: np.ndarray, rotation: np.ndarray, motion: Motion,
+                   limits: AffineLimits, dirs, log=None, chunk: int = 500) -> pd.DataFrame:
+    """Per-point capacity table for points ``pos`` (N, 3) m at end-effector orientation ``rotation``
+    (all IK branches x all directions); progress to ``log`` (a logger) every chunk."""
+    dyn = ArmDynamics(arm)
+    axes = grid_axes()
+    parts = []
+    t0, states = time.perf_counter(), 0
+    for start in range(0, len(pos), chunk):
+        rows = slice(start, start + chunk)
+        sol = ik.solve(arm, pos[rows], rotation)
+        pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits, axes)
+        states += int(pc.n_states.sum())
+        reach = sol.n_solutions > 0
+        d = np.where(pc.direction >= 0, pc.direction, 0)
+        br = np.where(pc.branch >= 0, pc.branch, 0)
+        q_worst = np.where(reach[:, None], sol.q[np.arange(len(br)), br], np.nan)
+        part = pd.DataFrame({
+            "point_id": ids[rows], "x_m": pos[rows, 0], "y_m": pos[rows, 1], "z_m": pos[rows, 2],
+            "reachable": reach, "n_branches": sol.n_solutions, "capacity_kg": pc.capacity_kg,
+            "binding": np.where(reach, np.array(pc.names + ("",))[pc.binding], ""),
+            "worst_branch": pc.branch,
+            "worst_alpha_deg": np.where(reach, dirs.alpha_deg[d], np.nan),
+            "worst_beta_deg": np.where(reach, dirs.beta_deg[d], np.nan),
+            "worst_ux": np.where(reach, dirs.u[d, 0], np.nan), "worst_uy": np.where(reach, dirs.u[d, 1], np.nan),
+            "worst_uz": np.where(reach, dirs.u[d, 2], np.nan),
+            "n_states": pc.n_states,
+        })
+        for c, j in enumerate(arm.active_joint_numbers):
+            part[f"worst_q_j{j}_deg"] = np.rad2deg(q_worst[:, c])
+        for c, col in enumerate(AXIS_COLUMNS):
+            part[col] = pc.axis_capacity_kg[:, c]
+        parts.append(part)
+        if log:
+            done = min(start + chunk, len(pos))
+            el = time.perf_counter() - t0
+            log.info(f"{done}/{len(pos)} points ({done / len(pos):.0%}), {states / el:,.0f} states/s, "
+                     f"eta {el / done * (len(pos) - done):.0f} s")
+    df = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+    if len(df):
+        df["binding"] = df["binding"].astype("category")
+    return df
+
+
+def voxel_table(pts: pd.DataFrame, edge_m: float) -> tuple[pd.DataFrame, Grid]:
+    """Voxels of edge_m covering the capacity points (each voxel: the minimum over its points);
+    adds the voxel indices i, j, k to ``pts``."""
+    xyz = pts[["x_m", "y_m", "z_m"]].to_numpy()
+    grid = Grid.covering(xyz, edge_m)
+    vm = voxelise(grid, xyz, pts.capacity_kg.to_numpy(), pts.reachable.to_numpy())
+    idx = grid.all_indices()
+    centres = grid.centres(idx)
+    worst = vm.worst_point
+    binding = np.where(worst >= 0, pts.binding.astype(str).to_numpy()[np.maximum(worst, 0)], "")
+    pidx = grid.index(xyz)
+    axis = np.full((grid.n_voxels, len(AXIS_COLUMNS)), np.nan)
+    if AXIS_COLUMNS[0] in pts:
+        r = pts.reachable.to_numpy() & (pidx[:, 0] >= 0)
+        axis[:] = np.inf
+        np.fmin.at(axis, grid.flat(pidx[r]), pts.loc[r, AXIS_COLUMNS].to_numpy())
+        axis[vm.n_reachable == 0] = np.nan
+    wxyz = np.where(worst[:, None] >= 0, xyz[np.maximum(worst, 0)], np.nan)
+    vox = pd.DataFrame({"i": idx[:, 0], "j": idx[:, 1], "k": idx[:, 2],
+                        "x_m": centres[:, 0], "y_m": centres[:, 1], "z_m": centres[:, 2],
+                        "n_points": vm.n_points, "n_reachable": vm.n_reachable, "capacity_kg": vm.capacity_kg,
+                        "binding": pd.Categorical(binding),
+                        "worst_point_id": np.where(worst >= 0, pts.point_id.to_numpy()[np.maximum(worst, 0)], -1),
+                        "worst_x_m": wxyz[:, 0], "worst_y_m": wxyz[:, 1], "worst_z_m": wxyz[:, 2]})
+    for c, col in enumerate(AXIS_COLUMNS):
+        vox[col] = axis[:, c]
+    pts["i"], pts["j"], pts["k"] = pidx[:, 0], pidx[:, 1], pidx[:, 2]
+    return vox, grid
+
+
+def grid_meta(grid: Grid) -> dict:
+    """The grid as recorded in a voxels dataset's provenance (read back by :func:`grid_of`)."""
+    return {"lower_m": grid.lower.tolist(), "shape": list(grid.shape), "edge_m": grid.edge_m}
+
+
+def grid_of(vox: pd.DataFrame) -> Grid:
+    """The voxel grid recorded in a voxels dataset's provenance."""
+    g = vox.attrs["capmap"]["grid"]
+    return Grid(lower=np.asarray(g["lower_m"], dtype=float), shape=tuple(g["shape"]), edge_m=float(g["edge_m"]))
