@@ -46,6 +46,9 @@ def _imports(path: Path) -> list[tuple[str, bool]]:
     """(imported capmap module, at module level?) for every import of capmap in a file."""
     tree = ast.parse(path.read_text())
     top = set(map(id, tree.body))
+    for node in tree.body:  # ``if TYPE_CHECKING:`` imports (annotations only) count as top-level ones
+        if isinstance(node, ast.If) and getattr(node.test, "id", getattr(node.test, "attr", "")) == "TYPE_CHECKING":
+            top |= set(map(id, node.body))
     out = []
     for node in ast.walk(tree):
         names = []

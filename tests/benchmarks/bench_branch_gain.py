@@ -15,6 +15,7 @@ Needs results/default/voxels/voxels.parquet and results/default/verify/payload_1
 from __future__ import annotations
 
 import argparse
+import json
 import time
 
 import numpy as np
@@ -29,6 +30,7 @@ from capmap.core.dynamics import ArmDynamics
 from capmap.errors import NoPath
 from capmap.io import datasets
 from capmap.stages.arm import arm_task_from
+from capmap.stages.common import stage_config
 from capmap.stages.verify import branch_deviation_deg
 from tests.benchmarks.machine import machine
 
@@ -41,7 +43,7 @@ def main() -> None:
     a = ap.parse_args()
     print(f"machine: {machine()}")
     deps = datasets.read("results/default/verify/payload_1500kg/timeseries.parquet").attrs["capmap"]["config"]
-    at = arm_task_from(deps)
+    at = arm_task_from(stage_config(json.dumps(deps)).run)
     arm, rot, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
     vox = datasets.read("results/default/voxels/voxels.parquet")

@@ -63,7 +63,7 @@ def main():
     wall, tmp, holder = _run("capacity_map", cfg, args.cores)
     pts = pd.read_parquet(tmp / "results" / name / "voxels/points.parquet")
     vox = pd.read_parquet(tmp / "results" / name / "voxels/voxels.parquet")
-    dirs = pts.attrs["capmap"]["config"]["capacity"]["directions"]
+    dirs = pts.attrs["capmap"]["config"]["run"]["directions"]
     jobs = _jobs(tmp / "results" / name)
     holder.cleanup()
     print(f"snakemake --cores {args.cores} capacity_map from clean: {wall:.1f} s wall (target < 30 s), "

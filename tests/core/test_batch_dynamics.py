@@ -26,7 +26,7 @@ def _arms(gravity_robot_yaml):
 
 def _near_singular(dyn, rng, n):
     """Badly conditioned configurations: Jacobian condition numbers between 1e2 and 1e4, the worst
-    of many random ones (the bound of _tolerance holds beyond: checked to cond 3e6)."""
+    of many random ones (the bound of _tolerance holds beyond: checked to cond 2.7e6)."""
     qa = rng.uniform(-np.pi, np.pi, (4000, dyn.arm.n_active))
     cond = np.array([np.linalg.cond(dyn.ee_jacobian(dyn.arm.full_q(q))) for q in qa])
     pick = np.flatnonzero((cond > 1e2) & (cond < 1e4))

@@ -74,6 +74,8 @@ def test_motion_realises_commanded_end_effector_motion(setup):
         v, a = rng.normal(size=3) * 0.15, rng.normal(size=3) * 0.03
         q, qd, qdd = dyn.motion(qa, v, a)
         J = dyn.ee_jacobian(q)
+        # residual of qd = J^-1 [v; 0]: <= c n eps cond(J) |v| (<= 3e-14 at these cond <= 62); measured <= 4.7e-16 over
+        # the 5 OpenBLAS kernels (Prescott, Sandybridge, Haswell, Zen, SkylakeX): margin 2000
         assert np.allclose(J @ qd[arm.active], np.concatenate([v, np.zeros(3)]), atol=1e-12)
         _, ee_acc, _, _ = newton_euler(q, qd, qdd, robot.gravity)
         assert np.allclose(ee_acc, np.concatenate([a, np.zeros(3)]), atol=1e-10)

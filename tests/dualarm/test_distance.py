@@ -3,6 +3,8 @@ brute force on random and degenerate cases, and gradients against finite differe
 
 from __future__ import annotations
 
+import zlib
+
 import numpy as np
 import pytest
 
@@ -29,6 +31,9 @@ def test_capsule_capsule_equals_coal():
     p0, p1, q0, q1 = (rng.normal(size=(300, 3)) for _ in range(4))
     r1, r2 = rng.uniform(0.005, 0.05, 300), rng.uniform(0.005, 0.05, 300)
     c = segment_segment(p0, p1, q0, q1)
+    # closed-form distances of O(1) points: rounding ~eps; the 1e-12 tolerances of this file measured at <= 5.6e-15
+    # (this test 8.9e-16) in 10 runs, 2 on each of the 5 OpenBLAS kernels (Prescott, Sandybridge, Haswell, Zen,
+    # SkylakeX; the brute-force cases then seeded by Python's per-run hash(case)): margin >= 180; seeds now fixed (crc32)
     for i in range(300):
         expect = distance(*capsule(p0[i], p1[i], r1[i]), *capsule(q0[i], q1[i], r2[i]))
         if expect > 0:
@@ -55,7 +60,7 @@ def test_capsule_triangle_equals_coal_one_triangle_bvh():
 @pytest.mark.parametrize("case", ["random", "parallel", "collinear", "crossing", "point_like", "both_points",
                                   "touching", "shared_end"])
 def test_segment_segment_against_brute_force(case):
-    rng = np.random.default_rng(hash(case) % 2**32)
+    rng = np.random.default_rng(zlib.crc32(repr(case).encode()))
     p0, p1, q0, q1 = (rng.normal(size=(40, 3)) for _ in range(4))
     if case == "parallel":
         q1 = q0 + (p1 - p0) * rng.uniform(-2, 2, (40, 1))
@@ -91,7 +96,7 @@ def test_segment_segment_against_brute_force(case):
 
 @pytest.mark.parametrize("case", ["random", "crossing", "parallel_above", "in_plane", "point_like", "edge_touch"])
 def test_segment_triangle_against_brute_force(case):
-    rng = np.random.default_rng(hash(case) % 2**32)
+    rng = np.random.default_rng(zlib.crc32(repr(case).encode()))
     p0, p1, v0, v1, v2 = (rng.normal(size=(25, 3)) for _ in range(5))
     n = np.cross(v1 - v0, v2 - v0)
     n /= np.linalg.norm(n, axis=1, keepdims=True)

@@ -5,9 +5,10 @@ import textwrap
 import pytest
 
 from capmap.io import fingerprint as fp
+from tests.scenario import ROOT
 
 _CACHED = (fp.module_closure, fp._module_tree, fp._module_imports, fp._module_digest, fp._lazy_exports,
-           fp.code_fingerprint, fp.script_fingerprint)
+           fp.code_fingerprint, fp._script_fingerprint)
 
 
 @pytest.fixture
@@ -101,8 +102,20 @@ def test_a_script_importing_through_the_capacity_face_follows_the_engine(tmp_pat
     def changed(which):
         monkeypatch.setattr(fp, "_module_digest", lambda mod: b"edited" if mod == which else digest(mod))
         fp.code_fingerprint.cache_clear()
-        fp.script_fingerprint.cache_clear()
+        fp._script_fingerprint.cache_clear()
         return fp.script_fingerprint(script)
 
     assert changed("capmap.capacity.planning") == before  # named by the face, not imported
     assert changed("capmap.capacity.engine") != before
+
+
+def test_imports_for_annotations_only_are_not_followed_and_named_modules_are(fresh):
+    """``if TYPE_CHECKING:`` imports never run: the run config's module does not depend on every
+    family through them; the sections a job rebuilds are added by name (``also``)."""
+    closure = fp.module_closure("capmap.config.run")
+    assert "capmap.config.run" in closure and "capmap.config.jobs" in closure
+    assert not {"capmap.config.dualarm", "capmap.dualarm.robot", "capmap.capacity.engine"} & set(closure)
+    script = ROOT / "workflow" / "scripts" / "dualarm_scan.py"
+    plain = fp.script_fingerprint(script)
+    assert fp.script_fingerprint(script, ["capmap.config.reconfig"]) != plain
+    assert fp.script_fingerprint(script, []) == plain

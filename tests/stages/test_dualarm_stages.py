@@ -9,13 +9,17 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from capmap.config.dualarm import cloud_source
+from capmap.config import canonical, stage_slice
+from capmap.config.dualarm import DualArmConfig, cloud_source
+from capmap.config.run import RunConfig
 from capmap.config.scene_file import load_scene
+from capmap.config.typed import partial, to_doc
 from capmap.dualarm.cloud import uncovered
 from capmap.dualarm.scene import scan
+from capmap.dualarm.tables import envelope_from
 from capmap.errors import ConfigError
 from capmap.io import datasets
-from capmap.stages.dualarm import envelope_from, stage_dualarm_envelope, stage_dualarm_scan
+from capmap.stages.dualarm import stage_dualarm_envelope, stage_dualarm_scan
 from tests.dualarm.conftest import SECTION
 from tests.scenario import ROOT
 
@@ -23,7 +27,10 @@ SCENE = str(ROOT / SECTION["scene"])
 
 
 def _slice(cloud: dict) -> str:
-    return json.dumps({"dualarm": {"scene": SCENE, "cloud": cloud}})
+    """The envelope stage's slice (a superset of the scan's) of the dual-arm section with this cloud."""
+    da = DualArmConfig.from_doc({**SECTION, "scene": SCENE, "cloud": cloud})
+    cfg = partial(RunConfig, json.loads(canonical({"dualarm": to_doc(da)})))
+    return canonical(stage_slice(cfg, "dualarm_envelope"))
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,8 @@
-"""Bad input never costs a good output: a table of bad configs and robot files, each run as
-``snakemake all`` over a finished tiny run. Each must exit with status 1 and exactly one stderr
-line starting ``capmap:`` that names the key or file, before any job runs, and leave every file
-under results/ byte-identical. (The cases run in parallel: each only parses the workflow.)"""
+"""Bad input never costs a good output: a table of bad configs, robot and cloud files. Each must give
+exactly one line starting ``capmap:`` that names the key or file, before any job runs: every case
+through the checks the workflow runs before building its DAG (in this process), and a case of each
+kind as ``snakemake all`` over a finished tiny run (status 1, one stderr line, every file under
+results/ byte-identical; those run in parallel: each only parses the workflow)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+from capmap.config.checks import check_run_config
+from capmap.config.run import run_document
+from capmap.errors import CapmapError
 from tests.scenario import ROOT, SSRMS_YAML
 from tests.workflow.runs import config_file
 
@@ -273,13 +277,10 @@ def _check(res, expect: str, name: str | None) -> str | None:
     return None
 
 
-def test_bad_inputs_are_one_line_and_cost_no_output(run_dir, tmp_path):
-    work, _ = run_dir
-    before = _tree_digest(work / "results")
+def _jobs(tmp_path: Path) -> list[tuple[Path, str, str | None, str]]:
+    """(config file, expected text, a name the line must hold, label) of every case."""
     jobs = []
-    for i, (changes, expect) in enumerate(CONFIG_CASES):
-        jobs.append((config_file(tmp_path, **changes), expect, None, f"config {changes}"))
-    for changes, expect in NEW_CONFIG_CASES:
+    for changes, expect in CONFIG_CASES + NEW_CONFIG_CASES:
         jobs.append((config_file(tmp_path, **changes), expect, None, f"config {changes}"))
     for make, expect in ROBOT_CASES + NEW_ROBOT_CASES:
         robot = make(tmp_path)
@@ -290,8 +291,40 @@ def test_bad_inputs_are_one_line_and_cost_no_output(run_dir, tmp_path):
                      f"cloud file {Path(cloud).name}"))
     assert len(NEW_CONFIG_CASES) + len(NEW_ROBOT_CASES) + len(CLOUD_CASES) >= 40
     assert len(jobs) >= 100
+    return jobs
+
+
+def _in_process(config: Path) -> subprocess.CompletedProcess:
+    """What the workflow runs before any job (Snakefile: run_document; common.smk: check_run_config),
+    in this process, as a finished snakemake call would report it."""
+    try:
+        check_run_config(run_document([str(config)]), str(config))
+    except CapmapError as exc:
+        return subprocess.CompletedProcess([], 1, "", f"capmap: {exc}\n")
+    return subprocess.CompletedProcess([], 0, "", "")
+
+
+def test_every_bad_input_is_one_line_naming_it(tmp_path):
+    """Every case through the checks the workflow runs before any job (fast: in this process)."""
+    failures = [f"{label}: {err}" for cfg, expect, name, label in _jobs(tmp_path)
+                if (err := _check(_in_process(cfg), expect, name))]
+    assert not failures, "\n".join(failures)
+
+
+def test_bad_inputs_cost_no_output_through_snakemake(run_dir, tmp_path):
+    """A case of each kind (file, YAML, schema, robot, lock, pose, size, step count, cloud) through
+    ``snakemake all`` over a finished run: status 1, one capmap line, every output byte-identical."""
+    work, _ = run_dir
+    before = _tree_digest(work / "results")
+    jobs = _jobs(tmp_path)
+    pick = ("limts", "q_start_deg[0] = 90", "lock.joint = 9", "task.goal_m = [30", "not a finite number",
+            "is text, not a number", "voxels.edge_m: this map needs", "verification.dt_s: verifying",
+            "lies outside the map's grid", "follow.ground.line_m = [0, 1e-12", "reconfig.dt_s: the reconfiguration",
+            "__use_yte__", "no such file", "not a text", "nested deeper", "is a FIFO", "not valid XML", "no column x_m")
+    chosen = [j for key in pick for j in jobs if key in j[1]][:len(pick) + 2]
+    assert len({j[1] for j in chosen}) >= len(pick)
     with ThreadPoolExecutor(max_workers=3) as pool:
-        results = list(pool.map(lambda j: (j, _run(work, j[0])), jobs))
+        results = list(pool.map(lambda j: (j, _run(work, j[0])), chosen))
     failures = [f"{j[3]}: {err}" for j, res in results if (err := _check(res, j[1], j[2]))]
     assert not failures, "\n".join(failures)
     assert _tree_digest(work / "results") == before  # every existing output byte-identical

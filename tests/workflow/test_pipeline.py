@@ -27,7 +27,7 @@ def test_outputs_and_provenance(run_dir):
         assert col in vox.columns
     meta = pts.attrs["capmap"]
     assert meta["stage"] == "voxels" and meta["seed"] == 7 and meta["capmap_version"]
-    assert meta["config"]["capacity"]["limits"]["joint_torque_nm"] == 700
+    assert meta["config"]["run"]["limits"]["joint_torque_nm"] == 700
     # points: each id exactly once across shards
     assert pts.point_id.is_unique and len(pts) == pd.read_parquet(tmp / "results/tiny/sample/points.parquet").shape[0]
     # reachable <=> at least one branch <=> finite capacity
@@ -175,7 +175,7 @@ def test_plan_and_verify_outputs(run_dir):
     wp = pd.read_parquet(res / "plan/payload_1500kg/waypoints.parquet")
     meta = wp.attrs["capmap"]
     assert meta["status"] == "ok" and meta["payload_kg"] == 1500
-    assert meta["config"]["plan"]["task"]["payload_kg"] == 1500
+    assert meta["config"]["job"]["payload_kg"] == 1500
     assert np.allclose(wp[["x_m", "y_m", "z_m"]].iloc[0], X_INI) and np.allclose(wp[["x_m", "y_m", "z_m"]].iloc[-1], X_DES)
     assert (wp.voxel_capacity_kg >= 1500).all()
     ts = pd.read_parquet(res / "verify/payload_1500kg/timeseries.parquet")

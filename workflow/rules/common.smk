@@ -4,6 +4,7 @@ import sys
 from pathlib import Path
 
 from capmap.config import canonical, check_run_config, main_task, payload_label, stage_slice
+from capmap.config.slices import section_modules
 from capmap.errors import CapmapError
 from capmap.io.datasets import missing_catalogued, rebuild_hint_config
 from capmap.io.fingerprint import script_fingerprint
@@ -49,7 +50,8 @@ def params(stage, script, job=None):
     it runs (the script's syntax tree and every capmap module it imports; capmap.io.fingerprint), so
     that a change of either reruns it and a comment does not. Recorded in the outputs' provenance."""
     path = Path(workflow.basedir) / "workflow" / "scripts" / f"{script}.py"
-    return canonical({**stage_slice(RUN, stage, job), "code": script_fingerprint(path)})
+    sl = stage_slice(RUN, stage, job)
+    return canonical({**sl, "code": script_fingerprint(path, section_modules(sl))})
 
 
 def code_params(script):

@@ -8,7 +8,9 @@
 - :mod:`~capmap.config.dualarm`     the ``dualarm`` section and dual-arm robot files
 - :mod:`~capmap.config.scene_file`  scene files of the dual-arm family
 - :mod:`~capmap.config.platform_file` platform robot files (arms of revolute and passive joints)
-- :mod:`~capmap.config.run`         the whole run configuration
+- :mod:`~capmap.config.run`         the whole run configuration (its type, its document)
+- :mod:`~capmap.config.parse`       the document validated into a RunConfig
+- :mod:`~capmap.config.jobs`        one plan/verify job (PlanTask)
 - :mod:`~capmap.config.typed`       typed objects <-> JSON (the generic rebuild of a job's config)
 - :mod:`~capmap.config.slices`      the fields each stage reads (rule params, provenance)
 - :mod:`~capmap.config.failure`     the failure in one edit: lock angle, start, start configuration
@@ -23,8 +25,8 @@ _EXPORTS = {
     'resolve_failure': 'failure',
     'main_task': 'failure',
     'RunConfig': 'run',
-    'load_config': 'run',
-    'parse_config': 'run',
+    'load_config': 'parse',
+    'parse_config': 'parse',
     'STAGES': 'slices',
     'StageConfig': 'slices',
     'canonical': 'slices',

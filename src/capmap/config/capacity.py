@@ -3,7 +3,7 @@ voxels, verification. Frozen dataclasses built from the validated config documen
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -12,21 +12,14 @@ from capmap.capacity import directions
 from capmap.capacity.directions import Directions
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.refine import RefineSettings
-from capmap.config.typed import ROUND
 from capmap.config.validation import as_tuple, per_item
 from capmap.errors import CapmapError, ConfigError
 
 __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "DirectionsConfig", "VerificationConfig",
-           "RefineConfig", "PlanningConfig", "PlanTask", "rotation_from_rpy", "PLAN_MOVES",
-           "payload_label"]
+           "RefineConfig", "PlanningConfig", "rotation_from_rpy", "PLAN_MOVES"]
 
 PLAN_MOVES = ("branch", "axis", "isotropic")  # planning.moves; the first is the default
 MAX_DIRECTIONS = 1_000_000  # directions a set may be built from (the paper's grid before its duplicates go)
-
-
-def payload_label(payload_kg: float) -> str:
-    """File-name label of a payload: 1500 -> '1500', 1250.5 -> '1250.5'."""
-    return f"{float(payload_kg):g}"
 
 
 @dataclass(frozen=True)
@@ -72,22 +65,6 @@ class PlanningConfig:
     moves: str = PLAN_MOVES[0]
     gain_tasks: int = 30
 
-
-@dataclass(frozen=True)
-class PlanTask:
-    """One plan/verify job: the main task at one of its payloads (``name`` None; start and start
-    configuration resolved, see :mod:`capmap.config.failure`) or a further task of ``tasks``."""
-
-    payload_kg: float
-    start_m: tuple[float, float, float] = field(metadata=ROUND)
-    goal_m: tuple[float, float, float]
-    q_start_deg: tuple[float, ...] = field(metadata=ROUND)
-    name: str | None = None
-
-    @classmethod
-    def from_doc(cls, d: dict) -> "PlanTask":
-        return cls(payload_kg=float(d["payload_kg"]), start_m=tuple(d["start_m"]), goal_m=tuple(d["goal_m"]),
-                   q_start_deg=tuple(d["q_start_deg"]), name=d["name"])
 
 DEFAULT_DT_S = 0.1  # verification.dt_s when not given
 

@@ -10,15 +10,17 @@ from dataclasses import replace
 import numpy as np
 
 from capmap.config.atlas import AtlasConfig
-from capmap.config.capacity import PlanTask, TaskConfig
+from capmap.config.capacity import TaskConfig
 from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.estimate import Estimate, check_duration, check_steps, estimate_map, line_duration_s
 from capmap.config.failure import Failure, locked_arm, resolve_failure
 from capmap.config.following import FollowConfig
 from capmap.config.inputs import check_cloud_file
+from capmap.config.jobs import PlanTask
+from capmap.config.parse import parse_config
 from capmap.config.reconfig import rate_limits, reconfig_problem
 from capmap.config.robot_file import load
-from capmap.config.run import RunConfig, parse_config
+from capmap.config.run import RunConfig
 from capmap.config.scene_file import load_scene
 from capmap.config.validation import per_item
 from capmap.core import ik

@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from capmap.config.capacity import LockConfig, PlanTask, TaskConfig
+from capmap.config.capacity import LockConfig, TaskConfig
+from capmap.config.jobs import PlanTask
 from capmap.config.typed import ROUND
 from capmap.core import ik
 from capmap.core.kinematics import rotation_log

@@ -1,43 +1,56 @@
-"""The run configuration: validated once against the JSON schema, then frozen dataclasses."""
+"""The run configuration: validated once against the JSON schema (:mod:`capmap.config.parse`), then
+frozen dataclasses. This module defines the run's type and how its document is read; it imports no
+section module at run time, so that every job can rebuild its own fields (:mod:`capmap.config.typed`)
+without depending on the code of the families it does not read."""
 
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from capmap.config.atlas import AtlasConfig
-from capmap.config.capacity import (
-    DirectionsConfig,
-    LimitsConfig,
-    LockConfig,
-    PlanningConfig,
-    PlanTask,
-    RefineConfig,
-    SamplingConfig,
-    TaskConfig,
-    VerificationConfig,
-    payload_label,
-)
-from capmap.config.dualarm import DualArmConfig
-from capmap.config.estimate import Estimate
-from capmap.config.failure import Failure
-from capmap.config.following import FollowConfig
-from capmap.config.reconfig import ReconfigConfig
+from capmap.config.jobs import PlanTask
 from capmap.config.typed import FILE
-from capmap.config.validation import load_yaml, validate
+from capmap.config.validation import load_yaml
 from capmap.errors import ConfigError
 
-__all__ = ["RunConfig", "parse_config", "load_config", "run_name", "run_document", "DEFAULT_CONFIG"]
+if TYPE_CHECKING:  # resolved lazily at run time through SECTION_TYPES
+    from capmap.config.atlas import AtlasConfig
+    from capmap.config.capacity import (
+        DirectionsConfig,
+        LimitsConfig,
+        LockConfig,
+        PlanningConfig,
+        RefineConfig,
+        SamplingConfig,
+        TaskConfig,
+        VerificationConfig,
+    )
+    from capmap.config.dualarm import DualArmConfig
+    from capmap.config.estimate import Estimate
+    from capmap.config.failure import Failure
+    from capmap.config.following import FollowConfig
+    from capmap.config.reconfig import ReconfigConfig
+
+__all__ = ["RunConfig", "SECTION_TYPES", "run_name", "run_document", "DEFAULT_CONFIG"]
 
 DEFAULT_CONFIG = "config/config.yaml"  # the config when no --configfile is given
+SECTION_TYPES = {  # a section type's name -> the module defining it (imported when a slice holds it)
+    **dict.fromkeys(("DirectionsConfig", "LimitsConfig", "LockConfig", "PlanningConfig", "RefineConfig", "SamplingConfig",
+                     "TaskConfig", "VerificationConfig"), "capmap.config.capacity"),
+    "AtlasConfig": "capmap.config.atlas", "DualArmConfig": "capmap.config.dualarm", "Estimate": "capmap.config.estimate",
+    "Failure": "capmap.config.failure", "FollowConfig": "capmap.config.following", "ReconfigConfig": "capmap.config.reconfig",
+}
 
 
 @dataclass(frozen=True)
 class RunConfig:
     """A whole run: the robot file and every section (``follow``, ``reconfig``, ``dualarm``: None when
     absent). ``failure`` (the resolved lock and start) and ``estimate`` (the map's size) are set by
-    :func:`capmap.config.check_run_config`."""
+    :func:`capmap.config.check_run_config`. The sections' types are resolved lazily
+    (:data:`SECTION_TYPES`): a job that rebuilds its slice imports only the sections it reads, so its
+    code fingerprint does not follow every family's code."""
 
     robot: str = field(metadata=FILE)
     lock: LockConfig
@@ -48,8 +61,8 @@ class RunConfig:
     voxel_edge_m: float
     shards: int
     verification: VerificationConfig
-    refine: RefineConfig | None = RefineConfig()
-    planning: PlanningConfig = PlanningConfig()
+    refine: RefineConfig | None  # None: voxels.refine false
+    planning: PlanningConfig
     tasks: tuple[PlanTask, ...] = ()
     follow: FollowConfig | None = None
     reconfig: ReconfigConfig | None = None
@@ -77,46 +90,6 @@ def run_name(doc: dict, source: str = "config") -> str:
     return stem
 
 
-def parse_config(doc: object, source: str = "config") -> RunConfig:
-    """Validate a run-config mapping and turn it into a :class:`RunConfig`."""
-    if not isinstance(doc, dict):
-        raise ConfigError(f"{source}: the config must be a mapping of keys, got {type(doc).__name__}")
-    doc = validate(doc, "config", source)  # integral floats as ints where the schema says integer
-    try:
-        directions = DirectionsConfig.from_doc(doc["directions"])
-        dualarm = DualArmConfig.from_doc(doc["dualarm"]) if "dualarm" in doc else None
-        atlas = AtlasConfig.from_doc(doc["atlas"]) if "atlas" in doc else None
-    except ConfigError as exc:
-        raise ConfigError(f"{source}: {exc}") from None
-    task = TaskConfig.from_doc(doc["task"])
-    try:
-        refine = RefineConfig.from_doc(doc["voxels"])
-    except ConfigError as exc:
-        raise ConfigError(f"{source}: {exc}") from None
-    labels = [payload_label(m) for m in task.payload_kg]
-    if len(set(labels)) != len(labels):
-        raise ConfigError(f"{source}: task.payload_kg has repeated values {labels}")
-    return RunConfig(
-        robot=doc["robot"],
-        lock=LockConfig.from_doc(doc["lock"]),
-        task=task,
-        limits=LimitsConfig.from_doc(doc["limits"]),
-        sampling=SamplingConfig.from_doc(doc["sampling"]),
-        directions=directions,
-        voxel_edge_m=float(doc["voxels"]["edge_m"]),
-        shards=int(doc["shards"]),
-        verification=VerificationConfig.from_doc(doc.get("verification")),
-        refine=refine,
-        planning=PlanningConfig(**doc.get("planning", {})),
-        tasks=tuple(PlanTask.from_doc(t) for t in doc.get("tasks") or ()),
-        follow=FollowConfig.from_doc(doc["follow"]) if "follow" in doc else None,
-        reconfig=ReconfigConfig.from_doc(doc["reconfig"]) if "reconfig" in doc else None,
-        dualarm=dualarm,
-        atlas=atlas,
-        name=run_name(doc, source),
-    )
-
-
 def _merged(base: dict, extra: dict) -> dict:
     """``base`` with ``extra`` merged in, mappings recursively (Snakemake's update_config)."""
     out = dict(base)
@@ -136,7 +109,3 @@ def run_document(configfiles: list[str], overrides: dict | None = None) -> dict:
             raise ConfigError(f"{f}: empty or not a mapping of keys")
         doc = _merged(doc, part)
     return _merged(doc, overrides or {})
-
-
-def load_config(path: str | Path) -> RunConfig:
-    return parse_config(load_yaml(path), str(path))

@@ -22,16 +22,16 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Callable
 
-from capmap.config.capacity import PlanTask, payload_label
+from capmap.config.jobs import PlanTask, payload_label
 from capmap.config.robot_file import referenced_files
-from capmap.config.run import RunConfig
+from capmap.config.run import SECTION_TYPES, RunConfig
 from capmap.config.typed import file_paths as _file_fields
 from capmap.config.typed import get_path, partial, rounded, to_doc
 from capmap.io.datasets import canonical, config_hash
 from capmap.io.fingerprint import file_fingerprints
 
-__all__ = ["Stage", "STAGES", "StageConfig", "stage_slice", "stage_config", "upstream_fields", "canonical", "config_hash",
-           "payload_label", "files_of"]
+__all__ = ["Stage", "STAGES", "StageConfig", "stage_slice", "stage_config", "upstream_fields", "section_modules",
+           "canonical", "config_hash", "payload_label", "files_of"]
 
 
 @dataclass(frozen=True)
@@ -139,6 +139,16 @@ def stage_slice(cfg: RunConfig, stage: str, job: PlanTask | None = None) -> dict
     if files:
         out["files"] = dict(sorted(files.items()))
     return out
+
+
+def section_modules(sl: dict) -> list[str]:
+    """The config modules whose types a job rebuilds from its slice ``sl`` (the sections it holds):
+    their code is part of the job's code fingerprint, as the modules its script imports are."""
+    names = set()
+    for name in sl.get("run", {}):
+        ann = RunConfig.__dataclass_fields__[name].type
+        names |= {t for t in SECTION_TYPES if t in str(ann).replace("|", " ").replace(",", " ").split()}
+    return sorted({SECTION_TYPES[t] for t in names})
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,10 @@ Field metadata understood here (``dataclasses.field(metadata=...)``):
 
 from __future__ import annotations
 
+import builtins
 import dataclasses
+import importlib
+import sys
 import types
 import typing
 from functools import lru_cache
@@ -79,9 +82,27 @@ def to_doc(obj: Any) -> Any:
     return obj
 
 
+class _Names(dict):
+    """A module's names, and the types its ``SECTION_TYPES`` names (imported on first use)."""
+
+    def __init__(self, module):
+        super().__init__(vars(module))
+        self.lazy = getattr(module, "SECTION_TYPES", {})
+
+    def __missing__(self, name: str):
+        if name not in self.lazy:
+            raise KeyError(name)
+        return getattr(importlib.import_module(self.lazy[name]), name)
+
+
 @lru_cache(maxsize=None)
-def _hints(cls: type) -> dict:
-    return typing.get_type_hints(cls)
+def _hint(cls: type, name: str):
+    """The type of field ``name`` of ``cls``, resolved alone (a string annotation evaluated in its
+    module's names): rebuilding a partial document imports only the types of its fields."""
+    ann = cls.__dataclass_fields__[name].type
+    if not isinstance(ann, str):
+        return ann
+    return eval(ann, {"__builtins__": builtins}, _Names(sys.modules[cls.__module__]))  # noqa: S307 (our annotations)
 
 
 def _args(hint) -> tuple:
@@ -135,10 +156,9 @@ def partial(cls: type, doc: dict, path: str = "") -> Any:
     converted by their type hints, the others are :class:`Undeclared`. Built without ``__init__``:
     the values were validated when the whole configuration was."""
     obj = object.__new__(cls)
-    hints = _hints(cls)
     for f in dataclasses.fields(cls):
         where = f"{path}.{f.name}" if path else f.name
-        value = _convert(hints[f.name], doc[f.name], where) if f.name in doc else Undeclared(where)
+        value = _convert(_hint(cls, f.name), doc[f.name], where) if f.name in doc else Undeclared(where)
         object.__setattr__(obj, f.name, value)
     return obj
 

@@ -48,9 +48,28 @@ def _module_file(name: str) -> Path | None:
     return None
 
 
+def _type_checking(node: ast.AST) -> bool:
+    """``if TYPE_CHECKING:`` (or ``typing.TYPE_CHECKING``): imports for annotations only, never run."""
+    t = getattr(node, "test", None)
+    return isinstance(node, ast.If) and (isinstance(t, ast.Name) and t.id == "TYPE_CHECKING" or
+                                         isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING")
+
+
+def _run_nodes(tree: ast.AST):
+    """Every node of ``tree`` but those under ``if TYPE_CHECKING:`` (their ``else`` is kept)."""
+    todo = [tree]
+    while todo:
+        node = todo.pop()
+        yield node
+        if _type_checking(node):
+            todo.extend(node.orelse)
+            continue
+        todo.extend(ast.iter_child_nodes(node))
+
+
 def _imports(name: str, tree: ast.Module) -> set[str]:
     out = set()
-    for node in ast.walk(tree):
+    for node in _run_nodes(tree):
         if isinstance(node, ast.Import):
             for a in node.names:
                 if a.name.split(".")[0] == "capmap":
@@ -162,13 +181,18 @@ def code_fingerprint(name: str) -> str:
     return h.hexdigest()[:16]
 
 
-@lru_cache(maxsize=None)
-def script_fingerprint(path: str | Path) -> str:
+def script_fingerprint(path: str | Path, also: tuple[str, ...] | list[str] = ()) -> str:
     """16 hex digits of a Snakemake script (its syntax tree: not its comments) and of every capmap
-    module it runs (:func:`code_fingerprint` of each module it imports)."""
+    module it runs (:func:`code_fingerprint` of each module it imports, and of the modules ``also``
+    names: those a job imports by name at run time, e.g. the config sections its slice holds)."""
+    return _script_fingerprint(str(path), tuple(sorted(set(also))))
+
+
+@lru_cache(maxsize=None)
+def _script_fingerprint(path: str, also: tuple[str, ...]) -> str:
     tree = _tree(Path(path))
     h = hashlib.sha256(ast.dump(tree).encode())
-    mods = sorted(_imports("__main__", tree))
+    mods = sorted(_imports("__main__", tree) | set(also))
     for mod in mods:
         h.update(code_fingerprint(mod).encode())
     return h.hexdigest()[:16]

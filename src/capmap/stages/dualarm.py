@@ -8,16 +8,16 @@ import pandas as pd
 
 from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.scene_file import load_scene
-from capmap.dualarm.cloud import Envelope, fit_envelope, uncovered
-from capmap.dualarm.robot import DualArm, LinkCapsule, build_dual_arm, fit_capsules
+from capmap.dualarm.cloud import fit_envelope, uncovered
+from capmap.dualarm.robot import DualArm, build_dual_arm, fit_capsules
 from capmap.dualarm.scene import nearest_solid, scan
+from capmap.dualarm.tables import capsule_table, capsules_from, envelope_table
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.stages.common import stage_config
 
-__all__ = ["stage_dualarm_scan", "stage_dualarm_envelope", "stage_dualarm_capsules", "envelope_from", "robot_from",
-           "XYZ"]
+__all__ = ["stage_dualarm_scan", "stage_dualarm_envelope", "stage_dualarm_capsules", "robot_from", "XYZ"]
 
 XYZ = ["x_m", "y_m", "z_m"]
 
@@ -75,41 +75,15 @@ def stage_dualarm_envelope(cloud: str, out: str, slice_json: str) -> None:
     scene = load_scene(sc.run.dualarm.scene)
     tri_label = nearest_solid(scene, env.tri.mean(axis=1))
     seg_label = nearest_solid(scene, env.seg.mean(axis=1))
-    rows = []
-    for k, v in enumerate(env.tri):
-        rows.append({"kind": "triangle", "label": tri_label[k] or f"face {env.tri_patch[k]}", "group": int(env.tri_patch[k]),
-                     **_vertices(v), "radius_m": env.tri_radius[k], "n_points": int(env.patch_points[env.tri_patch[k]])})
-    for k, s in enumerate(env.seg):
-        rows.append({"kind": "segment", "label": seg_label[k] or f"capsule {k}", "group": k,
-                     **_vertices(np.vstack([s, np.full((1, 3), np.nan)])), "radius_m": env.seg_radius[k],
-                     "n_points": int(env.seg_points[k])})
-    df = pd.DataFrame(rows)
+    df = envelope_table(env, tri_label, seg_label)
     datasets.write(df, out, datasets.provenance("dualarm_envelope", sc.doc, seed=seed, cloud_points=len(pts),
                                                  uncovered_points=0))
     log.info(f"{len(env.patch_points)} faces ({len(env.tri)} triangles, radius {_span(env.tri_radius)}), "
              f"{len(env.seg)} capsules (radius {_span(env.seg_radius)}); all {len(pts)} points covered -> {out}")
 
 
-def _vertices(v: np.ndarray) -> dict:
-    return {f"{c}{k}_m": v[k, i] for k in range(3) for i, c in enumerate("xyz")}
-
-
 def _span(r: np.ndarray) -> str:
     return f"{1e3 * r.min():.0f}-{1e3 * r.max():.0f} mm" if len(r) else "-"
-
-
-def envelope_from(df: pd.DataFrame) -> tuple[Envelope, tuple[np.ndarray, np.ndarray]]:
-    """The envelope (and its labels) back from its dataset."""
-    cols = [[f"{c}{k}_m" for c in "xyz"] for k in range(3)]
-    tri = df[df.kind == "triangle"]
-    seg = df[df.kind == "segment"]
-    tri_v = np.stack([tri[c].to_numpy() for c in cols], axis=1)
-    seg_v = np.stack([seg[c].to_numpy() for c in cols[:2]], axis=1)
-    groups = tri.group.to_numpy()
-    env = Envelope(tri_v, tri.radius_m.to_numpy(), groups, seg_v, seg.radius_m.to_numpy(),
-                   np.array([tri.n_points[groups == g].iloc[0] for g in np.unique(groups)], int),
-                   seg.n_points.to_numpy())
-    return env, (tri.label.to_numpy(dtype=object), seg.label.to_numpy(dtype=object))
 
 
 def stage_dualarm_capsules(out: str, slice_json: str) -> None:
@@ -118,20 +92,12 @@ def stage_dualarm_capsules(out: str, slice_json: str) -> None:
     log = stage_logger(__name__, "dualarm capsules")
     robot = _build(sc.run.dualarm.robot)
     robot, balls = fit_capsules(robot)
-    rows = []
-    for c in robot.capsules:
-        centres, radii = balls[c.name]
-        d = c.b - c.a
-        t = np.clip((centres - c.a) @ d / max(d @ d, 1e-300), 0, 1)
-        excess = float((np.linalg.norm(centres - c.a - np.outer(t, d), axis=1) + radii - c.r).max())
-        if excess > 1e-9:
-            raise DataError(f"capsule {c.name} leaves its geometry uncovered by {excess:.3g} m")
-        rows.append({"name": c.name, "part": c.part, "order": c.order, "joint": c.joint,
-                     **{f"a{x}_m": c.a[i] for i, x in enumerate("xyz")}, **{f"b{x}_m": c.b[i] for i, x in enumerate("xyz")},
-                     "radius_m": c.r, "length_m": float(np.linalg.norm(d)), "covered_balls": len(centres),
-                     "max_excess_m": excess})
-    datasets.write(pd.DataFrame(rows), out, datasets.provenance("dualarm_capsules", sc.doc, robot=robot.description.name))
-    log.info(f"{len(rows)} capsules over {robot.description.name}'s collision geometry, every ball covered -> {out}")
+    df = capsule_table(robot, balls)
+    worst = df.loc[df.max_excess_m.idxmax()] if len(df) else None
+    if worst is not None and worst.max_excess_m > 1e-9:
+        raise DataError(f"capsule {worst['name']} leaves its geometry uncovered by {worst.max_excess_m:.3g} m")
+    datasets.write(df, out, datasets.provenance("dualarm_capsules", sc.doc, robot=robot.description.name))
+    log.info(f"{len(df)} capsules over {robot.description.name}'s collision geometry, every ball covered -> {out}")
 
 
 def _build(robot_file: str) -> DualArm:
@@ -146,8 +112,6 @@ def _build(robot_file: str) -> DualArm:
 def robot_from(robot_file: str, capsules: pd.DataFrame) -> DualArm:
     """The robot with its capsules read back from their dataset."""
     robot = _build(robot_file)
-    caps = tuple(LinkCapsule(r["name"], r["part"], int(r["order"]), r["joint"],
-                             np.array([r["ax_m"], r["ay_m"], r["az_m"]]), np.array([r["bx_m"], r["by_m"], r["bz_m"]]),
-                             float(r["radius_m"])) for _, r in capsules.iterrows())
+    caps = capsules_from(capsules)
     return DualArm(robot.description, robot.model, robot.geometry, robot.gripper_frames, robot.q_lower, robot.q_upper,
                    robot.v_max, caps)

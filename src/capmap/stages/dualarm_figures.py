@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.config.scene_file import load_scene
+from capmap.dualarm.tables import envelope_from
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.dualarm import (
@@ -16,7 +17,6 @@ from capmap.plots.dualarm import (
     joints,
 )
 from capmap.stages.common import stage_config
-from capmap.stages.dualarm import envelope_from
 from capmap.stages.dualarm_solve import setup
 
 __all__ = ["stage_dualarm_plots", "stage_dualarm_animation"]

@@ -18,14 +18,10 @@ from capmap.io.tables import write_table
 from capmap.reconfig.multiarm import platform_model
 from capmap.reconfig.planner import reconfigure
 from capmap.reconfig.problem import closure_errors, summarise
+from capmap.reconfig.tables import column, run_table
 from capmap.stages.common import stage_config
 
-__all__ = ["column", "stage_reconfig", "stage_reconfig_summary"]
-
-
-def column(joint: str) -> str:
-    """Column stem of a qualified joint name: 'arm2.J1' -> 'arm2_j1'."""
-    return joint.replace(".", "_").lower()
+__all__ = ["stage_reconfig", "stage_reconfig_summary"]
 
 
 def stage_reconfig(method: str, out: str, out_timing: str, slice_json: str) -> None:
@@ -44,25 +40,7 @@ def stage_reconfig(method: str, out: str, out_timing: str, slice_json: str) -> N
     run = reconfigure(split, problem.fixed_end, problem.q0, problem.law, settings)
     wall = time.perf_counter() - t0
     closure = closure_errors(problem, platform_model(problem.description), run)
-    df = pd.DataFrame({"method": method, "t_s": run.t_s, "law_phase": run.u, "time_scale": run.time_scale})
-    for c, j in enumerate(split.moving.joints):
-        df[f"q_{column(j)}_deg"] = np.rad2deg(run.q[:, c])
-    for j, v in zip(split.fixed.joints, split.fixed.values(problem.state)):
-        df[f"q_{column(j)}_deg"] = np.rad2deg(v)
-    for c, j in enumerate(split.moving.joints):
-        df[f"qd_{column(j)}_deg_s"] = np.rad2deg(run.qd[:, c])
-    for j in split.fixed.joints:
-        df[f"qd_{column(j)}_deg_s"] = 0.0
-    df["passive_theta_deg"] = np.rad2deg(run.theta)
-    df["passive_d_m"] = run.d
-    df["manipulability"] = run.m
-    df["dm_dt"] = run.dm_dt
-    df["min_singular_value"] = run.min_singular_value
-    df["kappa"] = run.kappa
-    df["closure_pos_err_m"] = np.linalg.norm(closure[:, :3], axis=1)
-    df["closure_rot_err_rad"] = np.linalg.norm(closure[:, 3:], axis=1)
-    df["task_pos_err_m"] = np.linalg.norm(run.task_error[:, :3], axis=1)
-    df["task_rot_err_rad"] = np.linalg.norm(run.task_error[:, 3:], axis=1)
+    df = run_table(method, problem, run, closure)
     summary = summarise(run, closure, settings, split.moving.joints)
     prov = datasets.provenance(
         "reconfig", sc.doc, method=method, status=run.status, message=run.message, unlocked=split.unlocked,

@@ -10,8 +10,8 @@ from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.reconfig import animation, joint_rates, manipulability, passive_joint
 from capmap.reconfig.multiarm import link_segments, platform_model
+from capmap.reconfig.tables import column
 from capmap.stages.common import stage_config
-from capmap.stages.reconfig import column
 
 __all__ = ["stage_reconfig_plots", "stage_reconfig_animation"]
 

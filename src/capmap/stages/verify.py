@@ -12,7 +12,7 @@ from capmap.capacity import branch_planning, planning
 from capmap.capacity.directions import AXIS_LABELS, axis_of
 from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.capacity.verification import PathResult, judge, verify_path
-from capmap.config.capacity import PlanTask
+from capmap.config.jobs import PlanTask
 from capmap.config.slices import StageConfig
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.limits import AffineLimits

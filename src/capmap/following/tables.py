@@ -1,0 +1,90 @@
+"""A whole path followed segment by segment, each also solved by TOPP-RA on the same path and
+limits, and the family's tables of it (column schemas, units in the names): the follower's time
+series, TOPP-RA's, and the comparison row."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+from typing import Callable
+
+import numpy as np
+import pandas as pd
+
+from capmap.core.reduction import LockedArm
+from capmap.following.comparison import FollowComparison, compare
+from capmap.following.follower import FollowSettings, follow_segment
+from capmap.following.toppra_reference import time_optimal
+
+__all__ = ["PathRun", "follow_path", "follow_tables", "summary_row"]
+
+
+@dataclass(frozen=True)
+class PathRun:
+    """The followed segments and TOPP-RA's solutions on them (one each per segment), and their
+    comparison over the whole path."""
+
+    followed: list
+    optimal: list
+    comparison: FollowComparison
+
+
+def follow_path(arm: LockedArm, waypoints: np.ndarray, rotation: np.ndarray, q_start: np.ndarray,
+                settings: FollowSettings, progress: Callable[[str], None] = lambda _: None) -> PathRun:
+    """Follow waypoints (W, 3) m as straight segments at ``rotation`` (3, 3) from q_start
+    (n_active,) rad, each segment continuing from the last one's final configuration."""
+    limits = settings.torque_limits(arm)
+    followed, optimal = [], []
+    q = q_start
+    for k in range(len(waypoints) - 1):
+        t0 = time.perf_counter()
+        seg = follow_segment(arm, waypoints[k], waypoints[k + 1], rotation, q, settings)
+        el = time.perf_counter() - t0
+        top = time_optimal(arm, seg.table, settings.payload_kg, limits, settings.v_max_mps, settings.a_max_mps2,
+                           sample_dt_s=settings.period_s)
+        r = seg.result
+        followed.append(seg)
+        optimal.append(top)
+        progress(f"segment {k + 1}/{len(waypoints) - 1}: {seg.table.length_m:.3f} m, command {seg.command.duration_s:.3f} s, "
+                 f"follower {r.duration_s:.3f} s ({int(r.limited.sum())} of {len(r.t_s)} periods limited), "
+                 f"TOPP-RA {top.duration_s:.3f} s; {el:.2f} s wall incl. path preparation and exact evaluation")
+        q = seg.q[-1]
+    return PathRun(followed, optimal, compare(followed, optimal, limits))
+
+
+def follow_tables(case: str, arm: LockedArm, run: PathRun) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The follower's time series (one row per control period: command, state, lag, torques,
+    joints, deviation) and TOPP-RA's (its samples and torques), on path and time axes running on
+    across segments."""
+    joints = arm.active_joint_numbers
+    parts, tparts = [], []
+    t_off = t_off_topp = s_off = 0.0
+    for k, (seg, top) in enumerate(zip(run.followed, run.optimal)):
+        r = seg.result
+        df = pd.DataFrame({"case": case, "segment": k, "t_s": t_off + r.t_s, "s_cmd_m": s_off + r.s_cmd,
+                           "sd_cmd_mps": r.sd_cmd, "sdd_cmd_mps2": r.sdd_cmd, "s_m": s_off + r.s, "sd_mps": r.sd,
+                           "sdd_mps2": r.sdd, "lag_m": r.s_cmd - r.s, "limited": r.limited,
+                           "infeasible": r.infeasible})
+        for prefix, values in (("tau_cmd", seg.tau_cmd), ("tau", seg.tau)):
+            for c, jn in enumerate(joints):
+                df[f"{prefix}_j{jn}_nm"] = values[:, c]
+        for c, jn in enumerate(joints):
+            df[f"q_j{jn}_deg"] = np.rad2deg(seg.q[:, c])
+        df["deviation_m"] = seg.deviation_m
+        df["deviation_rad"] = seg.deviation_rad
+        parts.append(df)
+        tdf = pd.DataFrame({"case": case, "segment": k, "t_s": t_off_topp + top.t_s, "s_m": s_off + top.s,
+                            "sd_mps": top.sd})
+        for c, jn in enumerate(joints):
+            tdf[f"tau_j{jn}_nm"] = top.tau[:, c]
+        tparts.append(tdf)
+        t_off += r.duration_s
+        t_off_topp += top.duration_s
+        s_off += seg.table.length_m
+    return pd.concat(parts, ignore_index=True), pd.concat(tparts, ignore_index=True)
+
+
+def summary_row(case: str, arm: LockedArm, label: str, settings: FollowSettings, run: PathRun) -> pd.DataFrame:
+    """The comparison as the summary table's one row."""
+    return pd.DataFrame([{"case": case, "robot": arm.robot.name, "path": label, "payload_kg": settings.payload_kg,
+                          **asdict(run.comparison), "period_s": settings.period_s}])
