@@ -326,6 +326,8 @@ def load_yaml(path: str | Path) -> Any:
         at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         problem = getattr(exc, "problem", None) or (str(exc).splitlines() or [type(exc).__name__])[0]
         problem = f"{exc.context}: {problem}" if getattr(exc, "context", None) else problem
+        if "nesting depth" in problem:  # PyYAML >= 6.0.4's own limit (1000), met while scanning ahead of our count
+            raise ConfigError(f"{name}: nested deeper than {MAX_DEPTH} levels{at}") from None
         raise ConfigError(f"{name}: malformed YAML{at}: {shown(problem)}") from None
     if isinstance(doc, dict) and "__use_yte__" in doc:
         raise ConfigError(f"{name}: __use_yte__: capmap does not evaluate YTE templates (they run Python code from a "
