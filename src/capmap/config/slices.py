@@ -18,6 +18,7 @@ rule's params -> :func:`stage_config` in the job -> the numerics.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Callable
@@ -27,6 +28,7 @@ from capmap.config.robot_file import referenced_files
 from capmap.config.run import SECTION_TYPES, RunConfig
 from capmap.config.typed import file_paths as _file_fields
 from capmap.config.typed import get_path, partial, rounded, to_doc
+from capmap.errors import CapmapError
 from capmap.io.datasets import canonical, config_hash
 from capmap.io.fingerprint import file_fingerprints
 
@@ -126,7 +128,7 @@ def stage_slice(cfg: RunConfig, stage: str, job: PlanTask | None = None) -> dict
     for path in upstream_fields(cfg, stage):
         is_job = path == "job" or path.startswith("job.")
         if is_job and job is None:
-            raise ValueError(f"stage {stage} reads {path}: give its job")
+            raise CapmapError(f"stage {stage} reads {path}: give its job (a PlanTask)")
         root, key, sub = (job, "job", path[4:]) if is_job else (cfg, "run", path)
         value, meta = get_path(root, sub) if sub else (root, {})
         doc = rounded(to_doc(value), meta)
@@ -147,7 +149,7 @@ def section_modules(sl: dict) -> list[str]:
     names = set()
     for name in sl.get("run", {}):
         ann = RunConfig.__dataclass_fields__[name].type
-        names |= {t for t in SECTION_TYPES if t in str(ann).replace("|", " ").replace(",", " ").split()}
+        names |= set(re.findall(r"\w+", str(ann))) & set(SECTION_TYPES)
     return sorted({SECTION_TYPES[t] for t in names})
 
 
