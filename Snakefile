@@ -17,7 +17,7 @@ from capmap.config.run import run_document
 from capmap.errors import CapmapError
 
 try:
-    _doc = run_document([str(f) for f in workflow.overwrite_configfiles], workflow.config_settings.overwrite_config)
+    _doc = run_document([str(f) for f in workflow.overwrite_configfiles], dict(workflow.config_settings.config))
 except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
 config.clear()

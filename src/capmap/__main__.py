@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from capmap.config.checks import check_run_config
-from capmap.config.validation import load_yaml
+from capmap.config.run import run_document
 from capmap.errors import CapmapError
 from capmap.io.datasets import verify_catalogue
 
@@ -59,13 +59,14 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _check_config(files: list[str]) -> int:
-    for f in files:
-        try:
-            run = check_run_config(load_yaml(f), f)
-        except CapmapError as exc:
-            print(f"capmap: {exc}", file=sys.stderr)
-            return 1
-        print(f"capmap: {f}: valid; run {run.name!r}; {run.failure.describe()}")
+    """The files merged in order, as ``--configfile A B`` merges them."""
+    source = ", ".join(files)
+    try:
+        run = check_run_config(run_document(files), source)
+    except CapmapError as exc:
+        print(f"capmap: {exc}", file=sys.stderr)
+        return 1
+    print(f"capmap: {source}: valid; run {run.name!r}; {run.failure.describe()}")
     return 0
 
 

@@ -101,3 +101,23 @@ def _ancestors(stage):
     for before in STAGES[stage].after:
         out |= _ancestors(before)
     return out
+
+
+def test_an_undeclared_field_raises_on_comparison_and_formatting_too(cfg):
+    sc = stage_config(canonical(stage_slice(cfg, "model")))
+    for use in (lambda v: v == "branch", lambda v: f"{v}", lambda v: f"{v:g}", lambda v: str(v), lambda v: -v):
+        with pytest.raises(CapmapError, match="config field planning is not in this stage's slice"):
+            use(sc.run.planning)
+
+
+def test_an_absent_section_comes_back_as_none_and_the_atlas_start_is_resolved(doc):
+    d = copy.deepcopy(doc)
+    for section in ("reconfig", "dualarm", "follow"):
+        d.pop(section)
+    d["task"].pop("start_m")  # the start is then FK(q_ini): the atlas maps read the resolved one
+    c = check_run_config(d)
+    for stage in ("reconfig_nullspace", "dualarm_optimise"):
+        sc = stage_config(canonical(stage_slice(c, stage)))
+        assert sc.run.reconfig is None if stage.startswith("reconfig") else sc.run.dualarm is None
+    atlas = stage_config(canonical(stage_slice(c, "atlas_map"))).run
+    assert atlas.failure.start_m == pytest.approx(c.failure.start_m, abs=1e-9) and None not in atlas.failure.start_m

@@ -161,6 +161,7 @@ CLOUD_CASES = [  # (file maker, expected text); every case names dualarm.cloud.f
     (lambda t: _cloud(t, "folder.csv", folder=True), "not a regular file"),
     (lambda t: _cloud(t, "garbage.parquet", b"PAR1 not really"), "not a Parquet file"),
     (lambda t: _cloud(t, "points.txt", b"x_m,y_m,z_m\n0,0,0\n"), "not a cloud file"),
+    (lambda t: _cloud(t, "spaced.csv", b"x_m, y_m, z_m\n0,0,0\n"), "no column y_m"),  # as pandas would name them
 ]
 
 

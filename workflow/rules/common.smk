@@ -1,5 +1,6 @@
 # Validation and config slices: run once, before any job (snakemake-workflows' common.smk).
 import json
+import shlex
 import sys
 from pathlib import Path
 
@@ -10,7 +11,9 @@ from capmap.io.datasets import missing_catalogued, rebuild_hint_config
 from capmap.io.fingerprint import script_fingerprint
 from capmap.io.runs import stale_outputs
 
-CONFIG_ARGS = "".join(f" --configfile {f}" for f in workflow.overwrite_configfiles)  # repeated in printed commands
+CONFIG_ARGS = "".join(f" --configfile {shlex.quote(str(f))}" for f in workflow.overwrite_configfiles) + (
+    " --config " + " ".join(shlex.quote(a) for a in workflow.config_settings.config_args)
+    if workflow.config_settings.config_args else "")  # the run's config, repeated in printed commands
 rebuild_hint_config(CONFIG_ARGS)  # the jobs' rebuild hints (capmap.io.datasets.read) name the config too
 
 # validate once, before any job: schema, robot file, locked joint, limits, task poses, follow cases

@@ -46,7 +46,7 @@ def model_table(robot: Robot) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def sample_table(arm: LockedArm, sc, edge_m: float | None, log) -> pd.DataFrame:
+def sample_table(arm: LockedArm, sc, edge_m: float | None, log=None) -> pd.DataFrame:
     """The sampled points of the locked arm: joint-space Monte Carlo (seeded), plus for
     ``voxel_fill`` every voxel (of edge_m) of their bounding box. ``sc``: the sampling settings
     (mode, n_points, seed, jitter_per_voxel: a :class:`capmap.config.capacity.SamplingConfig`)."""
@@ -58,8 +58,9 @@ def sample_table(arm: LockedArm, sc, edge_m: float | None, log) -> pd.DataFrame:
         fill, kind = sampling.voxel_fill(grid, sc.jitter_per_voxel, rng)
         pos = np.concatenate([pos, fill])
         source = np.concatenate([source, kind + 1])
-        log.info(f"voxel_fill: grid {grid.shape} of {grid.edge_m} m = {grid.n_voxels} voxels, "
-                 f"+{len(fill)} points (centre + {sc.jitter_per_voxel} jittered each)")
+        if log:
+            log.info(f"voxel_fill: grid {grid.shape} of {grid.edge_m} m = {grid.n_voxels} voxels, "
+                     f"+{len(fill)} points (centre + {sc.jitter_per_voxel} jittered each)")
     return pd.DataFrame({"point_id": np.arange(len(pos)), "x_m": pos[:, 0], "y_m": pos[:, 1], "z_m": pos[:, 2],
                          "source": pd.Categorical.from_codes(source, ["joint_sample", "voxel_centre", "voxel_jitter"])})
 

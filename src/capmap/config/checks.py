@@ -5,6 +5,7 @@ here their messages are re-worded with the config keys (:meth:`CapmapError.in_te
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
@@ -36,6 +37,17 @@ __all__ = ["check_run_config", "check_goal", "check_dt", "check_follow", "check_
            "check_dualarm"]
 
 
+@contextmanager
+def _named(source: str):
+    """A ConfigError raised inside, prefixed with the config's name when it does not start with it."""
+    try:
+        yield
+    except ConfigError as exc:
+        if str(exc).startswith(f"{source}:"):
+            raise
+        raise ConfigError(f"{source}: {exc}") from None
+
+
 def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     """Everything that can be checked before any job: schema, robot file, lock, limits, directions."""
     cfg = parse_config(doc, source)
@@ -59,11 +71,14 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
     check_on_grid(cfg, failure, estimate, source)
-    check_motions(cfg, failure, source)
+    with _named(source):
+        check_motions(cfg, failure, source)
     if cfg.follow is not None:
-        check_follow(cfg.follow, cfg, source)
+        with _named(source):
+            check_follow(cfg.follow, cfg, source)
     if cfg.reconfig is not None:
-        rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
+        with _named(source):
+            rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
     if cfg.atlas is not None:
         check_atlas(cfg.atlas, robot, source)
         keys = {"n_points": "atlas.sampling.n_points", "edge_m": "atlas.edge_m",
@@ -220,6 +235,12 @@ def check_dualarm(cfg: RunConfig, source: str = "config") -> None:
             np.any(scene.q_start > robot.q_upper):
         raise ConfigError(f"{source}: dualarm.scene = {da.scene!r}: start_configuration_rad is outside the joint limits "
                           f"of {robot.description.name} (or has not {len(robot.q_lower)} values)")
+    with _named(source):
+        _dualarm_sizes(da, scene)
+
+
+def _dualarm_sizes(da, scene) -> None:
+    """The user's cloud file readable; the horizons, the re-check grid and the synthetic scan fit."""
     if da.cloud_file is not None:
         check_cloud_file(da.cloud_file)
     for key, h in (("dualarm.horizon.nodes", da.horizon), ("dualarm.check.nodes", da.check.horizon)):

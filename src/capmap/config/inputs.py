@@ -55,12 +55,12 @@ def check_cloud_file(path: str, key: str = "dualarm.cloud.file", limit: int = MA
         with open(path, "rb") as f:
             head = f.readline(65536)
         try:
-            text = head.decode("utf-8")
+            text = head.decode("utf-8-sig")  # a byte-order mark, as pandas reads it
         except UnicodeDecodeError:
             raise ConfigError(f"{key} = {shown(path)}: not a text (UTF-8) CSV file") from None
         if "\x00" in text:
             raise ConfigError(f"{key} = {shown(path)}: not a text CSV file (it contains NUL bytes)")
-        columns = [c.strip().strip('"') for c in text.strip().split(",")]
+        columns = [c.strip('"') for c in text.rstrip("\r\n").split(",")]  # as pandas names them: spaces kept
     missing = [c for c in CLOUD_COLUMNS if c not in columns]
     if missing:
         raise ConfigError(f"{key} = {shown(path)}: no column {missing[0]} (need a header with "

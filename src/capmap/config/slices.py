@@ -74,8 +74,9 @@ STAGES: dict[str, Stage] = {
     "plan": Stage(_plan, ("refine",)),
     "verify": Stage(("job", "verification.dt_s"), ("plan",)),
     "gain": Stage(("task.payload_kg", "planning.gain_tasks", "verification.dt_s"), ("refine",)),
-    "atlas_map": Stage(("robot", "limits", "verification.dt_s", "atlas.sampling", "atlas.directions", "atlas.edge_m")
-                       + _TASK_MOTION + tuple(f"task.{k}" for k in ("payload_kg", "start_m", "goal_m", "q_ini_deg"))),
+    "atlas_map": Stage(("robot", "limits", "verification.dt_s", "atlas.sampling", "atlas.directions", "atlas.edge_m",
+                        "failure.start_m")  # the start (given or FK(q_ini)) does not depend on the lock
+                       + _TASK_MOTION + tuple(f"task.{k}" for k in ("payload_kg", "goal_m", "q_ini_deg"))),
     "atlas": Stage(("atlas",), ("atlas_map",)),
     # family 2: following (space: the verified path of its payload, not the verification's sampling)
     "follow_space": Stage(("job", "follow.period_s", "follow.space"), ("plan",)),
@@ -112,6 +113,16 @@ def files_of(path: str) -> dict[str, str]:
     return file_fingerprints([f for f in referenced_files(path) if f.is_file()])
 
 
+def _absent_parent(root, sub: str) -> str:
+    """The first proper prefix of dotted ``sub`` whose value under ``root`` is None ('' when none)."""
+    parts, obj = sub.split("."), root
+    for k in range(len(parts) - 1):
+        obj = getattr(obj, parts[k])
+        if obj is None:
+            return ".".join(parts[:k + 1])
+    return ""
+
+
 def _put(doc: dict, path: str, value) -> None:
     *parents, leaf = path.split(".")
     for name in parents:
@@ -130,6 +141,10 @@ def stage_slice(cfg: RunConfig, stage: str, job: PlanTask | None = None) -> dict
         if is_job and job is None:
             raise CapmapError(f"stage {stage} reads {path}: give its job (a PlanTask)")
         root, key, sub = (job, "job", path[4:]) if is_job else (cfg, "run", path)
+        absent = _absent_parent(root, sub)
+        if absent:  # a section the config does not have: the job sees None, not a phantom section
+            _put(out.setdefault(key, {}), absent, None)
+            continue
         value, meta = get_path(root, sub) if sub else (root, {})
         doc = rounded(to_doc(value), meta)
         if sub:

@@ -36,7 +36,8 @@ ROUND = {"round": 9}
 
 
 class Undeclared:
-    """Stands for a config field that is not in a stage's slice: any use raises, naming it."""
+    """Stands for a config field that is not in a stage's slice: any use raises, naming it (only
+    ``x is None`` cannot be trapped: test declared fields, never undeclared ones)."""
 
     __slots__ = ("path",)
 
@@ -49,7 +50,8 @@ class Undeclared:
 
     __getattr__ = __call__ = __iter__ = __len__ = __getitem__ = __float__ = __int__ = __index__ = _fail
     __bool__ = __add__ = __radd__ = __sub__ = __rsub__ = __mul__ = __rmul__ = __truediv__ = __lt__ = __gt__ = _fail
-    __le__ = __ge__ = __array__ = _fail
+    __le__ = __ge__ = __array__ = __eq__ = __ne__ = __hash__ = __str__ = __format__ = __fspath__ = _fail
+    __neg__ = __abs__ = __pow__ = __rpow__ = __rtruediv__ = __round__ = __contains__ = __mod__ = __floordiv__ = _fail
 
     def __repr__(self) -> str:
         return f"<undeclared {self.path}>"

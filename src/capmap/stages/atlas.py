@@ -5,6 +5,8 @@ map is resolved as for the main run (the IK branch at the start nearest to task.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 
@@ -41,12 +43,12 @@ def stage_atlas_map(out_voxels: str, out_summary: str, slice_json: str, joint: i
     log.info(f"IK method {ik.method_for(arm.chain)}; {len(dirs)} directions; edge {run.atlas.edge_m} m")
     start_note, q_start, offset = "", None, np.nan
     try:  # the start configuration on this lock, as for the main run
-        failure = resolve_failure(robot, LockConfig(joint, angle_deg), task)
+        failure = resolve_failure(robot, LockConfig(joint, angle_deg), replace(task, start_m=run.failure.start_m))
         q_start = np.deg2rad(np.asarray(failure.q_start_deg))[arm.active]
         offset = failure.offset_deg
     except CapmapError as exc:
         start_note = f"start: {exc}".replace("config: ", "")
-    start = None if task.start_m is None else np.asarray(task.start_m, dtype=float)
+    start = np.asarray(run.failure.start_m, dtype=float)
     at = AtlasTask(task.rotation, task.motion, run.limits.resolve(robot.n_joints).for_arm(arm), start,
                    np.asarray(task.goal_m, dtype=float), task.payload_kg, run.verification.dt_s, q_start, offset,
                    start_note)

@@ -25,7 +25,7 @@ XYZ = ["x_m", "y_m", "z_m"]
 def _read_cloud(path: str) -> np.ndarray:
     """A user's cloud file: CSV or Parquet with columns x_m, y_m, z_m (base frame)."""
     try:
-        df = pd.read_parquet(path) if str(path).endswith(".parquet") else pd.read_csv(path)
+        df = pd.read_parquet(path) if str(path).lower().endswith(".parquet") else pd.read_csv(path)
     except (OSError, ValueError, UnicodeDecodeError) as exc:
         raise ConfigError(f"dualarm.cloud.file = {path!r}: cannot be read ({str(exc).splitlines()[0]})") from None
     missing = [c for c in XYZ if c not in df.columns]
@@ -93,9 +93,9 @@ def stage_dualarm_capsules(out: str, slice_json: str) -> None:
     robot = _build(sc.run.dualarm.robot)
     robot, balls = fit_capsules(robot)
     df = capsule_table(robot, balls)
-    worst = df.loc[df.max_excess_m.idxmax()] if len(df) else None
-    if worst is not None and worst.max_excess_m > 1e-9:
-        raise DataError(f"capsule {worst['name']} leaves its geometry uncovered by {worst.max_excess_m:.3g} m")
+    bad = df[df.max_excess_m > 1e-9]  # the first, in the capsules' order
+    if len(bad):
+        raise DataError(f"capsule {bad.name.iloc[0]} leaves its geometry uncovered by {bad.max_excess_m.iloc[0]:.3g} m")
     datasets.write(df, out, datasets.provenance("dualarm_capsules", sc.doc, robot=robot.description.name))
     log.info(f"{len(df)} capsules over {robot.description.name}'s collision geometry, every ball covered -> {out}")
 
