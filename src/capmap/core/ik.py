@@ -234,55 +234,54 @@ class IKMethod(ABC):
         return _finish(arm.chain, theta, ok, T, arm.q_lower, arm.q_upper, tol, self.name)
 
 
+class _ShapeMethod(IKMethod):
+    """A complete method for one chain shape, solved on the chain or, ``reversed``, from its tip (on
+    the inverse chain, the angles mapped back): subclasses give ``_label``, ``_shape`` and ``_raw``."""
+
+    reversed: bool = False
+    _label: str
+    _shape: staticmethod
+    _raw: staticmethod
+
+    @property
+    def name(self) -> str:
+        return f"{self._label}_reversed" if self.reversed else self._label
+
+    @property
+    def complete(self) -> bool:
+        return True
+
+    def applies(self, chain: Chain) -> bool:
+        return chain.n == 6 and self._shape(chain.reversed()) if self.reversed else self._shape(chain)
+
+    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if not self.reversed:
+            return self._raw(arm.chain, T)
+        theta_r, ok = self._raw(arm.chain.reversed(), inverse_transform(T))
+        return -theta_r[..., ::-1], ok
+
+
 @dataclass(frozen=True)
-class ClosedForm(IKMethod):
+class ClosedForm(_ShapeMethod):
     """Closed form (complete, up to 8 branches; :mod:`capmap.core.ik_closed`) for chains
     ``0 | 1 2 3 parallel | 4 5 intersecting``; ``reversed``: that shape from the tip, solved on the
     inverse chain."""
 
     reversed: bool = False
-
-    @property
-    def name(self) -> str:
-        return "closed_form_reversed" if self.reversed else "closed_form"
-
-    @property
-    def complete(self) -> bool:
-        return True
-
-    def applies(self, chain: Chain) -> bool:
-        return chain.n == 6 and closed_form_shape(chain.reversed()) if self.reversed else closed_form_shape(chain)
-
-    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if not self.reversed:
-            return ik_closed.branches(arm.chain, T)
-        theta_r, ok = ik_closed.branches(arm.chain.reversed(), inverse_transform(T))
-        return -theta_r[..., ::-1], ok
+    _label = "closed_form"
+    _shape = staticmethod(closed_form_shape)
+    _raw = staticmethod(ik_closed.branches)
 
 
 @dataclass(frozen=True)
-class SemiAnalytic(IKMethod):
+class SemiAnalytic(_ShapeMethod):
     """The semi-analytical 1-D search over joint 0 (complete; :mod:`capmap.core.ik_semi`) for chains
     ``0 | 1 | 2 3 parallel | 4 5 intersecting``; ``reversed``: that shape from the tip."""
 
     reversed: bool = False
-
-    @property
-    def name(self) -> str:
-        return "semi_analytic_reversed" if self.reversed else "semi_analytic"
-
-    @property
-    def complete(self) -> bool:
-        return True
-
-    def applies(self, chain: Chain) -> bool:
-        return chain.n == 6 and semi_analytic_shape(chain.reversed()) if self.reversed else semi_analytic_shape(chain)
-
-    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if not self.reversed:
-            return ik_semi.candidates(arm.chain, T)
-        theta_r, ok = ik_semi.candidates(arm.chain.reversed(), inverse_transform(T))
-        return -theta_r[..., ::-1], ok
+    _label = "semi_analytic"
+    _shape = staticmethod(semi_analytic_shape)
+    _raw = staticmethod(ik_semi.candidates)
 
 
 @dataclass(frozen=True)
