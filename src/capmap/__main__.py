@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from capmap.config.checks import check_run_config
-from capmap.config.run import run_document
+from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.errors import CapmapError
 from capmap.io.datasets import verify_catalogue
 
@@ -29,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
     chk = sub.add_parser("check", help="verify the catalogued datasets (sha256, rows)")
     chk.add_argument("runs", nargs="*", help="run folders, results/<run> (default: every run under results/)")
     cfg = sub.add_parser("check-config", help="read and check config files as the workflow does, before any job")
-    cfg.add_argument("files", nargs="*", default=["config/config.yaml"], help="config files (default: config/config.yaml)")
+    cfg.add_argument("files", nargs="*", default=[DEFAULT_CONFIG], help=f"config files (default: {DEFAULT_CONFIG})")
     args = ap.parse_args(argv)
     if args.command == "check-config":
         return _check_config(args.files)

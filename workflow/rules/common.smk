@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 
 from capmap.config import canonical, check_run_config, main_task, payload_label, stage_slice
+from capmap.config.run import DEFAULT_CONFIG
 from capmap.config.slices import section_modules
 from capmap.errors import CapmapError
 from capmap.io.datasets import missing_catalogued, rebuild_hint_config
@@ -18,7 +19,7 @@ rebuild_hint_config(CONFIG_ARGS)  # the jobs' rebuild hints (capmap.io.datasets.
 
 # validate once, before any job: schema, robot file, locked joint, limits, task poses, follow cases
 try:
-    RUN = check_run_config(config, ", ".join(map(str, workflow.overwrite_configfiles)) or "config/config.yaml")
+    RUN = check_run_config(config, ", ".join(map(str, workflow.overwrite_configfiles)) or DEFAULT_CONFIG)
 except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
 OUT = f"results/{RUN.name}"  # each run (config key `run`, else the config file's name) in its own folder
@@ -52,15 +53,17 @@ def params(stage, script, job=None):
     fields it reads, and the content hashes of the files they name) plus the fingerprint of the code
     it runs (the script's syntax tree and every capmap module it imports; capmap.io.fingerprint), so
     that a change of either reruns it and a comment does not. Recorded in the outputs' provenance."""
-    path = Path(workflow.basedir) / "workflow" / "scripts" / f"{script}.py"
     sl = stage_slice(RUN, stage, job)
-    return canonical({**sl, "code": script_fingerprint(path, section_modules(sl))})
+    return canonical({**sl, "code": script_fingerprint(_script(script), section_modules(sl))})
 
 
 def code_params(script):
     """Params that hold only the code: for rules reading no config (tables, figures of upstream outputs)."""
-    path = Path(workflow.basedir) / "workflow" / "scripts" / f"{script}.py"
-    return canonical({"code": script_fingerprint(path)})
+    return canonical({"code": script_fingerprint(_script(script))})
+
+
+def _script(name):
+    return Path(workflow.basedir) / "workflow" / "scripts" / f"{name}.py"
 
 
 def job_of(w):

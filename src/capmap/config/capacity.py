@@ -38,23 +38,19 @@ class RefineConfig:
     @classmethod
     def from_doc(cls, voxels_doc: dict) -> "RefineConfig | None":
         r = voxels_doc.get("refine", {})
-        if r is False:
-            return None
-        out = cls(**r)
-        if not 1 <= out.min_points <= out.max_points or out.near_min_points > out.max_points:
-            raise ConfigError(f"voxels.refine: min_points = {out.min_points}, near_min_points = {out.near_min_points} "
-                              f"and max_points = {out.max_points}: need min_points <= max_points and "
-                              "near_min_points <= max_points")
-        return out
+        return None if r is False else cls(**r)
 
     def settings(self, payloads_kg) -> RefineSettings:
-        """The refinement's numerics settings around the task payloads."""
+        """The refinement's numerics settings around the task payloads; their own check, re-worded with
+        the keys (the schema bounds rel_tol, so only the point counts can contradict each other)."""
         try:
             return RefineSettings(rel_tol=float(self.rel_tol), min_points=int(self.min_points),
                                   max_points=int(self.max_points), payloads_kg=tuple(float(p) for p in payloads_kg),
                                   near_band=float(self.near_band), near_min_points=int(self.near_min_points))
-        except CapmapError as exc:
-            raise ConfigError(exc.in_terms(rel_tol="voxels.refine.rel_tol")) from None
+        except CapmapError:
+            raise ConfigError(f"voxels.refine: min_points = {self.min_points}, near_min_points = {self.near_min_points} "
+                              f"and max_points = {self.max_points}: need min_points <= max_points and "
+                              "near_min_points <= max_points") from None
 
 
 @dataclass(frozen=True)

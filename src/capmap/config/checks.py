@@ -11,7 +11,7 @@ from dataclasses import replace
 import numpy as np
 
 from capmap.config.atlas import AtlasConfig
-from capmap.config.capacity import TaskConfig
+from capmap.config.capacity import DirectionsConfig, TaskConfig
 from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.estimate import Estimate, check_duration, check_steps, estimate_map, line_duration_s
 from capmap.config.failure import Failure, locked_arm, resolve_failure
@@ -48,6 +48,12 @@ def _named(source: str):
         raise ConfigError(f"{source}: {exc}") from None
 
 
+def _map_keys(prefix: str, edge_key: str, directions: DirectionsConfig) -> dict[str, str]:
+    """The config keys of a map's size (main map: prefix ''; the atlas': 'atlas.'), for estimate_map."""
+    return {"n_points": f"{prefix}sampling.n_points", "edge_m": edge_key, "jitter": f"{prefix}sampling.jitter_per_voxel",
+            "directions": f"{prefix}directions.{'n' if directions.kind == 'sphere' else 'step_deg'}"}
+
+
 def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     """Everything that can be checked before any job: schema, robot file, lock, limits, directions."""
     cfg = parse_config(doc, source)
@@ -64,8 +70,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
             cfg.refine.settings(cfg.task.payload_kg)
         except ConfigError as exc:
             raise ConfigError(f"{source}: {exc}") from None
-    keys = {"n_points": "sampling.n_points", "edge_m": "voxels.edge_m", "jitter": "sampling.jitter_per_voxel",
-            "directions": "directions.n" if cfg.directions.kind == "sphere" else "directions.step_deg"}
+    keys = _map_keys("", "voxels.edge_m", cfg.directions)
     try:
         estimate = estimate_map(arm, cfg.sampling, cfg.voxel_edge_m, len(dirs), len(limits.names), cfg.shards, keys)
     except ConfigError as exc:
@@ -81,9 +86,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
             rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
     if cfg.atlas is not None:
         check_atlas(cfg.atlas, robot, source)
-        keys = {"n_points": "atlas.sampling.n_points", "edge_m": "atlas.edge_m",
-                "jitter": "atlas.sampling.jitter_per_voxel",
-                "directions": "atlas.directions.n" if cfg.atlas.directions.kind == "sphere" else "atlas.directions.step_deg"}
+        keys = _map_keys("atlas.", "atlas.edge_m", cfg.atlas.directions)
         try:
             estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(cfg.atlas.directions.build()),
                          len(limits.names), 1, keys)

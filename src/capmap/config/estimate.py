@@ -98,9 +98,10 @@ def estimate_map(arm: LockedArm, sampling: SamplingConfig, edge_m: float, n_dire
     span = np.ptp(pos, axis=0) / edge_m + 1
     shape = tuple(int(v) for v in np.floor(span) + 1)
     voxels = int(np.prod(np.asarray(shape, dtype=float)))
-    if sampling.mode == "voxel_fill":
-        shape = Grid.covering(pos, edge_m).shape if voxels < 1e9 else shape
-        voxels = int(np.prod(np.asarray(shape, dtype=float)))
+    grid = Grid.covering(pos, edge_m) if voxels < 1e9 else None  # the grid of the voxels stage (all samples)
+    if sampling.mode == "voxel_fill" and grid is not None:
+        shape = grid.shape
+        voxels = grid.n_voxels
     fill = voxels * (1 + sampling.jitter_per_voxel) if sampling.mode == "voxel_fill" else 0
     points = sampling.n_points + fill
     states = points * 8.0 * n_directions
@@ -108,7 +109,6 @@ def estimate_map(arm: LockedArm, sampling: SamplingConfig, edge_m: float, n_dire
     shard_mb = points / max(shards, 1) * _POINT_BYTES / 2**20
     voxel_mb = points * _POINT_BYTES / 2**20 + voxels * 200 / 2**20
     peak = BASE_MB + max(chunk_mb + shard_mb, voxel_mb)
-    grid = Grid.covering(pos, edge_m) if voxels < 1e9 else None  # the grid of the voxels stage (all samples)
     est = Estimate(grid_shape=shape, voxels=voxels, points=points, states=states, peak_mb=peak, grid=grid)
     free = available_memory_mb()
     if peak > 0.8 * free:
@@ -122,11 +122,9 @@ def _blame(sampling: SamplingConfig, keys: dict[str, str], directions_dominate: 
     """The key that drives the size most, and what to do about it: the direction count (a capacity
     chunk's arrays), the jittered points per voxel, the voxel edge (the fill) or the joint samples."""
     if directions_dominate:
-        key = keys.get("directions", "directions")
-        return key, f"use fewer motion directions ({key})"
+        return keys["directions"], f"use fewer motion directions ({keys['directions']})"
     if sampling.mode == "voxel_fill" and fill > sampling.n_points:
         if sampling.jitter_per_voxel > 1:
-            key = keys.get("jitter", "sampling.jitter_per_voxel")
-            return key, f"lower {key}"
+            return keys["jitter"], f"lower {keys['jitter']}"
         return keys["edge_m"], f"coarsen {keys['edge_m']}"
     return keys["n_points"], f"lower {keys['n_points']}"

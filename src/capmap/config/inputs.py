@@ -5,12 +5,11 @@ it cannot read (Snakemake deletes a job's outputs before the job runs)."""
 from __future__ import annotations
 
 import os
-import stat
 from pathlib import Path
 
 import pyarrow.parquet as pq
 
-from capmap.config.validation import shown
+from capmap.config.validation import file_kind, shown, too_big
 from capmap.errors import ConfigError
 
 __all__ = ["CLOUD_COLUMNS", "CLOUD_SUFFIXES", "MAX_CLOUD_BYTES", "check_cloud_file"]
@@ -28,10 +27,8 @@ def _regular(path: str, key: str, limit: int) -> os.stat_result:
         raise ConfigError(f"{name}: no such file") from None
     except (OSError, ValueError) as exc:
         raise ConfigError(f"{name}: cannot read ({getattr(exc, 'strerror', None) or exc})") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise ConfigError(f"{name}: not a regular file")
-    if st.st_size > limit:
-        raise ConfigError(f"{name}: larger than {limit / 2**20:,.0f} MiB ({st.st_size:,} bytes), the limit for a cloud file")
+    file_kind(st.st_mode, name)  # the YAML loader's checks and words
+    too_big(st.st_size, name, limit)
     if not os.access(path, os.R_OK):
         raise ConfigError(f"{name}: cannot read (permission denied)")
     return st

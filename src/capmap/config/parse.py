@@ -39,10 +39,6 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
     task = TaskConfig.from_doc(doc["task"])
-    try:
-        refine = RefineConfig.from_doc(doc["voxels"])
-    except ConfigError as exc:
-        raise ConfigError(f"{source}: {exc}") from None
     labels = [payload_label(m) for m in task.payload_kg]
     if len(set(labels)) != len(labels):
         raise ConfigError(f"{source}: task.payload_kg has repeated values {labels}")
@@ -56,7 +52,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         voxel_edge_m=float(doc["voxels"]["edge_m"]),
         shards=int(doc["shards"]),
         verification=VerificationConfig.from_doc(doc.get("verification")),
-        refine=refine,
+        refine=RefineConfig.from_doc(doc["voxels"]),  # its point counts checked with the robot (check_run_config)
         planning=PlanningConfig(**doc.get("planning", {})),
         tasks=tuple(PlanTask.from_doc(t) for t in doc.get("tasks") or ()),
         follow=FollowConfig.from_doc(doc["follow"]) if "follow" in doc else None,

@@ -113,16 +113,6 @@ def files_of(path: str) -> dict[str, str]:
     return file_fingerprints([f for f in referenced_files(path) if f.is_file()])
 
 
-def _absent_parent(root, sub: str) -> str:
-    """The first proper prefix of dotted ``sub`` whose value under ``root`` is None ('' when none)."""
-    parts, obj = sub.split("."), root
-    for k in range(len(parts) - 1):
-        obj = getattr(obj, parts[k])
-        if obj is None:
-            return ".".join(parts[:k + 1])
-    return ""
-
-
 def _put(doc: dict, path: str, value) -> None:
     *parents, leaf = path.split(".")
     for name in parents:
@@ -141,11 +131,10 @@ def stage_slice(cfg: RunConfig, stage: str, job: PlanTask | None = None) -> dict
         if is_job and job is None:
             raise CapmapError(f"stage {stage} reads {path}: give its job (a PlanTask)")
         root, key, sub = (job, "job", path[4:]) if is_job else (cfg, "run", path)
-        absent = _absent_parent(root, sub)
+        value, meta, absent = get_path(root, sub) if sub else (root, {}, "")
         if absent:  # a section the config does not have: the job sees None, not a phantom section
             _put(out.setdefault(key, {}), absent, None)
             continue
-        value, meta = get_path(root, sub) if sub else (root, {})
         doc = rounded(to_doc(value), meta)
         if sub:
             _put(out.setdefault(key, {}), sub, doc)

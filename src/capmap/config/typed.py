@@ -173,15 +173,16 @@ def field_meta(obj: Any, name: str) -> dict:
     raise CapmapError(f"{type(obj).__name__} has no config field {name}")
 
 
-def get_path(root: Any, path: str) -> tuple[Any, dict]:
-    """The value at dotted ``path`` under ``root`` and its field metadata."""
-    obj, meta = root, {}
-    for name in path.split("."):
+def get_path(root: Any, path: str) -> tuple[Any, dict, str]:
+    """The value at dotted ``path`` under ``root``, its field metadata, and '' — or, when a section on
+    the way is None (absent from the config), (None, {}, that section's dotted path)."""
+    obj, meta, parts = root, {}, path.split(".")
+    for k, name in enumerate(parts):
         if obj is None:
-            return None, {}
+            return None, {}, ".".join(parts[:k])
         meta = field_meta(obj, name)
         obj = getattr(obj, name)
-    return obj, meta
+    return obj, meta, ""
 
 
 def file_paths(value: Any, meta: dict) -> list[str]:

@@ -28,7 +28,7 @@ import yaml
 from capmap.errors import ConfigError
 
 __all__ = ["schema", "key_path", "validate", "load_yaml", "as_tuple", "check_finite", "per_item", "normalise_integers",
-           "shown", "read_regular_file", "MAX_FILE_BYTES", "MAX_DEPTH", "MAX_NODES"]
+           "shown", "read_regular_file", "file_kind", "too_big", "MAX_FILE_BYTES", "MAX_DEPTH", "MAX_NODES"]
 
 MAX_FILE_BYTES = 4 * 1024 * 1024  # 4 MiB: a config, robot or scene file is a few kB
 MAX_DEPTH = 64  # levels of nested mappings and lists (the schemas need fewer than 10)
@@ -273,12 +273,12 @@ def _check_events(text: str, name: str) -> None:
         stack[-1][0], stack[-1][1] = stack[-1][0] + nodes, max(stack[-1][1], levels)
 
 
-def _file_kind(mode: int, name: str) -> None:
+def file_kind(mode: int, name: str) -> None:  # one line naming what a path is when not a regular file
     if not stat.S_ISREG(mode):
         raise ConfigError(f"{name}: is {next((k for test, k in _NOT_FILES if test(mode)), 'a special file')}, not a regular file")
 
 
-def _too_big(size: int, name: str, limit: int) -> None:
+def too_big(size: int, name: str, limit: int) -> None:
     if size > limit:
         raise ConfigError(f"{name}: larger than {limit / 2**20:g} MiB ({limit:,} bytes), the limit for a capmap input file")
 
@@ -289,10 +289,10 @@ def read_regular_file(path: str | Path, limit: int = MAX_FILE_BYTES) -> bytes:
     name = shown(path)
     try:
         st = os.stat(path)
-        _file_kind(st.st_mode, name)
-        _too_big(st.st_size, name, limit)
+        file_kind(st.st_mode, name)
+        too_big(st.st_size, name, limit)
         with os.fdopen(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)), "rb") as f:
-            _file_kind(os.fstat(f.fileno()).st_mode, name)
+            file_kind(os.fstat(f.fileno()).st_mode, name)
             data = f.read(limit + 1)
     except ConfigError:
         raise
@@ -302,7 +302,7 @@ def read_regular_file(path: str | Path, limit: int = MAX_FILE_BYTES) -> bytes:
         raise ConfigError(f"{name}: cannot read ({exc.strerror or exc})") from None
     except ValueError:  # a NUL byte in the path
         raise ConfigError(f"{name}: cannot read (not a valid file name)") from None
-    _too_big(len(data), name, limit)
+    too_big(len(data), name, limit)
     return data
 
 
