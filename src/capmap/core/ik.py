@@ -59,7 +59,7 @@ from capmap.core.ik_numeric import multi_start, newton
 from capmap.core.kinematics import Chain, inverse_transform, pose_error
 from capmap.core.reduction import LockedArm
 
-__all__ = ["IKSolutions", "IKMethod", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
+__all__ = ["IKSolutions", "IKMethod", "solve_chain", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
            "newton", "wrap_to_range", "method_for", "closed_form_shape", "semi_analytic_shape", "COMPLETE_METHODS",
            "RESIDUAL_TOL", "SEARCH_STEPS"]
 
@@ -219,19 +219,22 @@ class IKMethod(ABC):
         """Whether the method solves this chain (its shape)."""
 
     @abstractmethod
-    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Raw candidate solutions (N, K, n_active) rad and their validity (N, K) for targets T (N, 4, 4)."""
+    def candidates(self, chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Raw candidate solutions (N, K, n) rad and their validity (N, K) for targets T (N, 4, 4)
+        (lower, upper (n,) rad: the joint ranges, which only a search method uses)."""
 
     def solve(self, arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, tol: float = RESIDUAL_TOL) -> IKSolutions:
         """Every solution this method finds for each target (see the class docstring); ValueError when
         the method does not apply to ``arm``'s chain."""
         if not self.applies(arm.chain):
             raise ValueError(f"IK method {self.name} does not apply to the chain of {arm.robot.name}")
-        return self._solve(arm, _targets(positions, rotation), tol)
+        return self.solve_chain(arm.chain, _targets(positions, rotation), arm.q_lower, arm.q_upper, tol)
 
-    def _solve(self, arm: LockedArm, T: np.ndarray, tol: float) -> IKSolutions:
-        theta, ok = self.candidates(arm, T)
-        return _finish(arm.chain, theta, ok, T, arm.q_lower, arm.q_upper, tol, self.name)
+    def solve_chain(self, chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                    tol: float = RESIDUAL_TOL) -> IKSolutions:
+        """As :meth:`solve` for a bare chain: targets T (N, 4, 4), joint ranges lower, upper (n,) rad."""
+        theta, ok = self.candidates(chain, T, lower, upper)
+        return _finish(chain, theta, ok, T, lower, upper, tol, self.name)
 
 
 class _ShapeMethod(IKMethod):
@@ -254,10 +257,10 @@ class _ShapeMethod(IKMethod):
     def applies(self, chain: Chain) -> bool:
         return chain.n == 6 and self._shape(chain.reversed()) if self.reversed else self._shape(chain)
 
-    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def candidates(self, chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if not self.reversed:
-            return self._raw(arm.chain, T)
-        theta_r, ok = self._raw(arm.chain.reversed(), inverse_transform(T))
+            return self._raw(chain, T)
+        theta_r, ok = self._raw(chain.reversed(), inverse_transform(T))
         return -theta_r[..., ::-1], ok
 
 
@@ -300,8 +303,8 @@ class MultiStartNewton(IKMethod):
     def applies(self, chain: Chain) -> bool:
         return True
 
-    def candidates(self, arm: LockedArm, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return multi_start(arm.chain, T, arm.q_lower, arm.q_upper)
+    def candidates(self, chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return multi_start(chain, T, lower, upper)
 
 
 METHODS: tuple[IKMethod, ...] = (ClosedForm(), ClosedForm(reversed=True), SemiAnalytic(), SemiAnalytic(reversed=True),
@@ -326,7 +329,14 @@ def solve(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, tol: floa
     positions: (N, 3) m. rotation: (3, 3) or (N, 3, 3), end-effector orientation in the
     base frame. Returns active-joint angles within the joint ranges, residual <= tol.
     """
-    method = method_of(arm.chain)
+    return solve_chain(arm.chain, _targets(positions, rotation), arm.q_lower, arm.q_upper, tol)
+
+
+def solve_chain(chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                tol: float = RESIDUAL_TOL) -> IKSolutions:
+    """As :func:`solve` for a bare chain: targets T (N, 4, 4) in the chain's base frame, joint
+    ranges lower, upper (n,) rad."""
+    method = method_of(chain)
     if not method.complete:
-        _warn_incomplete(arm.chain)
-    return method._solve(arm, _targets(positions, rotation), tol)
+        _warn_incomplete(chain)
+    return method.solve_chain(chain, np.asarray(T, dtype=float), lower, upper, tol)
