@@ -3,8 +3,8 @@ import pytest
 import yaml
 
 from capmap.config.robot_file import load
-from capmap.core.ik import RESIDUAL_TOL, method_for, solve, wrap_to_range
-from capmap.core.reduction import lock
+from capmap.core.ik import RESIDUAL_TOL, MultiStartNewton, method_for, solve, wrap_to_range
+from capmap.core.reduction import free, lock
 from tests.scenario import Q_INI_DEG, SSRMS_YAML, TASK_R, X_DES, X_INI
 
 
@@ -90,23 +90,40 @@ def test_middle_locks_use_the_search(ssrms, joint, method):
     assert method_for(lock(ssrms, joint, 0.4).chain) == method
 
 
-def test_numeric_fallback_finds_exact_solutions(tmp_path, caplog):
+def test_general_chain_gets_every_branch(tmp_path):
+    """A chain with no closed form or search (joints 3, 4, 5 no longer parallel) is solved by the
+    general 6R method: every solution exact by Pinocchio, the sampled configuration among them, and
+    every solution a 256-start Newton search finds among them (an independent, incomplete oracle)."""
     doc = yaml.safe_load(SSRMS_YAML.read_text())
-    doc["dh"]["rows"][3][0] = 10  # joints 3, 4, 5 no longer parallel: no closed form, no search
+    doc["dh"]["rows"][3][0] = 10
     doc["dh"]["rows"][4][0] = 170
     (tmp_path / "r.yaml").write_text(yaml.safe_dump(doc))
     arm = lock(load(tmp_path / "r.yaml"), 1, 0.9)
-    assert method_for(arm.chain) == "numeric"
+    assert method_for(arm.chain) == "general_6r"
     rng = np.random.default_rng(11)
-    T = arm.fk(rng.uniform(-np.pi, np.pi, (5, 6)))
-    with caplog.at_level("WARNING", logger="capmap.core.ik"):
-        sol = solve(arm, T[:, :3, 3], T[:, :3, :3])
-    assert "may miss branches" in caplog.text
-    assert np.all(sol.n_solutions >= 1)
-    for i in range(5):
+    q_true = rng.uniform(-np.pi, np.pi, (8, 6))
+    T = arm.fk(q_true)
+    sol = solve(arm, T[:, :3, 3], T[:, :3, :3])
+    starts = MultiStartNewton().solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
+    for i in range(len(T)):
         q = sol.q[i, : sol.n_solutions[i]]
         dp, _ = _pin_residual(arm.robot, arm, q, T[i, :3, 3], T[i, :3, :3])
         assert dp.max() <= RESIDUAL_TOL and _distinct(q)
+        wrapped = np.mod(q - q_true[i] + np.pi, 2 * np.pi) - np.pi
+        assert np.abs(wrapped).max(axis=1).min() < 1e-6
+        for s in starts.q[i, : starts.n_solutions[i]]:
+            assert (np.abs(np.mod(q - s + np.pi, 2 * np.pi) - np.pi).max(axis=1) < 1e-6).any()
+
+
+def test_numeric_fallback_for_seven_joints(ssrms, caplog):
+    """More than 6 free joints: only the multi-start search applies; it warns that the map may overstate."""
+    arm = free(ssrms)
+    assert method_for(arm.chain) == "numeric"
+    T = arm.fk(np.random.default_rng(2).uniform(-np.pi, np.pi, (3, 7)))
+    with caplog.at_level("WARNING", logger="capmap.core.ik"):
+        sol = solve(arm, T[:, :3, 3], T[:, :3, :3])
+    assert "may overstate" in caplog.text
+    assert np.all(sol.n_solutions >= 1)
 
 
 def test_solutions_respect_joint_ranges(tmp_path):

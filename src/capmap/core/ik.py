@@ -35,14 +35,16 @@ root). Every root returned is an exact solution.
 
 Every solution is polished by two Newton steps, checked by forward kinematics
 (position and orientation residual <= ``tol``), put inside the joint ranges and
-de-duplicated. Other chain shapes use a multi-start Newton solver (a deterministic Halton
-set of starts): found solutions are exact, but completeness is not guaranteed (a
-warning is logged once per chain).
+de-duplicated. Every other chain of 6 revolute joints is solved by the general 6R method
+(:mod:`capmap.core.ik_general`: Raghavan-Roth / Manocha-Canny elimination, up to 16 solutions,
+complete; eight Newton steps polish its candidates). Only a chain it cannot take (not 6 joints)
+uses a multi-start Newton solver (a deterministic Halton set of starts): found solutions are
+exact, but completeness is not guaranteed (a warning, once per chain, says the map may overstate).
 
 Each method is one :class:`IKMethod` (one call signature, a ``complete`` property):
 :class:`ClosedForm` (raw branches in :mod:`capmap.core.ik_closed`), :class:`SemiAnalytic`
 (:mod:`capmap.core.ik_semi`, :mod:`capmap.core.ik_kernels`), each also ``reversed``, and
-:class:`MultiStartNewton` (:mod:`capmap.core.ik_numeric`); :func:`solve` takes the first of
+:class:`GeneralSixR` (:mod:`capmap.core.ik_general`), :class:`MultiStartNewton` (:mod:`capmap.core.ik_numeric`); :func:`solve` takes the first of
 :data:`METHODS` that applies to the arm's chain.
 """
 
@@ -54,12 +56,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik_closed, ik_semi
+from capmap.core import ik_closed, ik_general, ik_semi
 from capmap.core.ik_numeric import multi_start, newton
 from capmap.core.kinematics import Chain, inverse_transform, pose_error
 from capmap.core.reduction import LockedArm
 
-__all__ = ["IKSolutions", "IKMethod", "solve_chain", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
+__all__ = ["IKSolutions", "IKMethod", "solve_chain", "GeneralSixR", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
            "newton", "wrap_to_range", "method_for", "closed_form_shape", "semi_analytic_shape", "COMPLETE_METHODS",
            "RESIDUAL_TOL", "SEARCH_STEPS"]
 
@@ -123,8 +125,9 @@ def _warn_incomplete(chain: Chain) -> None:
     key = chain.X.tobytes()
     if key not in _WARNED:
         _WARNED.add(key)
-        log.warning("IK: this chain has no closed-form or semi-analytical solver; multi-start Newton finds exact "
-                    "solutions but may miss branches (capacity can be optimistic)")
+        log.warning("IK: this chain (%d joints) has no complete solver (those need 6 revolute joints); multi-start "
+                    "Newton finds exact solutions but may miss branches, so the capacity map may overstate",
+                    chain.n)
 
 
 def wrap_to_range(theta: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -144,7 +147,7 @@ def wrap_to_range(theta: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tu
 
 
 def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarray,
-            lower: np.ndarray, upper: np.ndarray, tol: float, method: str) -> IKSolutions:
+            lower: np.ndarray, upper: np.ndarray, tol: float, method: str, polish: int = 2) -> IKSolutions:
     N, K, n = theta.shape
     flat = np.where(ok[..., None], theta, 0.0).reshape(-1, n)
     # residuals of the candidates; two Newton steps polish those not already at rounding level
@@ -153,7 +156,7 @@ def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarra
     err = pose_error(chain.fk(flat[idx]), target)
     rough = np.flatnonzero(np.abs(err).max(axis=1, initial=0.0) > POLISHED)
     if len(rough):
-        flat[idx[rough]] = newton(chain, flat[idx[rough]], target[rough], iters=2)
+        flat[idx[rough]] = newton(chain, flat[idx[rough]], target[rough], iters=polish)
         err[rough] = pose_error(chain.fk(flat[idx[rough]]), target[rough])
     good = np.zeros(N * K, dtype=bool)
     good[idx] = ((np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
@@ -214,6 +217,8 @@ class IKMethod(ABC):
     def complete(self) -> bool:
         """True when the method finds every IK branch."""
 
+    polish: int = 2  # Newton steps on every candidate not already at rounding level
+
     @abstractmethod
     def applies(self, chain: Chain) -> bool:
         """Whether the method solves this chain (its shape)."""
@@ -234,7 +239,7 @@ class IKMethod(ABC):
                     tol: float = RESIDUAL_TOL) -> IKSolutions:
         """As :meth:`solve` for a bare chain: targets T (N, 4, 4), joint ranges lower, upper (n,) rad."""
         theta, ok = self.candidates(chain, T, lower, upper)
-        return _finish(chain, theta, ok, T, lower, upper, tol, self.name)
+        return _finish(chain, theta, ok, T, lower, upper, tol, self.name, self.polish)
 
 
 class _ShapeMethod(IKMethod):
@@ -287,6 +292,50 @@ class SemiAnalytic(_ShapeMethod):
     _raw = staticmethod(ik_semi.candidates)
 
 
+_GENERAL: dict[bytes, "ik_general.GeneralSolver"] = {}
+
+
+def _general_solver(chain: Chain) -> "ik_general.GeneralSolver":
+    key = chain.X.tobytes()
+    if key not in _GENERAL:
+        _GENERAL[key] = ik_general.prepare(chain)
+    return _GENERAL[key]
+
+
+@dataclass(frozen=True)
+class GeneralSixR(IKMethod):
+    """Every solution of any 6-joint revolute chain (:mod:`capmap.core.ik_general`: Raghavan-Roth /
+    Manocha-Canny elimination, a companion eigenproblem per pose). Poses where every formulation is
+    degenerate (a continuum of solutions, or an ill-conditioned elimination) are solved by the
+    multi-start search as well, with a warning that branches may be missing there."""
+
+    polish: int = 8  # the eliminated roots of clustered solutions can be 1e-2 rad off: Newton converges from there
+
+    @property
+    def name(self) -> str:
+        return "general_6r"
+
+    @property
+    def complete(self) -> bool:
+        return True
+
+    def applies(self, chain: Chain) -> bool:
+        return chain.n == 6
+
+    def candidates(self, chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        theta, ok, degenerate = ik_general.candidates(_general_solver(chain), np.ascontiguousarray(T))
+        if degenerate.any():
+            log.warning("IK: %d of %d poses are degenerate for the exact 6R method (a continuum of solutions "
+                        "or an ill-conditioned elimination); multi-start Newton is used there and may miss "
+                        "branches (the map may overstate there)", int(degenerate.sum()), len(T))
+            extra, extra_ok = multi_start(chain, T[degenerate], lower, upper)
+            pad = np.zeros((len(T), extra.shape[1], chain.n))
+            pad_ok = np.zeros((len(T), extra.shape[1]), dtype=bool)
+            pad[degenerate], pad_ok[degenerate] = extra, extra_ok
+            theta, ok = np.concatenate([theta, pad], axis=1), np.concatenate([ok, pad_ok], axis=1)
+        return theta, ok
+
+
 @dataclass(frozen=True)
 class MultiStartNewton(IKMethod):
     """Multi-start damped Newton from a deterministic Halton set of starts (:func:`capmap.core.ik_numeric.multi_start`):
@@ -308,7 +357,7 @@ class MultiStartNewton(IKMethod):
 
 
 METHODS: tuple[IKMethod, ...] = (ClosedForm(), ClosedForm(reversed=True), SemiAnalytic(), SemiAnalytic(reversed=True),
-                                 MultiStartNewton())  # in the order :func:`solve` tries them
+                                 GeneralSixR(), MultiStartNewton())  # in the order :func:`solve` tries them
 COMPLETE_METHODS = tuple(m.name for m in METHODS if m.complete)
 
 
