@@ -44,7 +44,8 @@ exact, but completeness is not guaranteed (a warning, once per chain, says the m
 Each method is one :class:`IKMethod` (one call signature, a ``complete`` property):
 :class:`ClosedForm` (raw branches in :mod:`capmap.core.ik_closed`), :class:`SemiAnalytic`
 (:mod:`capmap.core.ik_semi`, :mod:`capmap.core.ik_kernels`), each also ``reversed``, and
-:class:`GeneralSixR` (:mod:`capmap.core.ik_general`), :class:`MultiStartNewton` (:mod:`capmap.core.ik_numeric`); :func:`solve` takes the first of
+:class:`GeneralSixR` (:mod:`capmap.core.ik_general`),
+:class:`MultiStartNewton` (:mod:`capmap.core.ik_numeric`); :func:`solve` takes the first of
 :data:`METHODS` that applies to the arm's chain.
 """
 
@@ -61,7 +62,8 @@ from capmap.core.ik_numeric import multi_start, newton
 from capmap.core.kinematics import Chain, inverse_transform, pose_error
 from capmap.core.reduction import LockedArm
 
-__all__ = ["IKSolutions", "IKMethod", "solve_chain", "GeneralSixR", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
+__all__ = ["IKSolutions", "IKMethod", "solve_chain",
+           "GeneralSixR", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
            "newton", "wrap_to_range", "method_for", "closed_form_shape", "semi_analytic_shape", "COMPLETE_METHODS",
            "RESIDUAL_TOL", "SEARCH_STEPS"]
 

@@ -7,6 +7,12 @@ per-link mass, centre of mass and inertia, or the path of a URDF file; robot fil
 The model is built once (:func:`build_robot`) and treated as immutable; each worker makes
 its own ``pin.Data``. Frames: ``link<i>`` is DH frame i, ``ee`` is the end effector
 (last DH frame composed with the tool transform, or the URDF frame named in the file).
+
+A URDF robot may hold joints fixed (``locked``: joint name -> value, rad or m; the model is
+reduced with ``pin.buildReducedModel``, e.g. a gripper's fingers, a head, a torso) and name the
+arm's joints (``joints``, root first); what remains must be a serial chain of 1-DOF revolute
+joints. Its joints' ``<limit effort>`` are kept (:attr:`Robot.effort_limit_nm`): the default joint
+torque limits of a run (:meth:`capmap.config.capacity.LimitsConfig.for_robot`).
 """
 
 from __future__ import annotations
@@ -48,6 +54,8 @@ class RobotDescription:
     gravity_mps2: np.ndarray  # (3,)
     urdf_path: Path | None = None
     urdf_ee_frame: str | None = None
+    urdf_locked: tuple[tuple[str, float], ...] = ()  # URDF joints held fixed: (name, value rad or m), file order
+    urdf_joints: tuple[str, ...] | None = None  # the arm's joints as the file names them (None: every joint not locked)
 
     @property
     def n_joints(self) -> int:
@@ -70,6 +78,7 @@ class Robot:
     q_lower: np.ndarray  # (n,) rad
     q_upper: np.ndarray  # (n,) rad
     joint_names: tuple[str, ...] = field(default=())
+    effort_limit_nm: np.ndarray | None = None  # (n,) the URDF's <limit effort> of each joint (None: a DH robot)
 
     @property
     def name(self) -> str:
@@ -163,16 +172,94 @@ def _build_dh_model(desc: RobotDescription) -> pin.Model:
     return model
 
 
+_REVOLUTE = frozenset({"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"})
+_PRISMATIC = frozenset({"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned"})
+_UNBOUNDED = frozenset({"JointModelRUBX", "JointModelRUBY", "JointModelRUBZ", "JointModelRevoluteUnboundedUnaligned"})
+
+
+def _kind(jmodel) -> str:
+    name = jmodel.shortname()
+    return ("revolute" if name in _REVOLUTE else "prismatic" if name in _PRISMATIC
+            else "continuous" if name in _UNBOUNDED else name.removeprefix("JointModel"))
+
+
+def _locked_reference(desc: RobotDescription, model: pin.Model) -> tuple[list[int], np.ndarray]:
+    """The joints to lock (ids) and the reference configuration holding them at their values; a
+    joint the URDF does not have, a value outside its range, a joint that is not 1-DOF: one line
+    naming ``locked.<name>``."""
+    q_ref = pin.neutral(model)
+    ids = []
+    for name, value in desc.urdf_locked:
+        key = f"{desc.source}: locked.{name}"
+        if not model.existJointName(name):
+            movable = [model.names[j] for j in range(1, model.njoints)]
+            raise ConfigError(f"{key}: the URDF has no movable joint {name!r} (its joints: {', '.join(movable)})")
+        j = model.getJointId(name)
+        jm, kind = model.joints[j], _kind(model.joints[j])
+        if not np.isfinite(value):
+            raise ConfigError(f"{key} = {value}: not a finite value")
+        if kind == "continuous":  # unbounded: (cos, sin) in the configuration
+            q_ref[jm.idx_q:jm.idx_q + 2] = np.cos(value), np.sin(value)
+        elif kind in ("revolute", "prismatic"):
+            lo, hi = model.lowerPositionLimit[jm.idx_q], model.upperPositionLimit[jm.idx_q]
+            if not lo - 1e-12 <= value <= hi + 1e-12:
+                unit = "rad" if kind == "revolute" else "m"
+                raise ConfigError(f"{key} = {value:g} {unit} is outside the joint's range [{lo:g}, {hi:g}] {unit}")
+            q_ref[jm.idx_q] = value
+        else:
+            raise ConfigError(f"{key}: a {kind} joint ({jm.nv} DOF) cannot be locked at one value")
+        ids.append(j)
+    return ids, q_ref
+
+
+def _check_chain(desc: RobotDescription, model: pin.Model) -> None:
+    """What remains after locking is a serial chain of 1-DOF revolute joints, in the order of
+    ``joints`` when the file names them, ending at ``urdf.ee_frame``; else one line naming the joints."""
+    names = list(model.names[1:])
+    hint = "hold the others fixed in 'locked' (e.g. a gripper's fingers) or name the arm in 'joints'"
+    bad = [f"{n} ({_kind(model.joints[j])})" for j, n in enumerate(names, start=1)
+           if _kind(model.joints[j]) != "revolute"]
+    if bad:
+        raise ConfigError(f"{desc.source}: the arm must be a serial chain of 1-DOF revolute joints, but "
+                          f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not: {hint}")
+    branches = [f"{names[j - 1]} (on {model.names[model.parents[j]]}, not {model.names[j - 1]})"
+                for j in range(2, model.njoints) if model.parents[j] != j - 1]
+    if branches or (names and model.parents[1] != 0):
+        raise ConfigError(f"{desc.source}: the joints {', '.join(names)} are not a serial chain: "
+                          f"{', '.join(branches) or names[0] + ' is not on the base'} branch off: {hint}")
+    if desc.urdf_joints is not None and tuple(names) != desc.urdf_joints:
+        raise ConfigError(f"{desc.source}: joints = [{', '.join(desc.urdf_joints)}] is not the chain's order root "
+                          f"first ({', '.join(names)})")
+    frame = model.frames[model.getFrameId(desc.urdf_ee_frame)]
+    if names and frame.parentJoint != model.njoints - 1:
+        on = model.names[frame.parentJoint] if frame.parentJoint else "the base"
+        raise ConfigError(f"{desc.source}: urdf.ee_frame = {desc.urdf_ee_frame!r} is moved by {on}, not by the "
+                          f"chain's last joint {names[-1]}")
+
+
 def _build_urdf_model(desc: RobotDescription) -> tuple[pin.Model, np.ndarray]:
     try:
-        model = pin.buildModelFromUrdf(str(desc.urdf_path))
+        full = pin.buildModelFromUrdf(str(desc.urdf_path))
     except Exception as exc:  # Pinocchio raises bare ValueError/RuntimeError from C++
         raise ConfigError(f"{desc.source}: urdf.path = {str(desc.urdf_path)!r}: cannot be parsed "
                           f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
-    if not model.existFrame(desc.urdf_ee_frame):
+    if not full.existFrame(desc.urdf_ee_frame):
         raise ConfigError(f"{desc.source}: urdf.ee_frame = {desc.urdf_ee_frame!r} is not a frame of the URDF")
-    if model.nq != model.nv or any(model.joints[j].nq != 1 for j in range(1, model.njoints)):
-        raise ConfigError(f"{desc.source}: only serial arms of 1-DOF revolute joints are supported")
+    locked, q_ref = _locked_reference(desc, full)
+    if desc.urdf_joints is not None:
+        absent = [n for n in desc.urdf_joints if not full.existJointName(n)]
+        if absent:
+            raise ConfigError(f"{desc.source}: joints: the URDF has no movable joint {absent[0]!r}")
+        both = [n for n in desc.urdf_joints if n in dict(desc.urdf_locked)]
+        if both:
+            raise ConfigError(f"{desc.source}: joints: {both[0]} is also in locked (a joint moves or is held fixed)")
+        neither = [full.names[j] for j in range(1, full.njoints)
+                   if full.names[j] not in desc.urdf_joints and j not in locked]
+        if neither:
+            raise ConfigError(f"{desc.source}: the URDF's joints {', '.join(neither)} are neither in joints nor in "
+                              "locked: add each to one of them (locked: a value, rad or m)")
+    model = pin.buildReducedModel(full, locked, q_ref) if locked else full
+    _check_chain(desc, model)
     src = model.frames[model.getFrameId(desc.urdf_ee_frame)]
     model.addFrame(pin.Frame(EE_FRAME, src.parentJoint, model.getFrameId(desc.urdf_ee_frame),
                              src.placement * _se3(desc.tool), pin.FrameType.OP_FRAME))
@@ -182,8 +269,10 @@ def _build_urdf_model(desc: RobotDescription) -> tuple[pin.Model, np.ndarray]:
 
 def build_robot(desc: RobotDescription) -> Robot:
     """Build the Pinocchio model(s) of a validated description (do this once per process)."""
+    effort = None
     if desc.urdf_path is not None:
         model, urdf_ranges = _build_urdf_model(desc)
+        effort = np.asarray(model.effortLimit, dtype=float).copy()  # one per joint: 1-DOF joints (checked)
         ranges = desc.joint_range_rad if desc.joint_range_rad is not None else urdf_ranges
         if len(ranges) != model.nq:
             raise ConfigError(f"{desc.source}: joint_range_deg has {len(ranges)} entries but the URDF has "
@@ -202,4 +291,5 @@ def build_robot(desc: RobotDescription) -> Robot:
         q_lower=np.asarray(ranges[:, 0], dtype=float),
         q_upper=np.asarray(ranges[:, 1], dtype=float),
         joint_names=tuple(model.names[1:]),
+        effort_limit_nm=effort,
     )
