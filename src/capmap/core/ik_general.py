@@ -48,7 +48,6 @@ __all__ = ["Formulation", "GeneralSolver", "prepare", "candidates", "quantities"
 MAX_ROOTS = 32  # candidates per pose: the 24 roots of a degree-12 determinant, some shared by several solutions
 _SAMPLES = 25  # qa samples of the determinant: exact for degree <= 12
 _RANK_TOL = 1e-9  # sigma_8 / sigma_1 of Q below this: Q is rank deficient (special geometry)
-_ZERO_DET = 1e-11  # largest determinant coefficient / Hadamard bound below this: det vanishes identically
 _DEGREE_TOL = 1e-9  # coefficients above the chain's degree must be below this (relative)
 _REAL_TOL = 1e-2  # companion eigenvalues with |imag| <= this (relative) are candidates (then polished, checked)
 
@@ -128,14 +127,20 @@ def _left(X: np.ndarray, f: int, qa, qb, qc) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class GeneralSolver:
     """A chain prepared for :func:`candidates`: its formulations (best first), each with the left-side
-    coefficients CL (3, 14, 9) [basis of qa, quantity, monomial of (qb, qc)], and the degree of the
-    chain's determinant (``degree``, 8 for a general chain)."""
+    coefficients CL (3, 14, 9) [basis of qa, quantity, monomial of (qb, qc)] and the degree of its
+    determinant."""
 
     chain: Chain
     order: tuple[Formulation, ...]
     left: tuple[np.ndarray, ...]
-    degree: int
+    degrees: tuple[int, ...]
     phase: float  # rad: x = tan((qa - phase) / 2)
+    recovered: tuple[float, ...]  # share of the test poses whose known solution each formulation recovered
+
+    @property
+    def degree(self) -> int:
+        """The degree of the best formulation's determinant (8 for a general chain: <= 16 solutions)."""
+        return self.degrees[0]
 
     def formulation_chain(self, k: int) -> Chain:
         return self.chain.reversed() if self.order[k].reversed else self.chain
@@ -458,35 +463,44 @@ def _solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase:
     return theta, ok, status
 
 
-def prepare(chain: Chain, rng: np.random.Generator | None = None, n_poses: int = 12) -> GeneralSolver:
-    """The chain's formulations ordered by conditioning and its determinant's degree, from
-    ``n_poses`` poses FK(q) of uniform random q (``rng``; a fixed seed when None, so the choice is
-    reproducible)."""
+def _recovered(theta: np.ndarray, ok: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """(N,) bool: the known solution q (N, 6) is within 1e-4 rad of one of the raw candidates."""
+    d = np.abs(np.mod(theta - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=-1)
+    return np.any(ok & (d < 1e-4), axis=1)
+
+
+def prepare(chain: Chain, rng: np.random.Generator | None = None, n_poses: int = 24) -> GeneralSolver:
+    """The chain's formulations, best first, with their determinants' degrees, from ``n_poses``
+    poses FK(q) of uniform random q (``rng``; a fixed seed when None, so the choice is
+    reproducible). A formulation is ranked by the share of those poses whose known q it recovers,
+    then by the conditioning of Q (a special geometry can make a formulation fail: its
+    determinant vanishes identically, or its roots lose the solutions)."""
     if chain.n != 6:
         raise ValueError(f"the general 6R method needs 6 joints, this chain has {chain.n}")
     rng = np.random.default_rng(20260) if rng is None else rng
     q = rng.uniform(-np.pi, np.pi, (n_poses, 6))
+    phase = float(rng.uniform(0.0, 2 * np.pi))
     scores, lefts, degrees = [], [], []
     for form in FORMULATIONS:
         ch = chain.reversed() if form.reversed else chain
         CL = _left_coefficients(ch.X, form.f)
-        T = ch.fk(-q[:, ::-1] if form.reversed else q)
+        qf = -q[:, ::-1] if form.reversed else q
+        T = ch.fk(qf)
         M, _, _, rank = _matrices(ch.X, form.f, CL, T)
         dets = np.linalg.det(M[:, 0][:, None] + np.cos(_THETA)[None, :, None, None] * M[:, 1][:, None]
                              + np.sin(_THETA)[None, :, None, None] * M[:, 2][:, None])
         coef = np.abs(dets @ _DFT.T)  # (n, 25) k = -12..12
-        big = coef.max(axis=1)
-        had = np.prod(np.linalg.norm(M[:, 0] + M[:, 1], axis=2), axis=1)
-        live = big > _ZERO_DET * np.maximum(had, 1e-300)
         k = np.abs(np.arange(-12, 13))
-        deg = int(max((k[c > 1e-8 * c.max()].max() for c in coef[live]), default=12))
+        deg = int(max(k[c > 1e-8 * c.max()].max() if c.max() > 0 else 0 for c in coef))
+        theta, ok, status = _solve_formulation(ch, form.f, CL, max(deg, 1), phase, np.ascontiguousarray(T))
+        found = _recovered(theta, ok, qf) & (status == 0)
         lefts.append(CL)
-        degrees.append(deg)
-        scores.append(float(np.min(np.where(live, rank, 0.0))))
-    order = np.argsort(scores)[::-1]
+        degrees.append(max(deg, 1))
+        scores.append((float(found.mean()), float(rank.min())))
+    order = sorted(range(len(FORMULATIONS)), key=lambda i: scores[i], reverse=True)
     return GeneralSolver(chain=chain, order=tuple(FORMULATIONS[i] for i in order),
-                         left=tuple(lefts[i] for i in order), degree=max(degrees[i] for i in order[:1]),
-                         phase=float(rng.uniform(0.0, 2 * np.pi)))
+                         left=tuple(lefts[i] for i in order), degrees=tuple(degrees[i] for i in order),
+                         phase=phase, recovered=tuple(scores[i][0] for i in order))
 
 
 def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -502,8 +516,8 @@ def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = 3) -> tupl
             break
         ch = solver.formulation_chain(k)
         Tk = inverse_transform(T[todo]) if form.reversed else T[todo]
-        deg = solver.degree if k == 0 else 12
-        th, good, status = _solve_formulation(ch, form.f, solver.left[k], deg, solver.phase, np.ascontiguousarray(Tk))
+        th, good, status = _solve_formulation(ch, form.f, solver.left[k], solver.degrees[k], solver.phase,
+                                              np.ascontiguousarray(Tk))
         if form.reversed:
             th = -th[..., ::-1]
         done = status == 0
