@@ -63,6 +63,25 @@ def _reference_chunk(args):
     return len(pts) * len(_worker["dirs"])
 
 
+def erd_chain(name: str, joint: int):
+    """The 6-joint chain of example-robot-data's 7-DOF arm ``name`` (fingers held at 0) with ``joint``
+    (1-based) locked at mid-range: (Chain, lower (6,), upper (6,)) rad."""
+    import example_robot_data as erd
+    import pinocchio as pin
+
+    from capmap.core.kinematics import Chain
+
+    model = erd.load(name).model
+    arm = [j for j in range(1, model.njoints) if model.joints[j].nq == 1 and "finger" not in model.names[j]][:7]
+    model = pin.buildReducedModel(model, [j for j in range(1, model.njoints) if j not in arm], pin.neutral(model))
+    lo, hi = model.lowerPositionLimit, model.upperPositionLimit
+    q = pin.neutral(model)
+    q[joint - 1] = (lo[joint - 1] + hi[joint - 1]) / 2
+    reduced = pin.buildReducedModel(model, [joint], q)
+    active = [i for i in range(7) if i != joint - 1]
+    return Chain.from_model(reduced, reduced.nframes - 1), lo[active], hi[active]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--points", type=int, default=20000)
@@ -100,6 +119,25 @@ def main():
         dt = time.perf_counter() - t
         print(f"IK joint {joint} locked      : {n_lock / dt:12,.0f} points/s/core  ({sol_j.method}, "
               f"{sol_j.n_solutions.mean():.2f} branches per pose, max {sol_j.n_solutions.max()})")
+        general = ik.GeneralSixR()
+        general.solve_chain(arm_j.chain, Tj[:20], arm_j.q_lower, arm_j.q_upper)
+        t = time.perf_counter()
+        sol_g = general.solve_chain(arm_j.chain, Tj, arm_j.q_lower, arm_j.q_upper)
+        dt = time.perf_counter() - t
+        print(f"  general 6R, same poses: {n_lock / dt:12,.0f} points/s/core  ({sol_g.n_solutions.sum()} branches, "
+              f"{sol_j.method} {sol_j.n_solutions.sum()})")
+
+    # 7-DOF arms from example-robot-data, each joint locked at mid-range: the method and its speed
+    for name in ("panda", "xarm7"):
+        for joint in range(1, 8):
+            chain, lower, upper = erd_chain(name, joint)
+            Tj = chain.fk(rng.uniform(lower, upper, (n_lock, 6)))
+            ik.solve_chain(chain, Tj[:20], lower, upper)
+            t = time.perf_counter()
+            sol_j = ik.solve_chain(chain, Tj, lower, upper)
+            dt = time.perf_counter() - t
+            print(f"IK {name:6s} joint {joint} locked: {n_lock / dt:10,.0f} points/s/core  ({sol_j.method}, "
+                  f"{sol_j.n_solutions.mean():.2f} branches per pose, max {sol_j.n_solutions.max()})")
 
     # capacity: the reachable points' configuration sets, split across workers
     q, n = sol.q[reach], sol.n_solutions[reach]

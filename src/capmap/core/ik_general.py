@@ -288,6 +288,19 @@ def _angles_of(v):
     return (_ratio_angle(v[3 * bi + bj], v[3 * (bi + 1) + bj]), _ratio_angle(v[3 * ci + cj], v[3 * ci + cj + 1]))
 
 
+@numba.njit(cache=True)
+def _is_monomial(v):
+    """Whether the unit vector v is (to 1e-5 rad) the monomial vector xb^i xc^j of its own angles."""
+    qb, qc = _angles_of(v)
+    m = np.empty(12)
+    cb, sb, cc, sc = math.cos(qb / 2), math.sin(qb / 2), math.cos(qc / 2), math.sin(qc / 2)
+    for i in range(4):
+        for j in range(3):  # (cos^(3-i) sin^i)(cos^(2-j) sin^j): the monomials times cos^3 cos^2
+            m[3 * i + j] = cb ** (3 - i) * sb ** i * cc ** (2 - j) * sc ** j
+    norm = math.sqrt(np.sum(m * m))
+    return 1.0 - abs(np.sum(m * v)) / norm < 1e-10
+
+
 _ROWS0 = np.array([3 * i + j for i in range(3) for j in range(2)])  # monomials with both shifts inside
 _SHIFT_B, _SHIFT_C = _ROWS0 + 3, _ROWS0 + 1
 _MIX = (0.7548776662466927, 0.5698402909980532)  # a fixed generic combination of the two shifts
@@ -382,15 +395,15 @@ def _back_substitute(M, pose, roots, phase, qa_out, qb_out, qc_out, n_out):
         qa = phase + 2.0 * math.atan(roots[r])
         _at(M, n, qa, A)
         piv = _eliminate(A, perm)
-        k = 1
-        while k < 4 and piv[11 - k] < _SPLIT_TOL * piv[0]:
-            k += 1
-        _null_basis(A, perm, k, V)
+        _null_basis(A, perm, 1, V)
+        for i in range(12):
+            vecs[0, i] = V[i, 0]
         found = 1
-        if k == 1:
-            for i in range(12):
-                vecs[0, i] = V[i, 0]
-        else:
+        if not _is_monomial(vecs[0]):  # several solutions share the root: split the null space
+            k = 2
+            while k < 4 and piv[11 - k] < _SPLIT_TOL * piv[0]:
+                k += 1
+            _null_basis(A, perm, k, V)
             found = _split(V, k, vecs)
         for f in range(found):
             m = n_out[n]
