@@ -65,7 +65,7 @@ from capmap.core.reduction import LockedArm
 __all__ = ["IKSolutions", "IKMethod", "solve_chain",
            "GeneralSixR", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
            "newton", "wrap_to_range", "method_for", "closed_form_shape", "semi_analytic_shape", "COMPLETE_METHODS",
-           "RESIDUAL_TOL", "SEARCH_STEPS"]
+           "RESIDUAL_TOL", "SEARCH_STEPS", "ChainClass", "classify"]
 
 log = logging.getLogger(__name__)
 
@@ -391,3 +391,81 @@ def solve_chain(chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarra
     if not method.complete:
         _warn_incomplete(chain)
     return method.solve_chain(chain, np.asarray(T, dtype=float), lower, upper, tol)
+
+
+# --------------------------------------------------------------------------- classification
+
+_CLASS_TOL = 1e-9  # m and rad: axes closer than this to parallel / intersecting / collinear count as such
+
+
+@dataclass(frozen=True)
+class ChainClass:
+    """The geometry of a chain's joint axes, as :func:`classify` finds it (joints counted from 1 in
+    the chain, i.e. among the active joints).
+
+    pairs: for each consecutive pair (i, i+1) one of ``parallel``, ``intersecting``, ``collinear``,
+    ``skew``. spherical: triples of consecutive joints whose axes meet in one point (Pieper's
+    wrist or shoulder). collinear: consecutive joints whose axes are one line (a locked joint
+    between them held them there; a continuum of solutions: the two joints move as one).
+    method: the IK method :func:`solve` uses; complete: it finds every branch."""
+
+    n: int
+    pairs: tuple[str, ...]
+    spherical: tuple[tuple[int, int, int], ...]
+    collinear: tuple[tuple[int, int], ...]
+    method: str
+    complete: bool
+
+    def describe(self) -> str:
+        """One line: the axis relations, spherical groups, collinear pairs and the method."""
+        rel = ", ".join(f"{i + 1}-{i + 2} {p}" for i, p in enumerate(self.pairs))
+        sph = "; ".join(" ".join(map(str, t)) for t in self.spherical) or "none"
+        col = "; ".join(f"{a}={b}" for a, b in self.collinear)
+        text = f"{self.n} joints: {rel}; axes meeting in a point: {sph}"
+        if col:
+            text += f"; COLLINEAR axes {col} (a continuum of solutions: the map may overstate)"
+        return text + f" -> IK {self.method} ({'complete' if self.complete else 'may miss branches'})"
+
+
+def _axes(chain: Chain) -> tuple[np.ndarray, np.ndarray]:
+    """Points (n, 3) and unit directions (n, 3) of the joint axes at zero angles, base frame."""
+    points, dirs = [], []
+    T = chain.X[0]
+    for k in range(chain.n):
+        points.append(T[:3, 3].copy())
+        dirs.append(T[:3, 2].copy())
+        T = T @ chain.X[k + 1]
+    return np.array(points), np.array(dirs)
+
+
+def _line_distance(p1, d1, p2, d2) -> tuple[float, float]:
+    """(sin of the angle between two lines, their distance) m."""
+    c = np.cross(d1, d2)
+    s = float(np.linalg.norm(c))
+    if s < _CLASS_TOL:
+        return s, float(np.linalg.norm(np.cross(p2 - p1, d1)))
+    return s, float(abs((p2 - p1) @ c) / s)
+
+
+def classify(chain: Chain) -> ChainClass:
+    """The chain's axis geometry (tolerance 1e-9 m and rad) and its IK method; see :class:`ChainClass`.
+    Relations of consecutive axes do not depend on the joint angles."""
+    P, D = _axes(chain)
+    pairs = []
+    for i in range(chain.n - 1):
+        s, dist = _line_distance(P[i], D[i], P[i + 1], D[i + 1])
+        pairs.append("collinear" if s < _CLASS_TOL and dist < _CLASS_TOL else "parallel" if s < _CLASS_TOL
+                     else "intersecting" if dist < _CLASS_TOL else "skew")
+    spherical = []
+    for i in range(chain.n - 2):
+        A = np.stack([np.eye(3) - np.outer(d, d) for d in D[i:i + 3]])
+        b = np.einsum("kij,kj->ki", A, P[i:i + 3])
+        x, *_ = np.linalg.lstsq(A.reshape(9, 3), b.reshape(9), rcond=None)
+        far = max(float(np.linalg.norm(np.cross(x - P[k], D[k]))) for k in range(i, i + 3))
+        if far < _CLASS_TOL * 10 and all(pairs[k] == "intersecting" for k in (i, i + 1)):
+            spherical.append((i + 1, i + 2, i + 3))
+    collinear = [(i + 1, i + 2) for i, p in enumerate(pairs) if p == "collinear"]
+    method = method_of(chain)
+    return ChainClass(n=chain.n, pairs=tuple(pairs), spherical=tuple(spherical), collinear=tuple(collinear),
+                      method=method.name, complete=method.complete and not collinear)
+
