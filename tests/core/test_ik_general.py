@@ -1,0 +1,140 @@
+"""The general 6R method against independent solutions: the closed forms (another derivation) on the
+SSRMS and the UR5, the sampled configuration on random chains, a multi-start search, and a
+planted bug (a dropped eigenvalue) that these checks must catch."""
+
+import logging
+
+import numpy as np
+import pytest
+
+from capmap.config.robot_file import load
+from capmap.core import ik, ik_general
+from capmap.core.kinematics import Chain, pose_error
+from capmap.core.reduction import free, lock
+from tests.scenario import SSRMS_YAML
+
+UR5 = SSRMS_YAML.parent / "ur5.yaml"
+WRAP = 1e-6  # rad: two solutions are one (the IK's duplicate tolerance)
+
+
+def _missing(reference, found) -> int:
+    """How many of the reference solutions (per pose) are absent from ``found`` (IKSolutions each)."""
+    miss = 0
+    for n in range(len(reference.n_solutions)):
+        A = reference.q[n, : reference.n_solutions[n]]
+        B = found.q[n, : found.n_solutions[n]]
+        for a in A:
+            if not len(B) or (np.abs(np.mod(B - a + np.pi, 2 * np.pi) - np.pi).max(axis=1) > WRAP).all():
+                miss += 1
+    return miss
+
+
+def _random_chain(rng) -> Chain:
+    X = np.zeros((7, 4, 4))
+    for i in range(7):
+        q, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+        X[i, :3, :3] = q * np.sign(np.linalg.det(q))
+        X[i, :3, 3] = 0.5 * rng.standard_normal(3)
+        X[i, 3, 3] = 1.0
+    return Chain(X)
+
+
+def _arms():
+    ssrms = load(SSRMS_YAML)
+    yield "ur5", free(load(UR5))
+    for joint in (1, 2, 6, 7):
+        yield f"ssrms_j{joint}", lock(ssrms, joint, 0.7)
+
+
+@pytest.mark.parametrize("name, arm", list(_arms()), ids=lambda v: v if isinstance(v, str) else "")
+def test_agrees_with_the_closed_forms(name, arm):
+    """Closed-form chains: the general method returns exactly the closed form's solution set (every
+    closed-form branch, nothing else: both sets are complete), on 150 reachable poses."""
+    rng = np.random.default_rng(4)
+    T = arm.chain.fk(rng.uniform(arm.q_lower, arm.q_upper, (150, 6)))
+    closed = ik.method_of(arm.chain)
+    assert closed.name.startswith("closed_form")
+    a = closed.solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
+    b = ik.GeneralSixR().solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
+    assert _missing(a, b) == 0 and _missing(b, a) == 0
+
+
+@pytest.mark.parametrize("joint", [3, 4, 5])
+def test_agrees_with_the_search_on_the_middle_locks(joint):
+    """SSRMS with joint 3, 4 or 5 locked (the semi-analytical search's chains): every branch the
+    search finds, on 100 poses; measured over 300 poses each: 0 (joints 4, 5) and 7 of 1,962
+    (joint 3, poses with four solutions within 1e-3 rad of one another) missed, so this allows 1 %."""
+    arm = lock(load(SSRMS_YAML), joint, 0.3)
+    rng = np.random.default_rng(joint)
+    T = arm.chain.fk(rng.uniform(arm.q_lower, arm.q_upper, (100, 6)))
+    a = ik.SemiAnalytic().solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
+    b = ik.GeneralSixR().solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
+    assert _missing(a, b) <= 0.01 * a.n_solutions.sum()
+    assert _missing(b, a) == 0  # the search is complete: the general method finds nothing it lacks
+
+
+def test_random_chains_every_branch():
+    """Five random 6R chains (no special geometry), 60 poses each: every returned solution exact by
+    the chain's FK, the sampled configuration among them, and every solution of a 64-start Newton
+    search among them."""
+    rng = np.random.default_rng(12)
+    lo, hi = -np.pi * np.ones(6), np.pi * np.ones(6)
+    for _ in range(5):
+        chain = _random_chain(rng)
+        q = rng.uniform(lo, hi, (60, 6))
+        T = chain.fk(q)
+        sol = ik.GeneralSixR().solve_chain(chain, T, lo, hi)
+        starts = ik.MultiStartNewton().solve_chain(chain, T, lo, hi)
+        assert _missing(starts, sol) == 0
+        for n in range(len(T)):
+            Q = sol.q[n, : sol.n_solutions[n]]
+            err = pose_error(chain.fk(Q), np.repeat(T[n][None], len(Q), 0))
+            assert np.abs(err).max() <= ik.RESIDUAL_TOL
+            assert (np.abs(np.mod(Q - q[n] + np.pi, 2 * np.pi) - np.pi).max(axis=1) < WRAP).any()
+
+
+def test_a_dropped_eigenvalue_is_caught(monkeypatch):
+    """Planted bug: the companion's first real root of every pose is dropped. The closed-form
+    comparison above must then report missing branches."""
+    real_roots = ik_general._real_roots
+
+    def dropped(poly, usable):
+        pose, x = real_roots(poly, usable)
+        first = np.ones(len(pose), dtype=bool)
+        first[1:] = pose[1:] != pose[:-1]
+        return pose[~first], x[~first]
+
+    arm = free(load(UR5))
+    T = arm.chain.fk(np.random.default_rng(4).uniform(arm.q_lower, arm.q_upper, (40, 6)))
+    closed = ik.method_of(arm.chain).solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
+    monkeypatch.setattr(ik_general, "_real_roots", dropped)
+    broken = ik.GeneralSixR().solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
+    assert _missing(closed, broken) > 0
+
+
+def test_collinear_axes_are_reported(caplog):
+    """Two consecutive collinear axes (a continuum of solutions) cannot be solved exactly: the poses
+    are reported degenerate, the search fills in with a warning, and classify says so."""
+    ur5 = load(UR5)
+    chain = free(ur5).chain
+    X = chain.X.copy()
+    X[1] = np.eye(4)  # joint 2's axis on joint 1's: one line
+    X[1, 2, 3] = 0.1
+    col = Chain(X)
+    T = col.fk(np.random.default_rng(0).uniform(-np.pi, np.pi, (4, 6)))
+    _, _, degenerate = ik_general.candidates(ik_general.prepare(col), T)
+    assert degenerate.all()
+    with caplog.at_level(logging.WARNING, logger="capmap.core.ik"):
+        sol = ik.solve_chain(col, T, -np.pi * np.ones(6), np.pi * np.ones(6))
+    assert "degenerate" in caplog.text and "overstate" in caplog.text
+    assert (sol.n_solutions > 0).all()
+    info = ik.classify(col)
+    assert info.collinear == ((1, 2),) and not info.complete and "COLLINEAR" in info.describe()
+
+
+def test_classify_known_shapes():
+    ur5 = ik.classify(free(load(UR5)).chain)
+    assert ur5.pairs == ("intersecting", "parallel", "parallel", "intersecting", "intersecting")
+    assert ur5.method == "closed_form" and ur5.complete
+    j3 = ik.classify(lock(load(SSRMS_YAML), 3, 0.3).chain)
+    assert j3.method == "semi_analytic" and j3.pairs[2] == "parallel"
