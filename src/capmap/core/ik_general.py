@@ -45,7 +45,7 @@ from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["Formulation", "GeneralSolver", "prepare", "candidates", "quantities", "MAX_ROOTS"]
 
-MAX_ROOTS = 32  # candidates per pose: the 24 roots of a degree-12 determinant, some shared by several solutions
+MAX_ROOTS = 48  # candidates per pose (24 roots of a degree-12 determinant, some shared by several solutions); more: degenerate
 _SAMPLES = 25  # qa samples of the determinant: exact for degree <= 12
 _RANK_TOL = 1e-9  # sigma_8 / sigma_1 of Q below this: Q is rank deficient (special geometry)
 _DEGREE_TOL = 1e-9  # coefficients above the chain's degree must be below this (relative)
@@ -376,7 +376,7 @@ def _polynomials(M, dft, theta, W, degree, poly, status):
             big = max(big, abs(coef[k]))
             if abs(k - 12) > D:
                 high = max(high, abs(coef[k]))
-        status[n] = 2 if high > 1e-9 * big else 0
+        status[n] = 2 if high > _DEGREE_TOL * big else 0
         poly[n] = (W @ coef[12 - D: 13 + D]).real
 
 
@@ -408,6 +408,7 @@ def _back_substitute(M, pose, roots, phase, qa_out, qb_out, qc_out, n_out):
         for f in range(found):
             m = n_out[n]
             if m >= cap:
+                n_out[n] = cap + 1  # overflow: the caller treats the pose as degenerate
                 break
             qb, qc = _angles_of(vecs[f])
             qa_out[n, m], qb_out[n, m], qc_out[n, m] = qa, qb, qc
@@ -458,7 +459,9 @@ def _finish_angles(X: np.ndarray, f: int, CL, lstsq, const, T, qa, qb, qc):
 
 
 def _solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: float, T: np.ndarray):
-    """theta (N, MAX_ROOTS, 6), ok (N, MAX_ROOTS), status (N,) of one formulation on ``chain``."""
+    """theta (N, K, 6), ok (N, K), status (N,) of one formulation on ``chain``; status 0 solved, 1 a
+    determinant vanishing identically, 2 of too high a degree, 3 a rank-deficient Q, 4 more
+    candidates than MAX_ROOTS."""
     N = len(T)
     M, lstsq, const, rank = _matrices(chain.X, f, CL, T)
     M = np.ascontiguousarray(M)
@@ -469,6 +472,8 @@ def _solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase:
     qa, qb, qc = (np.zeros((N, MAX_ROOTS)) for _ in range(3))
     count = np.zeros(N, dtype=np.int64)
     _back_substitute(M, pose, x, phase, qa, qb, qc, count)
+    status[count > MAX_ROOTS] = 4
+    count = np.minimum(count, MAX_ROOTS)
     width = max(int(count.max(initial=0)), 1)
     qa, qb, qc = qa[:, :width], qb[:, :width], qc[:, :width]
     ok = (np.arange(width)[None] < count[:, None]) & (status == 0)[:, None]
