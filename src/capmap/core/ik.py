@@ -57,9 +57,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik_closed, ik_general, ik_semi
+from capmap.core import ik_classify, ik_closed, ik_general, ik_semi
+from capmap.core.ik_classify import ChainClass
+from capmap.core.ik_finish import RESIDUAL_TOL, IKSolutions, _finish, wrap_to_range
 from capmap.core.ik_numeric import multi_start, newton
-from capmap.core.kinematics import Chain, inverse_transform, pose_error
+from capmap.core.kinematics import Chain, inverse_transform
 from capmap.core.reduction import LockedArm
 
 __all__ = ["IKSolutions", "IKMethod", "solve_chain",
@@ -69,23 +71,8 @@ __all__ = ["IKSolutions", "IKMethod", "solve_chain",
 
 log = logging.getLogger(__name__)
 
-RESIDUAL_TOL = 1e-9  # m and rad
-POLISHED = 1e-13  # m, rad: candidates with a larger residual get two Newton steps
-DUPLICATE_TOL = 1e-6  # rad: two solutions closer than this (wrapped) are one
 _GEOM_TOL = 1e-9
 SEARCH_STEPS = ik_semi.SEARCH_STEPS
-
-
-@dataclass(frozen=True)
-class IKSolutions:
-    """Solutions for N targets; ``q`` is NaN beyond ``n_solutions`` in each row.
-
-    q: (N, K, n) rad (active joints of the locked arm), n_solutions: (N,) int, method: str.
-    """
-
-    q: np.ndarray
-    n_solutions: np.ndarray
-    method: str
 
 
 # --------------------------------------------------------------------------- structure
@@ -130,68 +117,6 @@ def _warn_incomplete(chain: Chain) -> None:
         log.warning("IK: this chain (%d joints) has no complete solver (those need 6 revolute joints); multi-start "
                     "Newton finds exact solutions but may miss branches, so the capacity map may overstate",
                     chain.n)
-
-
-def wrap_to_range(theta: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Shift angles by multiples of 2 pi into [lower, upper]; (theta', inside) elementwise.
-
-    Among the representatives inside the range the one nearest 0 is taken (a joint with a
-    range wider than 360 deg has further solutions 2 pi apart that are not listed).
-    """
-    base = np.mod(theta + np.pi, 2 * np.pi) - np.pi  # (-pi, pi]
-    best = np.full_like(theta, np.nan)
-    for k in (0, -1, 1, -2, 2):
-        cand = base + 2 * np.pi * k
-        inside = (cand >= lower - 1e-12) & (cand <= upper + 1e-12)
-        take = inside & (np.isnan(best) | (np.abs(cand) < np.abs(best)))
-        best = np.where(take, np.clip(cand, lower, upper), best)
-    return best, ~np.isnan(best)
-
-
-def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarray,
-            lower: np.ndarray, upper: np.ndarray, tol: float, method: str, polish: int = 2) -> IKSolutions:
-    N, K, n = theta.shape
-    flat = np.where(ok[..., None], theta, 0.0).reshape(-1, n)
-    # residuals of the candidates; Newton steps (``polish``) polish those not already at rounding level
-    idx = np.flatnonzero(ok.reshape(-1) & np.all(np.isfinite(flat), axis=1))
-    target = T_target[idx // K]
-    err = pose_error(chain.fk(flat[idx]), target)
-    rough = np.flatnonzero(np.abs(err).max(axis=1, initial=0.0) > POLISHED)
-    if len(rough):
-        flat[idx[rough]] = newton(chain, flat[idx[rough]], target[rough], iters=min(polish, 2))
-        err[rough] = pose_error(chain.fk(flat[idx[rough]]), target[rough])
-    for _ in range(polish - 2):  # further steps only for what has not converged, while it still converges
-        e = np.abs(err).max(axis=1, initial=0.0)
-        rough = np.flatnonzero((e > POLISHED) & (e < 0.1))
-        if not len(rough):
-            break
-        flat[idx[rough]] = newton(chain, flat[idx[rough]], target[rough], iters=1)
-        err[rough] = pose_error(chain.fk(flat[idx[rough]]), target[rough])
-    good = np.zeros(N * K, dtype=bool)
-    good[idx] = ((np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
-                 & np.all(np.isfinite(flat[idx]), axis=1))
-    wrapped, inside = wrap_to_range(flat, lower, upper)
-    good &= np.all(inside, axis=1) & ok.reshape(-1)
-    wrapped = wrapped.reshape(N, K, n)
-    good = good.reshape(N, K)
-    # the good candidates first (their order kept), then de-duplicate: solution j repeats an earlier good i
-    # when all wrapped differences are tiny
-    first = np.argsort(~good, axis=1, kind="stable")
-    Kg = max(int(good.sum(axis=1).max(initial=0)), 1)
-    wrapped = np.take_along_axis(wrapped, first[..., None], axis=1)[:, :Kg]
-    good = np.take_along_axis(good, first, axis=1)[:, :Kg]
-    diff = wrapped[:, :, None, :] - wrapped[:, None, :, :]
-    same = np.all(np.abs(np.mod(diff + np.pi, 2 * np.pi) - np.pi) < DUPLICATE_TOL, axis=-1)  # (N, Kg, Kg)
-    earlier = np.tril(np.ones((Kg, Kg), dtype=bool), -1)  # [j, i]: i < j
-    dup = np.any(same & earlier & good[:, None, :], axis=-1)
-    keep = good & ~dup
-    order = np.argsort(~keep, axis=1, kind="stable")
-    q = np.full((N, max(K, Kg), n), np.nan)
-    q[:, :Kg] = np.take_along_axis(wrapped, order[..., None], axis=1)
-    count = keep.sum(axis=1)
-    q[np.arange(q.shape[1])[None, :] >= count[:, None]] = np.nan
-    width = K if method.startswith("closed_form") else max(int(count.max(initial=0)), 1)
-    return IKSolutions(q=q[:, :width], n_solutions=count, method=method)
 
 
 # --------------------------------------------------------------------------- methods
@@ -406,79 +331,7 @@ def solve_chain(chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarra
     return method.solve_chain(chain, np.asarray(T, dtype=float), lower, upper, tol)
 
 
-# --------------------------------------------------------------------------- classification
-
-_CLASS_TOL = 1e-9  # m and rad: axes closer than this to parallel / intersecting / collinear count as such
-
-
-@dataclass(frozen=True)
-class ChainClass:
-    """The geometry of a chain's joint axes, as :func:`classify` finds it (joints counted from 1 in
-    the chain, i.e. among the active joints).
-
-    pairs: for each consecutive pair (i, i+1) one of ``parallel``, ``intersecting``, ``collinear``,
-    ``skew``. spherical: triples of consecutive joints whose axes meet in one point (Pieper's
-    wrist or shoulder). collinear: consecutive joints whose axes are one line (a locked joint
-    between them held them there; a continuum of solutions: the two joints move as one).
-    method: the IK method :func:`solve` uses; complete: it finds every branch."""
-
-    n: int
-    pairs: tuple[str, ...]
-    spherical: tuple[tuple[int, int, int], ...]
-    collinear: tuple[tuple[int, int], ...]
-    method: str
-    complete: bool
-
-    def describe(self) -> str:
-        """One line: the axis relations, spherical groups, collinear pairs and the method."""
-        rel = ", ".join(f"{i + 1}-{i + 2} {p}" for i, p in enumerate(self.pairs))
-        sph = "; ".join(" ".join(map(str, t)) for t in self.spherical) or "none"
-        col = "; ".join(f"{a}={b}" for a, b in self.collinear)
-        text = f"{self.n} joints: {rel}; axes meeting in a point: {sph}"
-        if col:
-            text += f"; COLLINEAR axes {col} (a continuum of solutions: the map may overstate)"
-        return text + f" -> IK {self.method} ({'complete' if self.complete else 'may miss branches'})"
-
-
-def _axes(chain: Chain) -> tuple[np.ndarray, np.ndarray]:
-    """Points (n, 3) and unit directions (n, 3) of the joint axes at zero angles, base frame."""
-    points, dirs = [], []
-    T = chain.X[0]
-    for k in range(chain.n):
-        points.append(T[:3, 3].copy())
-        dirs.append(T[:3, 2].copy())
-        T = T @ chain.X[k + 1]
-    return np.array(points), np.array(dirs)
-
-
-def _line_distance(p1, d1, p2, d2) -> tuple[float, float]:
-    """(sin of the angle between two lines, their distance) m."""
-    c = np.cross(d1, d2)
-    s = float(np.linalg.norm(c))
-    if s < _CLASS_TOL:
-        return s, float(np.linalg.norm(np.cross(p2 - p1, d1)))
-    return s, float(abs((p2 - p1) @ c) / s)
-
-
 def classify(chain: Chain) -> ChainClass:
-    """The chain's axis geometry (tolerance 1e-9 m and rad) and its IK method; see :class:`ChainClass`.
-    Relations of consecutive axes do not depend on the joint angles."""
-    P, D = _axes(chain)
-    pairs = []
-    for i in range(chain.n - 1):
-        s, dist = _line_distance(P[i], D[i], P[i + 1], D[i + 1])
-        pairs.append("collinear" if s < _CLASS_TOL and dist < _CLASS_TOL else "parallel" if s < _CLASS_TOL
-                     else "intersecting" if dist < _CLASS_TOL else "skew")
-    spherical = []
-    for i in range(chain.n - 2):
-        A = np.stack([np.eye(3) - np.outer(d, d) for d in D[i:i + 3]])
-        b = np.einsum("kij,kj->ki", A, P[i:i + 3])
-        x, *_ = np.linalg.lstsq(A.reshape(9, 3), b.reshape(9), rcond=None)
-        far = max(float(np.linalg.norm(np.cross(x - P[k], D[k]))) for k in range(i, i + 3))
-        if far < _CLASS_TOL * 10 and all(pairs[k] == "intersecting" for k in (i, i + 1)):
-            spherical.append((i + 1, i + 2, i + 3))
-    collinear = [(i + 1, i + 2) for i, p in enumerate(pairs) if p == "collinear"]
+    """The chain's axis geometry and the IK method :func:`solve` uses for it (:mod:`capmap.core.ik_classify`)."""
     method = method_of(chain)
-    return ChainClass(n=chain.n, pairs=tuple(pairs), spherical=tuple(spherical), collinear=tuple(collinear),
-                      method=method.name, complete=method.complete and not collinear)
-
+    return ik_classify.classify(chain, method.name, method.complete)
