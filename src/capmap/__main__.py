@@ -66,7 +66,7 @@ def _check_config(files: list[str]) -> int:
     except CapmapError as exc:
         print(f"capmap: {exc}", file=sys.stderr)
         return 1
-    print(f"capmap: {source}: valid; run {run.name!r}; {run.failure.describe()}")
+    print(f"capmap: {source}: valid; run {run.name!r}; {run.failure.describe()}; {run.limits.describe()}")
     return 0
 
 

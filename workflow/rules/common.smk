@@ -32,6 +32,9 @@ def out(path):
 
 print(f"capmap: run {RUN.name!r}: outputs under {OUT}/", file=sys.stderr)
 print(f"capmap: {RUN.failure.describe()}", file=sys.stderr)
+print(f"capmap: {RUN.limits.describe()}", file=sys.stderr)
+# the report's scenario text (workflow/report/workflow.rst sees only the config): what the checks resolved
+config["resolved"] = {"joint_torque_nm": RUN.limits.torque_text(), "torque_limit_source": RUN.limits.torque_limit_source}
 print(f"capmap: estimate: {RUN.estimate.describe(RUN.voxel_edge_m)}", file=sys.stderr)
 for _path in missing_catalogued(out("catalogue.parquet")) + missing_catalogued(out("atlas/catalogue.parquet")):
     # Snakemake would not rebuild it by itself (its consumers are up to date): say so, with the command

@@ -29,7 +29,7 @@ from capmap.errors import NoPath
 __all__ = ["GainMap", "GainVerifier", "MIN_SEPARATION", "SWEEP_PERCENTILES", "gain_payloads", "gain_tasks", "gain_summary"]
 
 MIN_SEPARATION = 3  # voxels between start and goal (Chebyshev), so that a detour is possible
-SWEEP_PERCENTILES = (50, 75, 90)  # payloads besides the task's: these percentiles of the map (rounded to 100 kg)
+SWEEP_PERCENTILES = (50, 75, 90)  # payloads besides the task's: these percentiles of the map (2 significant digits)
 
 
 @dataclass(frozen=True)
@@ -67,10 +67,15 @@ def _try(fn: Callable):
         return None
 
 
+def _two_digits(x: float) -> float:
+    """x rounded to two significant digits (3217 -> 3200 kg for the SSRMS, 9.437 -> 9.4 kg for a Panda)."""
+    return float(f"{x:.2g}") if x > 0 else 0.0
+
+
 def gain_payloads(capacity_kg: np.ndarray, task_payloads_kg) -> tuple[list[float], list[float]]:
     """(every payload of the experiment, sorted; the map's percentile payloads) [kg]."""
     positive = capacity_kg[np.nan_to_num(capacity_kg, nan=0.0) > 0]
-    sweep = [float(np.round(np.percentile(positive, q), -2)) for q in SWEEP_PERCENTILES] if len(positive) else []
+    sweep = [_two_digits(float(np.percentile(positive, q))) for q in SWEEP_PERCENTILES] if len(positive) else []
     return sorted(set(map(float, task_payloads_kg)) | set(sweep)), sweep
 
 

@@ -37,6 +37,7 @@ def model_table(robot: Robot) -> pd.DataFrame:
         rows.append({
             "joint": j, "name": m.names[j], "type": m.joints[j].shortname(),
             "lower_deg": np.rad2deg(robot.q_lower[j - 1]), "upper_deg": np.rad2deg(robot.q_upper[j - 1]),
+            "effort_nm": np.nan if robot.effort_limit_nm is None else robot.effort_limit_nm[j - 1],  # the URDF's
             "placement_x_m": M.translation[0], "placement_y_m": M.translation[1], "placement_z_m": M.translation[2],
             "placement_roll_deg": rpy[0], "placement_pitch_deg": rpy[1], "placement_yaw_deg": rpy[2],
             "mass_kg": inertia.mass, "com_x_m": inertia.lever[0], "com_y_m": inertia.lever[1], "com_z_m": inertia.lever[2],

@@ -3,7 +3,7 @@ voxels, verification. Frozen dataclasses built from the validated config documen
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -16,7 +16,7 @@ from capmap.config.validation import as_tuple, per_item
 from capmap.errors import CapmapError, ConfigError
 
 __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "DirectionsConfig", "VerificationConfig",
-           "RefineConfig", "PlanningConfig", "rotation_from_rpy", "PLAN_MOVES"]
+           "RefineConfig", "PlanningConfig", "rotation_from_rpy", "PLAN_MOVES", "TORQUE_FROM_CONFIG", "TORQUE_FROM_URDF"]
 
 PLAN_MOVES = ("branch", "axis", "isotropic")  # planning.moves; the first is the default
 MAX_DIRECTIONS = 1_000_000  # directions a set may be built from (the paper's grid before its duplicates go)
@@ -55,11 +55,13 @@ class RefineConfig:
 
 @dataclass(frozen=True)
 class PlanningConfig:
-    """``planning``: the kind of moves (``PLAN_MOVES``) and the random tasks per payload of the
-    plan_gain experiment."""
+    """``planning``: the kind of moves (``PLAN_MOVES``), the random tasks per payload of the
+    plan_gain experiment, and the spacing of the samples a branch move is tracked at (None: the
+    planner's own, :data:`capmap.capacity.branch_moves.TRACK_STEP_M`)."""
 
     moves: str = PLAN_MOVES[0]
     gain_tasks: int = 30
+    track_step_m: float | None = None
 
 
 DEFAULT_DT_S = 0.1  # verification.dt_s when not given
@@ -112,17 +114,54 @@ class TaskConfig:
         return Motion(self.v_max_mps, self.a_max_mps2)
 
 
+TORQUE_FROM_CONFIG = "config limits.joint_torque_nm"  # LimitsConfig.torque_limit_source
+TORQUE_FROM_URDF = "urdf effort"
+
+
 @dataclass(frozen=True)
 class LimitsConfig:
-    """``limits``: joint torque (one value or one per joint), base force and moment (one or three)."""
+    """``limits``: joint torque (one value or one per joint), base force and moment (one or three).
+    Without ``limits.joint_torque_nm`` the joint torque limits are the URDF's ``<limit effort>`` of
+    each joint (this is the key's default, filled in with the robot by :meth:`for_robot`);
+    ``torque_limit_source`` says which (:data:`TORQUE_FROM_CONFIG` or :data:`TORQUE_FROM_URDF`)."""
 
-    joint_torque_nm: float | tuple[float, ...]
     base_force_n: float | tuple[float, ...]
     base_moment_nm: float | tuple[float, ...]
+    joint_torque_nm: float | tuple[float, ...] | None = None  # None until for_robot: the URDF's effort limits
+    torque_limit_source: str = TORQUE_FROM_CONFIG
 
     @classmethod
     def from_doc(cls, d: dict) -> "LimitsConfig":
-        return cls(**{k: as_tuple(v) for k, v in d.items()})
+        out = {k: as_tuple(v) for k, v in d.items()}
+        return cls(**out, torque_limit_source=TORQUE_FROM_CONFIG if "joint_torque_nm" in d else TORQUE_FROM_URDF)
+
+    def for_robot(self, robot) -> "LimitsConfig":
+        """The limits with the joint torque limits resolved: the config's, else the URDF effort limit of
+        each joint of ``robot`` (:class:`capmap.core.robot.Robot`). A DH robot (no effort limits) or a
+        joint whose effort limit is missing or zero, with no ``limits.joint_torque_nm``: one line
+        naming the joint."""
+        if self.joint_torque_nm is not None:
+            return self
+        src = robot.description.source
+        if robot.effort_limit_nm is None:
+            raise ConfigError(f"limits.joint_torque_nm is required: the robot file {src} gives DH rows, which carry "
+                              "no joint effort limits (a URDF's <limit effort> would be the default)")
+        for name, effort in zip(robot.joint_names, robot.effort_limit_nm):
+            if not (np.isfinite(effort) and effort > 0):
+                raise ConfigError(f"limits.joint_torque_nm is not given and {src}'s URDF "
+                                  f"{robot.description.urdf_path.name} has {'no' if not np.isfinite(effort) else 'a zero'}"
+                                  f" effort limit for joint {name}: give limits.joint_torque_nm (N m)")
+        return replace(self, joint_torque_nm=tuple(float(e) for e in robot.effort_limit_nm))
+
+    def torque_text(self) -> str:
+        """The joint torque limits as text, e.g. ``87, 87, 87, 87, 12, 12, 12`` (N m) or ``700`` (every joint)."""
+        tau = self.joint_torque_nm
+        return "(not filled in)" if tau is None else ", ".join(f"{t:g}" for t in np.atleast_1d(tau))
+
+    def describe(self) -> str:
+        """The joint torque limits and where they come from, e.g. ``joint torque limits 87, ..., 12 N m
+        (from urdf effort)``."""
+        return f"joint torque limits {self.torque_text()} N m (from {self.torque_limit_source})"
 
     def canonical(self) -> "LimitsConfig":
         """The same limits with a list of equal values written as the one value (``[700] * 7`` and
@@ -133,6 +172,9 @@ class LimitsConfig:
 
     def resolve(self, n_joints: int) -> LoadLimits:
         """:class:`LoadLimits` for an arm with n_joints joints (length checks here)."""
+        if self.joint_torque_nm is None:
+            raise CapmapError("limits.joint_torque_nm: the URDF's effort limits are not filled in "
+                              "(LimitsConfig.for_robot, done by check_run_config)")
         return LoadLimits(per_item(self.joint_torque_nm, n_joints, "limits.joint_torque_nm"),
                           per_item(self.base_force_n, 3, "limits.base_force_n"),
                           per_item(self.base_moment_nm, 3, "limits.base_moment_nm"))

@@ -60,7 +60,11 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     robot = load(cfg.robot)
     failure = resolve_failure(robot, cfg.lock, cfg.task, source)
     arm = locked_arm(robot, failure.joint, failure.angle_deg)
-    limits = cfg.limits.resolve(robot.n_joints).for_arm(arm)
+    try:
+        limits_cfg = cfg.limits.for_robot(robot)  # the URDF's effort limits unless limits.joint_torque_nm
+        limits = limits_cfg.resolve(robot.n_joints).for_arm(arm)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
     dirs = cfg.directions.build()
     check_goal(arm, cfg.task, failure, source)
     check_tasks(cfg.tasks, arm, cfg.task, failure, source)
@@ -94,7 +98,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
             raise ConfigError(f"{source}: {exc}") from None
     if cfg.dualarm is not None:
         check_dualarm(cfg, source)
-    return replace(cfg, failure=failure, estimate=estimate, limits=cfg.limits.canonical())
+    return replace(cfg, failure=failure, estimate=estimate, limits=limits_cfg.canonical())
 
 
 def check_dt(cfg: RunConfig, source: str = "config") -> None:

@@ -2,8 +2,10 @@
 
 Schema: ``capmap/config/schemas/robot.schema.json``. A robot is given either by DH rows
 (modified/Craig or standard) with per-link mass, centre of mass and inertia, or by a URDF
-file (a path relative to the robot file, or a file shipped by a pip package). Every
-problem is one :class:`capmap.errors.ConfigError` line naming the file and the key.
+file (a path relative to the robot file, or a file shipped by a pip package), with the URDF
+joints to hold fixed (``locked``: name -> value, rad or m) and optionally the arm's joints
+(``joints``, root first). Every problem is one :class:`capmap.errors.ConfigError` line naming
+the file and the key.
 """
 
 from __future__ import annotations
@@ -113,6 +115,10 @@ def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> Robot
         for i, (lo, hi) in enumerate(ranges):
             if not lo < hi:
                 raise ConfigError(f"{source}: joint_range_deg[{i}] = {doc['joint_range_deg'][i]}: lower must be < upper")
+    if not has_urdf:
+        for key in ("locked", "joints"):
+            if key in doc:
+                raise ConfigError(f"{source}: '{key}' is only for URDF robots (a DH robot's joints all move)")
     if has_urdf:
         if "links" in doc:
             raise ConfigError(f"{source}: 'links' is only for DH robots; a URDF carries its own inertias")
@@ -126,8 +132,11 @@ def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> Robot
             raise ConfigError(f"{source}: urdf.path = {doc['urdf']['path']!r}: "
                               f"{'not a regular file' if path.exists() else 'no such file'}")
         check_urdf(path, source)
+        joints = tuple(doc["joints"]) if "joints" in doc else None
         return RobotDescription(convention=None, dh=None, links=(), joint_range_rad=ranges,
-                                urdf_path=path, urdf_ee_frame=doc["urdf"]["ee_frame"], **common)
+                                urdf_path=path, urdf_ee_frame=doc["urdf"]["ee_frame"],
+                                urdf_locked=tuple((str(k), float(v)) for k, v in doc.get("locked", {}).items()),
+                                urdf_joints=joints, **common)
     if "links" not in doc:
         raise ConfigError(f"{source}: a DH robot needs 'links' (mass, centre of mass, inertia per link)")
     rows = np.asarray(doc["dh"]["rows"], dtype=float)

@@ -56,7 +56,7 @@ def _refine(cfg: RunConfig) -> tuple[str, ...]:  # voxels near any task payload 
 
 def _plan(cfg: RunConfig) -> tuple[str, ...]:  # moves on the executed branch start from its configuration
     return ("job.payload_kg", "job.start_m", "job.goal_m", "planning.moves") + (
-        ("job.q_start_deg",) if cfg.planning.moves == "branch" else ())
+        ("job.q_start_deg", "planning.track_step_m") if cfg.planning.moves == "branch" else ())
 
 
 _RECONFIG = ("robot", "capture", "unlock", "configuration_deg", "theta_deg", "d_m", "duration_s", "dt_s",

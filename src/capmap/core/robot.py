@@ -191,7 +191,7 @@ def _locked_reference(desc: RobotDescription, model: pin.Model) -> tuple[list[in
     ids = []
     for name, value in desc.urdf_locked:
         key = f"{desc.source}: locked.{name}"
-        if not model.existJointName(name):
+        if name == model.names[0] or not model.existJointName(name):  # names[0]: 'universe', no joint
             movable = [model.names[j] for j in range(1, model.njoints)]
             raise ConfigError(f"{key}: the URDF has no movable joint {name!r} (its joints: {', '.join(movable)})")
         j = model.getJointId(name)
@@ -222,11 +222,11 @@ def _check_chain(desc: RobotDescription, model: pin.Model) -> None:
     if bad:
         raise ConfigError(f"{desc.source}: the arm must be a serial chain of 1-DOF revolute joints, but "
                           f"{', '.join(bad)} {'is' if len(bad) == 1 else 'are'} not: {hint}")
-    branches = [f"{names[j - 1]} (on {model.names[model.parents[j]]}, not {model.names[j - 1]})"
-                for j in range(2, model.njoints) if model.parents[j] != j - 1]
-    if branches or (names and model.parents[1] != 0):
-        raise ConfigError(f"{desc.source}: the joints {', '.join(names)} are not a serial chain: "
-                          f"{', '.join(branches) or names[0] + ' is not on the base'} branch off: {hint}")
+    branches = [f"{names[j - 1]} follows {model.names[model.parents[j]] if model.parents[j] else 'the base'}, "
+                f"not {names[j - 2]}" for j in range(2, model.njoints) if model.parents[j] != j - 1]
+    if branches:
+        raise ConfigError(f"{desc.source}: the joints {', '.join(names)} are not a serial chain ({'; '.join(branches)}): "
+                          f"{hint}")
     if desc.urdf_joints is not None and tuple(names) != desc.urdf_joints:
         raise ConfigError(f"{desc.source}: joints = [{', '.join(desc.urdf_joints)}] is not the chain's order root "
                           f"first ({', '.join(names)})")
@@ -247,7 +247,7 @@ def _build_urdf_model(desc: RobotDescription) -> tuple[pin.Model, np.ndarray]:
         raise ConfigError(f"{desc.source}: urdf.ee_frame = {desc.urdf_ee_frame!r} is not a frame of the URDF")
     locked, q_ref = _locked_reference(desc, full)
     if desc.urdf_joints is not None:
-        absent = [n for n in desc.urdf_joints if not full.existJointName(n)]
+        absent = [n for n in desc.urdf_joints if n == full.names[0] or not full.existJointName(n)]
         if absent:
             raise ConfigError(f"{desc.source}: joints: the URDF has no movable joint {absent[0]!r}")
         both = [n for n in desc.urdf_joints if n in dict(desc.urdf_locked)]

@@ -71,8 +71,9 @@ def _branch_plan(sc: StageConfig, grid, vox: pd.DataFrame, task: PlanTask,
     the planned configuration at each waypoint, cost, expansions, log line."""
     at = arm_task_from(sc.run)
     arm = at.arm
+    step = sc.run.planning.track_step_m
     problem = branch_planning.BranchProblem(ArmDynamics(arm), grid, at.rotation, at.motion, at.limits,
-                                            (vox.n_reachable > 0).to_numpy())
+                                            (vox.n_reachable > 0).to_numpy(), **({} if step is None else {"step_m": step}))
     q_start = np.deg2rad(np.asarray(task.q_start_deg, dtype=float))[arm.active]
     p = branch_planning.plan_on_branch(problem, task.start_m, task.goal_m, q_start, payload)
     df = _waypoint_frame(p, grid, vox.capacity_kg.to_numpy())
