@@ -7,6 +7,9 @@
 - ``python -m capmap check-config [FILE ...]`` reads and checks config files with capmap's own
   loader (what the workflow checks before any job, without Snakemake reading the file first:
   Snakemake evaluates YTE templates in a ``--configfile``); exit status 1 and one line on a problem.
+- ``python -m capmap arm ROBOT_FILE [--angle-deg A]`` prints, for the robot with each joint locked in
+  turn (at A, clipped to the joint's range; default mid-range), the geometry of the remaining
+  chain's axes and the IK method it gets, and whether that method finds every branch.
 """
 
 from __future__ import annotations
@@ -30,9 +33,14 @@ def main(argv: list[str] | None = None) -> int:
     chk.add_argument("runs", nargs="*", help="run folders, results/<run> (default: every run under results/)")
     cfg = sub.add_parser("check-config", help="read and check config files as the workflow does, before any job")
     cfg.add_argument("files", nargs="*", default=[DEFAULT_CONFIG], help=f"config files (default: {DEFAULT_CONFIG})")
+    arm = sub.add_parser("arm", help="the IK classification of a robot with each joint locked in turn")
+    arm.add_argument("robot", help="a robot file (config/robots/*.yaml)")
+    arm.add_argument("--angle-deg", type=float, default=None, help="the lock angle (default: mid-range)")
     args = ap.parse_args(argv)
     if args.command == "check-config":
         return _check_config(args.files)
+    if args.command == "arm":
+        return _arm(args.robot, args.angle_deg)
     runs = [Path(r) for r in args.runs] or sorted(p for p in Path("results").glob("*") if p.is_dir())
     absent = [r for r in runs if not r.is_dir()]
     bare = [r for r in runs if r.is_dir() and not (r / "catalogue.parquet").is_file()]
@@ -67,6 +75,29 @@ def _check_config(files: list[str]) -> int:
         print(f"capmap: {exc}", file=sys.stderr)
         return 1
     print(f"capmap: {source}: valid; run {run.name!r}; {run.failure.describe()}; {run.limits.describe()}")
+    return 0
+
+
+def _arm(path: str, angle_deg: float | None) -> int:
+    import numpy as np
+
+    from capmap.config.robot_file import load
+    from capmap.core.ik import classify
+    from capmap.core.reduction import free, lock
+
+    try:
+        robot = load(path)
+    except CapmapError as exc:
+        print(f"capmap: {exc}", file=sys.stderr)
+        return 1
+    names = ", ".join(robot.joint_names)
+    print(f"capmap: {robot.name}: {robot.n_joints} joints ({names})")
+    if robot.n_joints == 6:
+        print(f"  no joint locked: {classify(free(robot).chain).describe()}")
+    for j in range(1, robot.n_joints + 1):
+        lo, hi = robot.q_lower[j - 1], robot.q_upper[j - 1]
+        angle = (lo + hi) / 2 if angle_deg is None else float(np.clip(np.deg2rad(angle_deg), lo, hi))
+        print(f"  joint {j} locked at {np.rad2deg(angle):g} deg: {classify(lock(robot, j, angle).chain).describe()}")
     return 0
 
 
