@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 
 from capmap.config.checks import check_run_config
+from capmap.config.robot_file import load, lock_classes
 from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.errors import CapmapError
 from capmap.io.datasets import verify_catalogue
@@ -79,25 +80,14 @@ def _check_config(files: list[str]) -> int:
 
 
 def _arm(path: str, angle_deg: float | None) -> int:
-    import numpy as np
-
-    from capmap.config.robot_file import load
-    from capmap.core.ik import classify
-    from capmap.core.reduction import free, lock
-
     try:
         robot = load(path)
     except CapmapError as exc:
         print(f"capmap: {exc}", file=sys.stderr)
         return 1
-    names = ", ".join(robot.joint_names)
-    print(f"capmap: {robot.name}: {robot.n_joints} joints ({names})")
-    if robot.n_joints == 6:
-        print(f"  no joint locked: {classify(free(robot).chain).describe()}")
-    for j in range(1, robot.n_joints + 1):
-        lo, hi = robot.q_lower[j - 1], robot.q_upper[j - 1]
-        angle = (lo + hi) / 2 if angle_deg is None else float(np.clip(np.deg2rad(angle_deg), lo, hi))
-        print(f"  joint {j} locked at {np.rad2deg(angle):g} deg: {classify(lock(robot, j, angle).chain).describe()}")
+    print(f"capmap: {robot.name}: {robot.n_joints} joints ({', '.join(robot.joint_names)})")
+    for line in lock_classes(robot, angle_deg):
+        print(f"  {line}")
     return 0
 
 

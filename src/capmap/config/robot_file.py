@@ -19,10 +19,12 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.config.validation import load_yaml, read_regular_file, validate
+from capmap.core.ik import classify
+from capmap.core.reduction import free, lock
 from capmap.core.robot import LinkInertia, Robot, RobotDescription, build_robot
 from capmap.errors import ConfigError
 
-__all__ = ["parse_robot", "load_robot", "load", "package_file", "transform", "referenced_files", "check_urdf",
+__all__ = ["lock_classes", "parse_robot", "load_robot", "load", "package_file", "transform", "referenced_files", "check_urdf",
            "urdf_package_dir", "mesh_search_dirs", "check_meshes"]
 
 _YAML_SUFFIXES = (".yaml", ".yml")
@@ -288,3 +290,15 @@ def referenced_files(path: str | Path) -> list[Path]:
             if "capsules" in doc:
                 out += _mesh_files(target)
     return out
+
+
+def lock_classes(robot: Robot, angle_deg: float | None = None) -> list[str]:
+    """One line per joint locked in turn (at ``angle_deg`` clipped to its range; default mid-range,
+    plus "no joint locked" for a 6-joint arm): the remaining chain's axis geometry and IK method
+    (:func:`capmap.core.ik.classify`)."""
+    lines = [f"no joint locked: {classify(free(robot).chain).describe()}"] if robot.n_joints == 6 else []
+    for j in range(1, robot.n_joints + 1):
+        lo, hi = robot.q_lower[j - 1], robot.q_upper[j - 1]
+        angle = (lo + hi) / 2 if angle_deg is None else float(np.clip(np.deg2rad(angle_deg), lo, hi))
+        lines.append(f"joint {j} locked at {np.rad2deg(angle):g} deg: {classify(lock(robot, j, angle).chain).describe()}")
+    return lines

@@ -26,10 +26,12 @@ no special case), the least-squares solution of Q gives qu, qv, and the orientat
 
 Degenerate cases are detected, never silently dropped: a rank-deficient Q or a determinant that
 vanishes identically (special geometries, where some formulations fail), or a determinant of
-higher degree than the chain's, marks the pose; :func:`candidates` then tries the other
-formulations, and a pose none of them solves is returned in ``degenerate`` (the caller falls back
-to a search there and says so). The chain's formulation (the best-conditioned one) and the degree
-of its determinant are found once per chain (:func:`prepare`) from poses of a seeded generator.
+higher degree than the chain's, marks the pose. :func:`candidates` solves every pose with the two
+best formulations and joins their candidates (one formulation's roots can lose solutions another
+keeps) and tries further formulations for a pose both leave unsolved; a pose none of them solves
+is returned in ``degenerate`` (the caller falls back to a search there and says so). The ranking of
+the formulations and the degrees of their determinants are found once per chain
+(:func:`prepare`) from poses of a seeded generator.
 """
 
 from __future__ import annotations
@@ -292,28 +294,37 @@ def prepare(chain: Chain, rng: np.random.Generator | None = None, n_poses: int =
                          phase=phase, recovered=tuple(scores[i][0] for i in order))
 
 
-def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Candidate solutions (N, MAX_ROOTS, 6) rad, their validity (N, MAX_ROOTS) and the poses no
-    formulation solved (N,) bool, for targets T (N, 4, 4) in the chain's base frame."""
+UNION = 2  # formulations every pose is solved by (their candidates joined): one formulation's roots can lose
+# solutions another keeps (measured: Baxter's left arm with joint 2 locked, 4 of 8 lost by the best-ranked one)
+
+
+def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate solutions (N, K, 6) rad, their validity (N, K) and the poses no formulation solved
+    (N,) bool, for targets T (N, 4, 4) in the chain's base frame. Every pose is solved by the
+    ``UNION`` best formulations that recover every test pose (the best one at least), their
+    candidates joined; a pose they both leave unsolved tries the next formulations."""
     N = len(T)
-    theta = np.zeros((N, MAX_ROOTS, 6))
-    ok = np.zeros((N, MAX_ROOTS), dtype=bool)
-    todo = np.arange(N)
-    width = 1
+    parts = []
+    solved = np.zeros(N, dtype=bool)
+    used = 0
     for k, form in enumerate(solver.order[:max_tries]):
-        if not len(todo):
+        union = used < UNION and (k == 0 or solver.recovered[k] == 1.0)
+        rows = np.arange(N) if union else np.flatnonzero(~solved)
+        if not len(rows):
             break
         ch = solver.formulation_chain(k)
-        Tk = inverse_transform(T[todo]) if form.reversed else T[todo]
+        Tk = inverse_transform(T[rows]) if form.reversed else T[rows]
         th, good, status = _solve_formulation(ch, form.f, solver.left[k], solver.degrees[k], solver.phase,
                                               np.ascontiguousarray(Tk))
         if form.reversed:
             th = -th[..., ::-1]
         done = status == 0
-        w = th.shape[1]
-        width = max(width, w)
-        theta[todo[done], :w], ok[todo[done], :w] = th[done], good[done]
-        todo = todo[~done]
-    degenerate = np.zeros(N, dtype=bool)
-    degenerate[todo] = True
-    return theta[:, :width], ok[:, :width], degenerate
+        theta = np.zeros((N,) + th.shape[1:])
+        ok = np.zeros((N, th.shape[1]), dtype=bool)
+        theta[rows[done]], ok[rows[done]] = th[done], good[done]
+        parts.append((theta, ok))
+        solved[rows[done]] = True
+        used += union
+    theta = np.concatenate([p[0] for p in parts], axis=1)
+    ok = np.concatenate([p[1] for p in parts], axis=1)
+    return theta, ok, ~solved
