@@ -17,6 +17,16 @@ _DEGREE_TOL = 1e-9  # coefficients above the chain's degree must be below this (
 _LIVE_TOL = 1e-12  # smallest / largest full-pivoting pivot of M(qa) above this at some sample: M is not singular for all qa
 
 
+@numba.njit(cache=True, inline="always")
+def _below(A, k):
+    """One elimination step: rows below pivot row k minus their multiple of it (columns > k)."""
+    n = A.shape[0]
+    for i in range(k + 1, n):
+        m = A[i, k] / A[k, k]
+        for j in range(k + 1, n):
+            A[i, j] -= m * A[k, j]
+
+
 @numba.njit(cache=True)
 def _det(A):
     """Determinant of a small square matrix by partial-pivot elimination (A is overwritten)."""
@@ -34,10 +44,7 @@ def _det(A):
                 A[k, j], A[p, j] = A[p, j], A[k, j]
             d = -d
         d *= A[k, k]
-        for i in range(k + 1, n):
-            m = A[i, k] / A[k, k]
-            for j in range(k + 1, n):
-                A[i, j] -= m * A[k, j]
+        _below(A, k)
     return d
 
 
@@ -63,10 +70,7 @@ def _eliminate(A, perm):
         for i in range(n):
             A[i, k], A[i, bj] = A[i, bj], A[i, k]
         perm[k], perm[bj] = perm[bj], perm[k]
-        for i in range(k + 1, n):
-            m = A[i, k] / A[k, k]
-            for j in range(k + 1, n):
-                A[i, j] -= m * A[k, j]
+        _below(A, k)
     return piv
 
 
