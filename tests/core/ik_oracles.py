@@ -5,7 +5,8 @@
   ranges, batched with numpy over targets and starts. The forward kinematics and Jacobian it
   iterates on are a product of exponentials (:class:`PoE`) read off the Pinocchio model at q = 0
   (joint screws from ``pin.forwardKinematics`` and each joint's motion subspace), a different
-  parametrisation from capmap's ``X0 Rz(q1) X1 ...``. Every distinct converged solution is then
+  parametrisation from capmap's ``X0 Rz(q1) X1 ...``. Converged starts are polished by undamped Newton
+  steps to <= 1e-12, and every distinct one is then
   checked by Pinocchio's own FK (``pin.framesForwardKinematics``, ``pin.log6``): position and
   orientation error <= 1e-9. With enough starts the set is every IK branch, but a random-restart
   search can only ever under-report, never invent: it is the reference for "nothing missed".
