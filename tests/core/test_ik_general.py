@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from capmap.config.robot_file import load
-from capmap.core import ik, ik_general
+from capmap.core import ik, ik_general, ik_general_select
 from capmap.core.kinematics import Chain, pose_error
 from capmap.core.reduction import free, lock
 from tests.scenario import SSRMS_YAML
@@ -99,10 +99,10 @@ def test_a_dropped_eigenvalue_is_caught(monkeypatch):
     real_roots = ik_general._real_roots
 
     def dropped(poly, usable):
-        pose, x = real_roots(poly, usable)
-        first = np.ones(len(pose), dtype=bool)
-        first[1:] = pose[1:] != pose[:-1]
-        return pose[~first], x[~first]
+        roots = real_roots(poly, usable)
+        first = np.ones(len(roots.pose), dtype=bool)
+        first[1:] = roots.pose[1:] != roots.pose[:-1]
+        return roots._replace(pose=roots.pose[~first], x=roots.x[~first], imag=roots.imag[~first])
 
     arm = free(load(UR5))
     T = arm.chain.fk(np.random.default_rng(4).uniform(arm.q_lower, arm.q_upper, (40, 6)))
@@ -122,7 +122,7 @@ def test_collinear_axes_are_reported(caplog):
     X[1, 2, 3] = 0.1
     col = Chain(X)
     T = col.fk(np.random.default_rng(0).uniform(-np.pi, np.pi, (4, 6)))
-    _, _, degenerate = ik_general.candidates(ik_general.prepare(col), T)
+    _, _, degenerate = ik_general_select.candidates(ik_general_select.prepare(col), T)
     assert degenerate.all()
     with caplog.at_level(logging.WARNING, logger="capmap.core.ik"):
         sol = ik.solve_chain(col, T, -np.pi * np.ones(6), np.pi * np.ones(6))

@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik_classify, ik_closed, ik_general, ik_semi
+from capmap.core import ik_classify, ik_closed, ik_general_select, ik_semi
 from capmap.core.ik_classify import ChainClass
 from capmap.core.ik_finish import RESIDUAL_TOL, IKSolutions, _finish, wrap_to_range
 from capmap.core.ik_numeric import multi_start, newton
@@ -232,13 +232,13 @@ class SemiAnalytic(_ShapeMethod):
     _raw = staticmethod(ik_semi.candidates)
 
 
-_GENERAL: dict[bytes, "ik_general.GeneralSolver"] = {}
+_GENERAL: dict[bytes, "ik_general_select.GeneralSolver"] = {}
 
 
-def _general_solver(chain: Chain) -> "ik_general.GeneralSolver":
+def _general_solver(chain: Chain) -> "ik_general_select.GeneralSolver":
     key = chain.X.tobytes()
     if key not in _GENERAL:
-        _GENERAL[key] = ik_general.prepare(chain)
+        _GENERAL[key] = ik_general_select.prepare(chain)
     return _GENERAL[key]
 
 
@@ -263,7 +263,7 @@ class GeneralSixR(IKMethod):
         return chain.n == 6
 
     def candidates(self, chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        theta, ok, degenerate = ik_general.candidates(_general_solver(chain), np.ascontiguousarray(T))
+        theta, ok, degenerate = ik_general_select.candidates(_general_solver(chain), np.ascontiguousarray(T))
         if degenerate.any():
             log.warning("IK: %d of %d poses are degenerate for the exact 6R method (a continuum of solutions "
                         "or an ill-conditioned elimination); multi-start Newton is used there and may miss "

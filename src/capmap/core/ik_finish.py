@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core.ik_numeric import newton
-from capmap.core.kinematics import Chain, pose_error
+from capmap.core.ik_polish import distinct, polish
+from capmap.core.kinematics import Chain
 
 __all__ = ["IKSolutions", "wrap_to_range", "RESIDUAL_TOL", "POLISHED", "DUPLICATE_TOL"]
 
@@ -46,46 +46,18 @@ def wrap_to_range(theta: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tu
 
 
 def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarray,
-            lower: np.ndarray, upper: np.ndarray, tol: float, method: str, polish: int = 2) -> IKSolutions:
+            lower: np.ndarray, upper: np.ndarray, tol: float, method: str, polish_steps: int = 2) -> IKSolutions:
     N, K, n = theta.shape
     flat = np.where(ok[..., None], theta, 0.0).reshape(-1, n)
-    # residuals of the candidates; Newton steps (``polish``) polish those not already at rounding level
+    # Newton steps (``polish``, compiled) for the candidates not already at rounding level, their residuals
     idx = np.flatnonzero(ok.reshape(-1) & np.all(np.isfinite(flat), axis=1))
-    target = T_target[idx // K]
-    err = pose_error(chain.fk(flat[idx]), target)
-    rough = np.flatnonzero(np.abs(err).max(axis=1, initial=0.0) > POLISHED)
-    if len(rough):
-        flat[idx[rough]] = newton(chain, flat[idx[rough]], target[rough], iters=min(polish, 2))
-        err[rough] = pose_error(chain.fk(flat[idx[rough]]), target[rough])
-    for _ in range(polish - 2):  # further steps only for what has not converged, while it still converges
-        e = np.abs(err).max(axis=1, initial=0.0)
-        rough = np.flatnonzero((e > POLISHED) & (e < 0.1))
-        if not len(rough):
-            break
-        flat[idx[rough]] = newton(chain, flat[idx[rough]], target[rough], iters=1)
-        err[rough] = pose_error(chain.fk(flat[idx[rough]]), target[rough])
+    flat[idx], err = polish(chain.X, flat[idx], T_target, idx // K, polish_steps, POLISHED)
+    wrapped, inside = wrap_to_range(flat[idx], lower, upper)
     good = np.zeros(N * K, dtype=bool)
     good[idx] = ((np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
-                 & np.all(np.isfinite(flat[idx]), axis=1))
-    wrapped, inside = wrap_to_range(flat, lower, upper)
-    good &= np.all(inside, axis=1) & ok.reshape(-1)
-    wrapped = wrapped.reshape(N, K, n)
-    good = good.reshape(N, K)
-    # the good candidates first (their order kept), then de-duplicate: solution j repeats an earlier good i
-    # when all wrapped differences are tiny
-    first = np.argsort(~good, axis=1, kind="stable")
-    Kg = max(int(good.sum(axis=1).max(initial=0)), 1)
-    wrapped = np.take_along_axis(wrapped, first[..., None], axis=1)[:, :Kg]
-    good = np.take_along_axis(good, first, axis=1)[:, :Kg]
-    diff = wrapped[:, :, None, :] - wrapped[:, None, :, :]
-    same = np.all(np.abs(np.mod(diff + np.pi, 2 * np.pi) - np.pi) < DUPLICATE_TOL, axis=-1)  # (N, Kg, Kg)
-    earlier = np.tril(np.ones((Kg, Kg), dtype=bool), -1)  # [j, i]: i < j
-    dup = np.any(same & earlier & good[:, None, :], axis=-1)
-    keep = good & ~dup
-    order = np.argsort(~keep, axis=1, kind="stable")
-    q = np.full((N, max(K, Kg), n), np.nan)
-    q[:, :Kg] = np.take_along_axis(wrapped, order[..., None], axis=1)
-    count = keep.sum(axis=1)
-    q[np.arange(q.shape[1])[None, :] >= count[:, None]] = np.nan
+                 & np.all(np.isfinite(flat[idx]), axis=1) & np.all(inside, axis=1))
+    flat[idx] = wrapped
+    wrapped, good = flat.reshape(N, K, n), good.reshape(N, K)
+    q, count = distinct(wrapped, good, DUPLICATE_TOL)  # a solution repeating an earlier good one is dropped
     width = K if method.startswith("closed_form") else max(int(count.max(initial=0)), 1)
     return IKSolutions(q=q[:, :width], n_solutions=count, method=method)

@@ -1,7 +1,7 @@
 """Compiled per-pose kernels of the general 6R method (:mod:`capmap.core.ik_general`): the
-determinant of M(qa) sampled and turned into the companion polynomial, and the back-substitution
-of a root into qb, qc through the null space of M(qa). Scalar loops compiled with numba: 12 x 12
-matrices, where numpy's per-call overhead would dominate."""
+determinant of M(qa) sampled and turned into the companion polynomial, and the remaining joints of
+a root (the back-substitution of qb, qc is :mod:`capmap.core.ik_general_back`). Scalar loops
+compiled with numba: 12 x 12 matrices, where numpy's per-call overhead would dominate."""
 
 from __future__ import annotations
 
@@ -10,11 +10,10 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["polynomials", "back_substitute"]
+__all__ = ["polynomials", "finish_angles"]
 
-_SPLIT_TOL = 1e-3  # pivots of M(root) below this (relative) span its null space: several solutions may share the root
 _DEGREE_TOL = 1e-9  # coefficients above the chain's degree must be below this (relative)
-_LIVE_TOL = 1e-12  # smallest / largest full-pivoting pivot of M(qa) above this at some sample: M is not singular for all qa
+_LIVE_TOL = 1e-12  # smallest / largest partial-pivoting pivot of M(qa) above this at some sample: M is not singular for all qa
 
 
 @numba.njit(cache=True, inline="always")
@@ -29,23 +28,26 @@ def _below(A, k):
 
 @numba.njit(cache=True)
 def _det(A):
-    """Determinant of a small square matrix by partial-pivot elimination (A is overwritten)."""
+    """Determinant of a small square matrix by partial-pivot elimination (A is overwritten) and the
+    ratio of its smallest to its largest pivot (0 when a column has no pivot)."""
     n = A.shape[0]
     d = 1.0
+    lo, hi = np.inf, 0.0
     for k in range(n):
         p = k
         for i in range(k + 1, n):
             if abs(A[i, k]) > abs(A[p, k]):
                 p = i
         if A[p, k] == 0.0:
-            return 0.0
+            return 0.0, 0.0
         if p != k:
             for j in range(n):
                 A[k, j], A[p, j] = A[p, j], A[k, j]
             d = -d
         d *= A[k, k]
+        lo, hi = min(lo, abs(A[k, k])), max(hi, abs(A[k, k]))
         _below(A, k)
-    return d
+    return d, lo / hi
 
 
 @numba.njit(cache=True)
@@ -75,102 +77,6 @@ def _eliminate(A, perm):
 
 
 @numba.njit(cache=True)
-def _null_basis(A, perm, k, V):
-    """Columns 0..k-1 of V (n, >=k): a basis of the null space of the eliminated A (see
-    :func:`_eliminate`) taking its last k pivots as zero."""
-    n = A.shape[0]
-    y = np.zeros(n)
-    for c in range(k):
-        y[:] = 0.0
-        y[n - k + c] = 1.0
-        for r in range(n - k - 1, -1, -1):
-            s = 0.0
-            for j in range(r + 1, n):
-                s += A[r, j] * y[j]
-            y[r] = -s / A[r, r]
-        norm = math.sqrt(np.sum(y * y))
-        for r in range(n):
-            V[perm[r], c] = y[r] / norm
-
-
-@numba.njit(cache=True)
-def _ratio_angle(a, b):
-    """The angle q with tan(q/2) = b / a (a projective pair, either may be 0)."""
-    r = a * a + b * b
-    return math.atan2(2 * a * b, a * a - b * b) if r > 0 else 0.0
-
-
-@numba.njit(cache=True)
-def _angles_of(v):
-    """qb, qc of a monomial vector v[3 i + j] ~ xb^i xc^j (i < 4, j < 3): from the pair of consecutive
-    powers with the largest entries, so neither angle at 180 deg is special."""
-    bi, bj, best = 0, 0, -1.0
-    for i in range(3):
-        for j in range(3):
-            w = abs(v[3 * i + j]) + abs(v[3 * (i + 1) + j])
-            if w > best:
-                best, bi, bj = w, i, j
-    ci, cj, best = 0, 0, -1.0
-    for i in range(4):
-        for j in range(2):
-            w = abs(v[3 * i + j]) + abs(v[3 * i + j + 1])
-            if w > best:
-                best, ci, cj = w, i, j
-    return (_ratio_angle(v[3 * bi + bj], v[3 * (bi + 1) + bj]), _ratio_angle(v[3 * ci + cj], v[3 * ci + cj + 1]))
-
-
-@numba.njit(cache=True)
-def _is_monomial(v):
-    """Whether the unit vector v is (to 1e-5 rad) the monomial vector xb^i xc^j of its own angles."""
-    qb, qc = _angles_of(v)
-    m = np.empty(12)
-    cb, sb, cc, sc = math.cos(qb / 2), math.sin(qb / 2), math.cos(qc / 2), math.sin(qc / 2)
-    for i in range(4):
-        for j in range(3):  # (cos^(3-i) sin^i)(cos^(2-j) sin^j): the monomials times cos^3 cos^2
-            m[3 * i + j] = cb ** (3 - i) * sb ** i * cc ** (2 - j) * sc ** j
-    norm = math.sqrt(np.sum(m * m))
-    return 1.0 - abs(np.sum(m * v)) / norm < 1e-10
-
-
-_ROWS0 = np.array([3 * i + j for i in range(3) for j in range(2)])  # monomials with both shifts inside
-_SHIFT_B, _SHIFT_C = _ROWS0 + 3, _ROWS0 + 1
-_MIX = (0.7548776662466927, 0.5698402909980532)  # a fixed generic combination of the two shifts
-
-
-@numba.njit(cache=True)
-def _split(V, k, out):
-    """A k-dimensional null space V[:, :k] spanned by k monomial vectors (several solutions at one
-    qa): its monomial vectors from the eigenvectors of the shift operator (a xb + b xc) restricted
-    to it, written to out (k, 12); returns how many were found."""
-    B0 = np.empty((6, k))
-    B1 = np.empty((6, k))
-    for r in range(6):
-        for c in range(k):
-            B0[r, c] = V[_ROWS0[r], c]
-            B1[r, c] = _MIX[0] * V[_SHIFT_B[r], c] + _MIX[1] * V[_SHIFT_C[r], c]
-    G = np.linalg.lstsq(B0, B1)[0]  # (k, k): B0 G = B1
-    w, W = np.linalg.eig(G.astype(np.complex128))
-    m = 0
-    for e in range(k):
-        if abs(w[e].imag) > 1e-6 * (1 + abs(w[e].real)):
-            continue
-        x = W[:, e]
-        # a real representative: rotate the complex eigenvector to its largest real part
-        big = 0
-        for c in range(k):
-            if abs(x[c]) > abs(x[big]):
-                big = c
-        x = x / x[big]
-        for r in range(12):
-            acc = 0.0
-            for c in range(k):
-                acc += V[r, c] * x[c].real
-            out[m, r] = acc
-        m += 1
-    return m
-
-
-@numba.njit(cache=True)
 def _at(M, n, qa, A):
     """A = M(qa) of pose n."""
     c, sn = math.cos(qa), math.sin(qa)
@@ -181,66 +87,126 @@ def _at(M, n, qa, A):
 
 @numba.njit(cache=True)
 def polynomials(M, dft, theta, W, degree, poly, status):
-    """Per pose n: det M(qa) sampled at ``theta``, its Fourier coefficients (dft) and the polynomial
-    poly[n] (x^0 .. x^2D, W) whose real roots x give qa = phase + 2 atan x. status[n]: 0 solved,
-    1 M(qa) singular for every qa (a degenerate elimination: full pivoting at up to four samples
-    finds no full rank), 2 a determinant of higher degree than the chain's."""
+    """Per pose n: det M(qa) sampled at ``theta`` (S,), its Fourier coefficients (dft (S, S), k =
+    -(S-1)/2 ..) and the polynomial poly[n] (x^0 .. x^2D, W) whose real roots x give qa = phase + 2
+    atan x. status[n]: 0 solved, 1 M(qa) singular for every qa (a degenerate elimination: at no
+    sample do the partial-pivoting pivots span more than 1e12), 2 a determinant of higher degree
+    than the chain's (a coefficient above D larger than 1e-9 of the largest)."""
     N, S, D = M.shape[0], len(theta), degree
-    A, B = np.empty((12, 12)), np.empty((12, 12))
-    perm = np.empty(12, dtype=np.int64)
+    c = (S - 1) // 2
+    A = np.empty((12, 12))
     d = np.empty(S, dtype=np.complex128)
     for n in range(N):
         live = False
         for s in range(S):
             _at(M, n, theta[s], A)
-            if s % 8 == 3 and not live:
-                B[:] = A
-                piv = _eliminate(B, perm)
-                live = piv[11] > _LIVE_TOL * piv[0]
-            d[s] = _det(A)
+            d[s], ratio = _det(A)
+            live = live or ratio > _LIVE_TOL
         if not live:
             status[n] = 1
             continue
-        coef = dft @ d  # k = -12..12
+        coef = dft @ d
         big, high = 0.0, 0.0
-        for k in range(25):
+        for k in range(S):
             big = max(big, abs(coef[k]))
-            if abs(k - 12) > D:
+            if abs(k - c) > D:
                 high = max(high, abs(coef[k]))
         status[n] = 2 if high > _DEGREE_TOL * big else 0
-        poly[n] = (W @ coef[12 - D: 13 + D]).real
+        poly[n] = (W @ coef[c - D: c + D + 1]).real
+
+
+@numba.njit(cache=True, inline="always")
+def _times_rz(F, q, out):
+    """out = F @ Rz(q) (4, 4)."""
+    c, s = math.cos(q), math.sin(q)
+    for i in range(4):
+        a, b = F[i, 0], F[i, 1]
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = c * a + s * b, c * b - s * a, F[i, 2], F[i, 3]
+
+
+@numba.njit(cache=True, inline="always")
+def _times(A, B, out):
+    """out = A @ B (4, 4)."""
+    for i in range(4):
+        for j in range(4):
+            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j] + A[i, 3] * B[3, j]
 
 
 @numba.njit(cache=True)
-def back_substitute(M, pose, roots, phase, qa_out, qb_out, qc_out, n_out):
-    """For roots x (R,) of pose ``pose`` (R,): qa = phase + 2 atan x and qb, qc from the null space of
-    M(qa) (split into monomial vectors when several solutions share the root); rows of the outputs
-    per pose, counts in n_out."""
-    A = np.empty((12, 12))
-    V = np.empty((12, 4))
-    vecs = np.empty((4, 12))
-    perm = np.empty(12, dtype=np.int64)
-    cap = qa_out.shape[1]
-    for r in range(len(roots)):
-        n = pose[r]
-        qa = phase + 2.0 * math.atan(roots[r])
-        _at(M, n, qa, A)
-        piv = _eliminate(A, perm)
-        _null_basis(A, perm, 1, V)
-        for i in range(12):
-            vecs[0, i] = V[i, 0]
-        found = 1
-        if not _is_monomial(vecs[0]):  # several solutions share the root: split the null space
-            k = 2
-            while k < 4 and piv[11 - k] < _SPLIT_TOL * piv[0]:
-                k += 1
-            _null_basis(A, perm, k, V)
-            found = _split(V, k, vecs)
-        for f in range(found):
-            m = n_out[n]
-            if m >= cap:
-                n_out[n] = cap + 1  # overflow: the caller treats the pose as degenerate
-                break
-            qb, qc = _angles_of(vecs[f])
-            qa_out[n, m], qb_out[n, m], qc_out[n, m] = qa, qb, qc
-            n_out[n] = m + 1
+def _product(X, first, angles, out):
+    """out = X[first] Rz(angles[0]) X[first + 1] Rz(angles[1]) ... X[first + len(angles)]."""
+    W, V = np.empty((4, 4)), np.empty((4, 4))
+    out[:] = X[first]
+    for k in range(len(angles)):
+        _times_rz(out, angles[k], W)
+        _times(W, X[first + k + 1], V)
+        out[:] = V
+
+
+@numba.njit(cache=True)
+def finish_angles(X, f, CL, lstsq, const, T, qa, qb, qc, count, theta):
+    """Per pose n and root r < count[n]: the remaining joints qu, qv (least squares on Q: the map
+    lstsq (N, 8, 14), the right-hand constant const (N, 14)) and qf (orientation, from the target T
+    (N, 4, 4)), written with qa, qb, qc (N, R) into theta (N, R, 6) rad."""
+    a = f - 3
+    L, A, B, F, G = np.empty((4, 4)), np.empty((4, 4)), np.empty((4, 4)), np.empty((4, 4)), np.empty((4, 4))
+    lhs, y = np.empty(14), np.empty(8)
+    one, two, abc = np.empty(1), np.empty(2), np.empty(3)
+    for n in range(T.shape[0]):
+        for r in range(count[n]):
+            abc[0], abc[1], abc[2] = qa[n, r], qb[n, r], qc[n, r]
+            _rz_left(X, a, abc, L)
+            ca, sa = math.cos(qa[n, r]), math.sin(qa[n, r])
+            bb = (1.0, math.cos(qb[n, r]), math.sin(qb[n, r]))
+            bc = (1.0, math.cos(qc[n, r]), math.sin(qc[n, r]))
+            for q in range(14):
+                s = 0.0
+                for i in range(3):
+                    for j in range(3):
+                        s += (CL[0, q, 3 * i + j] + ca * CL[1, q, 3 * i + j] + sa * CL[2, q, 3 * i + j]) * bb[i] * bc[j]
+                lhs[q] = s - const[n, q]
+            for k in range(8):
+                s = 0.0
+                for q in range(14):
+                    s += lstsq[n, k, q] * lhs[q]
+                y[k] = s
+            qv = math.atan2(y[1], y[0])
+            qu = math.atan2(y[5], y[2])
+            if f == 5:
+                two[0], two[1] = qu, qv
+                _product(X, 0, two, A)
+                B[:] = X[6]
+            elif f == 4:
+                one[0] = qu
+                _product(X, 0, one, A)
+                one[0] = qv
+                _product(X, 5, one, B)
+            else:
+                A[:] = X[0]
+                two[0], two[1] = qu, qv
+                _product(X, 4, two, B)
+            _times(A, L, F)  # Rz(qf) = (A L)^-1 T B^-1: its first column is (A L)^T T B^T e_x rotated
+            for i in range(3):  # G = T @ B^-1, rotation part only: T[:3, :3] B[:3, :3]^T
+                for j in range(3):
+                    G[i, j] = T[n, i, 0] * B[j, 0] + T[n, i, 1] * B[j, 1] + T[n, i, 2] * B[j, 2]
+            r00 = F[0, 0] * G[0, 0] + F[1, 0] * G[1, 0] + F[2, 0] * G[2, 0]
+            r10 = F[0, 1] * G[0, 0] + F[1, 1] * G[1, 0] + F[2, 1] * G[2, 0]
+            theta[n, r, a], theta[n, r, a + 1], theta[n, r, a + 2] = qa[n, r], qb[n, r], qc[n, r]
+            theta[n, r, f] = math.atan2(r10, r00)
+            rest = 0
+            for j in range(6):
+                if j < a or (j > a + 2 and j != f):
+                    theta[n, r, j] = qu if rest == 0 else qv
+                    rest += 1
+
+
+@numba.njit(cache=True)
+def _rz_left(X, a, angles, L):
+    """L = Rz(qa) X[a+1] Rz(qb) X[a+2] Rz(qc) X[a+3]."""
+    W = np.empty((4, 4))
+    E = np.eye(4)
+    _times_rz(E, angles[0], W)
+    _times(W, X[a + 1], L)
+    for k in range(1, 3):
+        _times_rz(L, angles[k], W)
+        _times(W, X[a + k + 1], L)

@@ -1,0 +1,141 @@
+"""Which eliminations of the general 6R method (:mod:`capmap.core.ik_general`) solve which poses.
+
+A formulation can lose solutions that a single pose does not reveal: where its eliminated joint qa
+reaches an angle at which two axes line up, M(qa) loses rank and the true roots nearby cluster,
+turn into complex pairs or back-substitute badly (measured: the xArm7 with joint 6 locked, qa = q2,
+2 of 4 branches lost at one pose; the 6-DOF Kinova, qa = q5, 3 of 8; the SSRMS with joint 3
+locked, qa = q2 near -90 deg, 2 of 6 and 2 of 8 at two of 2,000 poses). A count test does not
+catch it (in the SSRMS cases the remaining real roots each gave one distinct solution), but a
+second formulation that eliminates a different joint sees those solutions well separated.
+
+:func:`prepare` measures every formulation once per chain on poses FK(q) of a seeded generator:
+the share of the known q it recovers and the share of poses it *confirms* (it solved the pose,
+its polynomial kept its full degree, and its exactly real eigenvalues gave as many distinct
+solutions as there are of them: a formulation with structural spurious roots confirms few), and
+orders them [best, the best one eliminating a different joint, the rest]. :func:`candidates`
+solves every pose with the first two and joins their candidates; a pose that fewer than two
+formulations solved (a rank-deficient elimination, a determinant vanishing identically) tries the
+next ones, and a pose no formulation solves is reported (the caller falls back to a search there
+and says so).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.core.ik_finish import DUPLICATE_TOL, POLISHED
+from capmap.core.ik_general import FORMULATIONS, Formulation, Solved, degree_of, left_coefficients, recovered, solve_formulation
+from capmap.core.ik_polish import distinct, polish
+from capmap.core.kinematics import Chain, inverse_transform
+
+__all__ = ["GeneralSolver", "prepare", "candidates", "UNION"]
+
+UNION = 2  # formulations (eliminating different joints where the chain allows) that solve every pose
+
+
+@dataclass(frozen=True, eq=False)
+class GeneralSolver:
+    """A chain prepared for :func:`candidates`: its formulations in the order they are run, each with
+    the left-side coefficients CL (3, 14, 9) [basis of qa, quantity, monomial of (qb, qc)], the
+    degree of its determinant and its measured shares (see the module docstring)."""
+
+    chain: Chain
+    order: tuple[Formulation, ...]
+    left: tuple[np.ndarray, ...]
+    degrees: tuple[int, ...]
+    phase: float  # rad: x = tan((qa - phase) / 2)
+    recovered: tuple[float, ...]  # share of the test poses whose known solution each formulation recovered
+    confirmed: tuple[float, ...]  # share of the test poses each formulation confirmed
+
+    @property
+    def degree(self) -> int:
+        """The degree of the best formulation's determinant (8 for a general chain: <= 16 solutions)."""
+        return self.degrees[0]
+
+    def formulation_chain(self, k: int) -> Chain:
+        return self.chain.reversed() if self.order[k].reversed else self.chain
+
+
+def _eliminated_joint(form: Formulation) -> int:
+    """The chain's joint (0-based) that formulation eliminates last (its qa)."""
+    return 5 - (form.f - 3) if form.reversed else form.f - 3
+
+
+def _run(chain: Chain, form: Formulation, CL: np.ndarray, degree: int, phase: float,
+         T: np.ndarray) -> tuple[Solved, np.ndarray]:
+    """One formulation on targets T (N, 4, 4) of ``chain``: its raw output and its candidates in the
+    chain's angles (N, K, 6) rad."""
+    ch = chain.reversed() if form.reversed else chain
+    Tk = inverse_transform(T) if form.reversed else T
+    out = solve_formulation(ch, form.f, CL, degree, phase, np.ascontiguousarray(Tk))
+    return out, (-out.theta[..., ::-1] if form.reversed else out.theta)
+
+
+def _confirmed(chain: Chain, out: Solved, theta: np.ndarray, T: np.ndarray, steps: int, tol: float) -> np.ndarray:
+    """(N,) bool: the formulation's output ``out`` (candidates theta (N, K, 6) rad in the chain's angles,
+    polished here in place) confirms each pose (see the module docstring)."""
+    N, K = out.ok.shape
+    flat = theta.reshape(-1, 6)
+    idx = np.flatnonzero(out.ok.reshape(-1))
+    flat[idx], err = polish(chain.X, flat[idx], T, idx // K, steps, POLISHED)
+    valid = np.zeros(N * K, dtype=bool)
+    valid[idx] = (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
+    valid = valid.reshape(N, K)
+    _, n_distinct = distinct(np.mod(theta + np.pi, 2 * np.pi) - np.pi, valid, DUPLICATE_TOL)
+    return (out.status == 0) & out.full & (n_distinct == out.real)
+
+
+def prepare(chain: Chain, rng: np.random.Generator | None = None, n_poses: int = 64, steps: int = 8,
+            tol: float = 1e-9) -> GeneralSolver:
+    """The chain's formulations in the order :func:`candidates` runs them, measured on ``n_poses``
+    poses FK(q) of uniform random q (``rng``; a fixed seed when None, so the choice is reproducible):
+    ranked by the share of known q recovered, then the share confirmed; the second is the best one
+    that eliminates a different joint than the first."""
+    if chain.n != 6:
+        raise ValueError(f"the general 6R method needs 6 joints, this chain has {chain.n}")
+    rng = np.random.default_rng(20260) if rng is None else rng
+    q = rng.uniform(-np.pi, np.pi, (n_poses, 6))
+    phase = float(rng.uniform(0.0, 2 * np.pi))
+    T = np.ascontiguousarray(chain.fk(q))
+    rows = []
+    for form in FORMULATIONS:
+        ch = chain.reversed() if form.reversed else chain
+        CL = left_coefficients(ch.X, form.f)
+        degree = degree_of(ch, form.f, CL, inverse_transform(T) if form.reversed else T)
+        out, theta = _run(chain, form, CL, degree, phase, T)
+        confirmed = _confirmed(chain, out, theta, T, steps, tol)
+        found = float((recovered(theta, out.ok, q) & (out.status == 0)).mean())
+        rows.append((form, CL, degree, found, float(confirmed.mean())))
+    rows.sort(key=lambda r: (r[3], r[4]), reverse=True)
+    first = _eliminated_joint(rows[0][0])
+    second = next((i for i in range(1, len(rows)) if rows[i][3] > 0 and _eliminated_joint(rows[i][0]) != first), 1)
+    rows = [rows[0], rows[second]] + [r for i, r in enumerate(rows) if i not in (0, second)]
+    return GeneralSolver(chain=chain, order=tuple(r[0] for r in rows), left=tuple(r[1] for r in rows),
+                         degrees=tuple(r[2] for r in rows), phase=phase, recovered=tuple(r[3] for r in rows),
+                         confirmed=tuple(r[4] for r in rows))
+
+
+def candidates(solver: GeneralSolver, T: np.ndarray,
+               max_tries: int = len(FORMULATIONS)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Raw candidate solutions (N, K, 6) rad (to be polished and checked by the caller), their
+    validity (N, K) and the poses no formulation solved (N,) bool, for targets T
+    (N, 4, 4) in the chain's base frame. Formulations run in the solver's order on the poses fewer
+    than ``UNION`` of them solved so far, up to ``max_tries``."""
+    N = len(T)
+    parts = []
+    solved = np.zeros(N, dtype=int)
+    for k, form in enumerate(solver.order[:max_tries]):
+        rows = np.flatnonzero(solved < UNION)
+        if not len(rows):
+            break
+        out, theta_k = _run(solver.chain, form, solver.left[k], solver.degrees[k], solver.phase,
+                            np.ascontiguousarray(T[rows]))
+        solved[rows] += out.status == 0
+        theta, ok = np.zeros((N,) + theta_k.shape[1:]), np.zeros((N, theta_k.shape[1]), dtype=bool)
+        theta[rows], ok[rows] = theta_k, out.ok
+        parts.append((theta, ok))
+    theta = np.concatenate([p[0] for p in parts], axis=1)
+    ok = np.concatenate([p[1] for p in parts], axis=1)
+    return theta, ok, solved == 0

@@ -1,0 +1,261 @@
+"""Real roots of many small polynomials, compiled (numba): each polynomial's companion matrix,
+balanced (EISPACK ``balanc``) and reduced by the Francis double-shift QR iteration (EISPACK
+``hqr``, as in Numerical Recipes). The companion matrix is already upper Hessenberg, so the
+Hessenberg reduction LAPACK's ``dgeev`` performs is skipped: about half the time of
+``numpy.linalg.eigvals`` on a 16 x 16 companion, with the same accuracy (tests/core/test_ik_roots.py
+compares both on polynomials whose coefficients span six decades)."""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+__all__ = ["real_roots", "RealRoots"]
+
+_MAX_DEGREE = 24
+
+
+class RealRoots(NamedTuple):
+    """pose (R,) int and x (R,): the kept eigenvalues' rows and real parts; imag (R,): their imaginary
+    parts (exactly 0 where the QR iteration found a real eigenvalue); degree (N,): each polynomial's
+    effective degree; gap (N,): the smallest chordal distance 2 |z - w| / sqrt((1 + |z|^2)(1 + |w|^2))
+    between two of its eigenvalues (for z = tan(a/2), w = tan(b/2) real: 2 |sin((a - b)/2)|, the
+    chord of the angle between them); failed (N,) bool: rows whose QR iteration did not converge."""
+
+    pose: np.ndarray
+    x: np.ndarray
+    imag: np.ndarray
+    degree: np.ndarray
+    gap: np.ndarray
+    failed: np.ndarray
+
+
+@numba.njit(cache=True)
+def _balance(a, n):
+    """Diagonal similarity scaling of a[:n, :n] in place (EISPACK balanc, radix 2)."""
+    done = False
+    while not done:
+        done = True
+        for i in range(n):
+            r = 0.0
+            c = 0.0
+            for j in range(n):
+                if j != i:
+                    c += abs(a[j, i])
+                    r += abs(a[i, j])
+            if c > 0.0 and r > 0.0:
+                g = r / 2.0
+                f = 1.0
+                s = c + r
+                while c < g:
+                    f *= 2.0
+                    c *= 4.0
+                g = r * 2.0
+                while c > g:
+                    f /= 2.0
+                    c /= 4.0
+                if (c + r) / f < 0.95 * s:
+                    done = False
+                    g = 1.0 / f
+                    for j in range(n):
+                        a[i, j] *= g
+                    for j in range(n):
+                        a[j, i] *= f
+
+
+@numba.njit(cache=True)
+def _hqr(a, n, wr, wi):
+    """Eigenvalues (wr + i wi) of the upper Hessenberg a[:n, :n] (overwritten) by the Francis
+    double-shift QR iteration (EISPACK hqr); returns False when an eigenvalue took more than 60
+    iterations."""
+    anorm = 0.0
+    for i in range(n):
+        for j in range(max(i - 1, 0), n):
+            anorm += abs(a[i, j])
+    nn = n - 1
+    t = 0.0
+    while nn >= 0:
+        its = 0
+        while True:
+            l = 0
+            for ll in range(nn, 0, -1):
+                s = abs(a[ll - 1, ll - 1]) + abs(a[ll, ll])
+                if s == 0.0:
+                    s = anorm
+                if abs(a[ll, ll - 1]) + s == s:
+                    a[ll, ll - 1] = 0.0
+                    l = ll
+                    break
+            x = a[nn, nn]
+            if l == nn:
+                wr[nn] = x + t
+                wi[nn] = 0.0
+                nn -= 1
+                break
+            y = a[nn - 1, nn - 1]
+            w = a[nn, nn - 1] * a[nn - 1, nn]
+            if l == nn - 1:
+                p = 0.5 * (y - x)
+                q = p * p + w
+                z = math.sqrt(abs(q))
+                x += t
+                if q >= 0.0:
+                    z = p + (z if p >= 0.0 else -z)
+                    wr[nn - 1] = wr[nn] = x + z
+                    if z != 0.0:
+                        wr[nn] = x - w / z
+                    wi[nn - 1] = wi[nn] = 0.0
+                else:
+                    wr[nn - 1] = wr[nn] = x + p
+                    wi[nn - 1] = -z
+                    wi[nn] = z
+                nn -= 2
+                break
+            if its == 60:
+                return False
+            if its == 10 or its == 20 or its == 40:  # exceptional shifts
+                t += x
+                for i in range(nn + 1):
+                    a[i, i] -= x
+                s = abs(a[nn, nn - 1]) + abs(a[nn - 1, nn - 2])
+                x = y = 0.75 * s
+                w = -0.4375 * s * s
+            its += 1
+            m = nn - 2
+            while True:
+                z = a[m, m]
+                r = x - z
+                s = y - z
+                p = (r * s - w) / a[m + 1, m] + a[m, m + 1]
+                q = a[m + 1, m + 1] - z - r - s
+                r = a[m + 2, m + 1]
+                s = abs(p) + abs(q) + abs(r)
+                p /= s
+                q /= s
+                r /= s
+                if m == l:
+                    break
+                u = abs(a[m, m - 1]) * (abs(q) + abs(r))
+                v = abs(p) * (abs(a[m - 1, m - 1]) + abs(z) + abs(a[m + 1, m + 1]))
+                if u + v == v:
+                    break
+                m -= 1
+            for i in range(m + 2, nn + 1):
+                a[i, i - 2] = 0.0
+                if i != m + 2:
+                    a[i, i - 3] = 0.0
+            for k in range(m, nn):
+                if k != m:
+                    p = a[k, k - 1]
+                    q = a[k + 1, k - 1]
+                    r = a[k + 2, k - 1] if k != nn - 1 else 0.0
+                    x = abs(p) + abs(q) + abs(r)
+                    if x != 0.0:
+                        p /= x
+                        q /= x
+                        r /= x
+                s = math.sqrt(p * p + q * q + r * r)
+                if p < 0.0:
+                    s = -s
+                if s != 0.0:
+                    if k == m:
+                        if l != m:
+                            a[k, k - 1] = -a[k, k - 1]
+                    else:
+                        a[k, k - 1] = -s * x
+                    p += s
+                    x = p / s
+                    y = q / s
+                    z = r / s
+                    q /= p
+                    r /= p
+                    for j in range(k, nn + 1):
+                        p = a[k, j] + q * a[k + 1, j]
+                        if k != nn - 1:
+                            p += r * a[k + 2, j]
+                            a[k + 2, j] -= p * z
+                        a[k + 1, j] -= p * y
+                        a[k, j] -= p * x
+                    mmin = nn if nn < k + 3 else k + 3
+                    for i in range(l, mmin + 1):
+                        p = x * a[i, k] + y * a[i, k + 1]
+                        if k != nn - 1:
+                            p += z * a[i, k + 2]
+                            a[i, k + 2] -= p * r
+                        a[i, k + 1] -= p * q
+                        a[i, k] -= p
+            if l >= nn - 1:
+                break
+    return True
+
+
+@numba.njit(cache=True)
+def _count_roots(poly, usable, real_tol, pose_out, x_out, imag_out, degree_out, gap_out):
+    """Per usable row of poly (N, n+1) (x^0 upward): its effective degree (trailing coefficients
+    below 1e-14 of the largest are zero), the eigenvalues of its companion matrix, and those with
+    |imag| <= real_tol (1 + |real|) written to pose_out, x_out, imag_out; the effective degrees to
+    degree_out, the smallest chordal distance between two eigenvalues to gap_out; returns (count,
+    failed rows)."""
+    N, n1 = poly.shape
+    a = np.empty((_MAX_DEGREE, _MAX_DEGREE))
+    wr, wi = np.empty(_MAX_DEGREE), np.empty(_MAX_DEGREE)
+    m, failed = 0, 0
+    for r in range(N):
+        if not usable[r]:
+            continue
+        scale = 0.0
+        for k in range(n1):
+            scale = max(scale, abs(poly[r, k]))
+        deg = 0
+        for k in range(n1 - 1, -1, -1):
+            if abs(poly[r, k]) > 1e-14 * scale:
+                deg = k
+                break
+        degree_out[r] = deg
+        if deg == 0:
+            continue
+        for i in range(deg):
+            for j in range(deg):
+                a[i, j] = 0.0
+        for j in range(deg):
+            a[0, j] = -poly[r, deg - 1 - j] / poly[r, deg]
+        for i in range(1, deg):
+            a[i, i - 1] = 1.0
+        _balance(a, deg)
+        if not _hqr(a, deg, wr, wi):
+            usable[r] = False
+            failed += 1
+            continue
+        gap = 2.0
+        for k in range(deg):
+            for i in range(k):
+                d = 2 * math.hypot(wr[k] - wr[i], wi[k] - wi[i]) / math.sqrt(
+                    (1 + wr[k] ** 2 + wi[k] ** 2) * (1 + wr[i] ** 2 + wi[i] ** 2))
+                gap = min(gap, d)
+        gap_out[r] = gap
+        for k in range(deg):
+            if abs(wi[k]) <= real_tol * (1.0 + abs(wr[k])):
+                pose_out[m] = r
+                x_out[m] = wr[k]
+                imag_out[m] = wi[k]
+                m += 1
+    return m, failed
+
+
+def real_roots(poly: np.ndarray, usable: np.ndarray, real_tol: float) -> RealRoots:
+    """The real roots of the ``usable`` polynomials poly (N, n+1) (x^0 upward, n <= 24): the
+    eigenvalues of their companion matrices with |imag| <= real_tol (1 + |real|) (near-double roots
+    split into complex pairs of small imaginary part; the caller polishes and checks every one)."""
+    poly = np.ascontiguousarray(poly, dtype=float)
+    if poly.shape[1] - 1 > _MAX_DEGREE:
+        raise ValueError(f"polynomials of degree {poly.shape[1] - 1} > {_MAX_DEGREE}")
+    live = np.ascontiguousarray(usable, dtype=np.bool_).copy()
+    pose = np.empty(len(poly) * (poly.shape[1] - 1), dtype=np.int64)
+    x, imag = np.empty(len(pose)), np.empty(len(pose))
+    degree = np.zeros(len(poly), dtype=np.int64)
+    gap = np.full(len(poly), 2.0)
+    m, _ = _count_roots(poly, live, real_tol, pose, x, imag, degree, gap)
+    return RealRoots(pose[:m], x[:m], imag[:m], degree, gap, usable & ~live)

@@ -1,0 +1,140 @@
+"""The compiled IK kernels against independent numpy/LAPACK computations: the companion roots
+(:mod:`capmap.core.ik_roots`) against ``numpy.linalg.eigvals`` (LAPACK dgeev), the Newton polish
+(:mod:`capmap.core.ik_polish`) against :func:`capmap.core.ik_numeric.newton` and
+:func:`capmap.core.kinematics.pose_error`, and the elimination matrices
+(:mod:`capmap.core.ik_general_matrices`, a pivoted Householder QR) against an SVD formulation
+written here."""
+
+import numpy as np
+import pytest
+
+from capmap.core import ik_general, ik_polish, ik_roots
+from capmap.core.ik_numeric import newton
+from capmap.core.kinematics import Chain, inverse_transform, pose_error
+
+
+def _random_chain(rng, n=6) -> Chain:
+    X = np.zeros((n + 1, 4, 4))
+    for i in range(n + 1):
+        q, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+        X[i, :3, :3] = q * np.sign(np.linalg.det(q))
+        X[i, :3, 3] = 0.5 * rng.standard_normal(3)
+        X[i, 3, 3] = 1.0
+    return Chain(X)
+
+
+@pytest.mark.parametrize("degree", [1, 2, 5, 8, 16, 24])
+def test_companion_roots_match_lapack(degree):
+    """Every eigenvalue LAPACK finds (as |imag| <= 1 keeps them all) is found, to 1e-9 relative, on
+    polynomials whose coefficients span six decades; the kept ones are exactly those with small imag."""
+    rng = np.random.default_rng(degree)
+    poly = rng.normal(size=(300, degree + 1)) * 10.0 ** rng.uniform(-3, 3, (300, degree + 1))
+    comp = np.zeros((300, degree, degree))
+    comp[:, 0, :] = -poly[:, degree - 1::-1] / poly[:, degree, None]
+    comp[:, np.arange(1, degree), np.arange(degree - 1)] = 1.0
+    ref = np.linalg.eigvals(comp)
+    roots = ik_roots.real_roots(poly, np.ones(300, dtype=bool), 1e30)  # keep every eigenvalue
+    assert not roots.failed.any() and (roots.degree == degree).all()
+    for n in range(300):
+        mine = roots.x[roots.pose == n] + 1j * roots.imag[roots.pose == n]
+        assert len(mine) == degree
+        d = np.abs(ref[n][:, None] - mine[None]).min(axis=1) / (1 + np.abs(ref[n]))
+        assert d.max() < 1e-9, (n, d.max())
+    kept = ik_roots.real_roots(poly, np.ones(300, dtype=bool), 1e-2)
+    small = np.abs(ref.imag) <= 1e-2 * (1 + np.abs(ref.real))
+    assert len(kept.pose) == small.sum()
+
+
+def test_companion_roots_trailing_zeros_and_unusable_rows():
+    """A vanishing leading coefficient lowers the degree; rows not usable give no roots."""
+    poly = np.array([[2.0, -3.0, 1.0, 0.0, 0.0], [1.0, 0.0, -1.0, 0.0, 1e-20], [1.0, 2.0, 1.0, 0.0, 0.0]])
+    roots = ik_roots.real_roots(poly, np.array([True, True, False]), 1e-8)
+    assert list(roots.degree[:2]) == [2, 2]
+    assert sorted(roots.x[roots.pose == 0]) == pytest.approx([1.0, 2.0])
+    assert sorted(roots.x[roots.pose == 1]) == pytest.approx([-1.0, 1.0])
+    assert not (roots.pose == 2).any()
+
+
+def test_polish_matches_numpy_newton():
+    """Undamped Newton steps from perturbed solutions: the compiled steps and errors equal numpy's
+    (same formulas, rounding-level differences), and converge to <= 1e-13."""
+    rng = np.random.default_rng(1)
+    chain = _random_chain(rng)
+    q = rng.uniform(-np.pi, np.pi, (200, 6))
+    T = chain.fk(q)
+    start = q + 1e-2 * rng.standard_normal(q.shape)
+    one, err = ik_polish.polish(chain.X, start, T, np.arange(200), 1, 0.0)
+    ref = newton(chain, start, T, iters=1)
+    assert np.abs(one - ref).max() < 1e-10
+    assert np.abs(err - pose_error(chain.fk(ref), T)).max() < 1e-10
+    done, err = ik_polish.polish(chain.X, start, T, np.arange(200), 8, 1e-13)
+    ref = newton(chain, start, T, iters=8)
+    conv = np.abs(pose_error(chain.fk(ref), T)).max(axis=1) < 1e-12
+    assert conv.mean() > 0.9  # random chains, 1e-2 rad off: a few starts lie near a singularity
+    assert (np.abs(err[conv]).max(axis=1) < 1e-12).all()
+    assert np.abs(np.mod(done[conv] - ref[conv] + np.pi, 2 * np.pi) - np.pi).max() < 1e-8
+
+
+def test_polish_rotation_error_near_pi():
+    """The rotation error of a pose turned by ~pi (the symmetric-part branch) equals kinematics'."""
+    rng = np.random.default_rng(2)
+    chain = _random_chain(rng)
+    q = rng.uniform(-np.pi, np.pi, (50, 6))
+    T = chain.fk(q)
+    flip = np.diag([-1.0, -1.0, 1.0, 1.0])  # Rz(pi) about the tip
+    T_far = T @ flip
+    _, err = ik_polish.polish(chain.X, q, T_far, np.arange(50), 0, 0.0)
+    ref = pose_error(chain.fk(q), T_far)
+    assert np.abs(err[:, :3] - ref[:, :3]).max() < 1e-12
+    # at pi, w and -w are one rotation (the sign is rounding's): same angle, parallel axes
+    assert np.abs(np.linalg.norm(err[:, 3:], axis=1) - np.pi).max() < 1e-6
+    assert np.abs(np.linalg.norm(np.cross(err[:, 3:], ref[:, 3:]), axis=1)).max() < 1e-6
+
+
+def test_distinct_keeps_first_of_repeats():
+    wrapped = np.array([[[0.0, 1.0], [1e-8, 1.0], [np.pi, 0.0], [-np.pi + 1e-9, 0.0], [0.5, 0.5]]])
+    good = np.array([[True, True, True, True, False]])
+    q, count = ik_polish.distinct(wrapped, good, 1e-6)
+    assert count[0] == 2
+    assert np.allclose(q[0, :2], [[0.0, 1.0], [np.pi, 0.0]]) and np.isnan(q[0, 2:]).all()
+
+
+def _svd_matrices(X, f, CL, T):
+    """The elimination's matrices by an SVD (the formulation before the compiled QR one)."""
+    N = len(T)
+    A, B = ik_general._sides(X, f, ik_general._G2[:, 0], ik_general._G2[:, 1])
+    F = inverse_transform(A)[None] @ T[:, None] @ inverse_transform(B)[None]
+    CR = np.einsum("rg,ngq->nrq", ik_general._B2_INV, ik_general.quantities(F))
+    Q = np.swapaxes(CR[:, 1:], 1, 2)
+    U, S, Vt = np.linalg.svd(Q)
+    Nl = np.swapaxes(U[:, :, 8:], 1, 2)
+    lstsq = np.swapaxes(Vt, 1, 2) @ (np.swapaxes(U[:, :, :8], 1, 2) / S[:, :, None])
+    P = np.broadcast_to(CL, (N, 3, 14, 9)).copy()
+    P[:, 0, :, 0] -= CR[:, 0]
+    E = np.einsum("nek,nakm->naem", Nl, P) @ ik_general._HH
+    M = np.zeros((N, 3, 12, 12))
+    M[:, :, :6, :9] = E
+    M[:, :, 6:, 3:] = E
+    return M, lstsq, CR[:, 0], S[:, 7] / S[:, 0]
+
+
+@pytest.mark.parametrize("f", [3, 4, 5])
+def test_elimination_matrices_match_svd(f):
+    """Same least-squares map and constant; det M(qa) equal at random qa (another orthonormal basis
+    of Q's left null space changes M by an orthogonal 6 x 6 factor on both row blocks: det by its
+    square, 1); the QR rank estimate within a factor sqrt(8) of sigma_8 / sigma_1 ... or more
+    conservative (never larger than 8 x)."""
+    rng = np.random.default_rng(f)
+    chain = _random_chain(rng)
+    CL = ik_general.left_coefficients(chain.X, f)
+    T = np.ascontiguousarray(chain.fk(rng.uniform(-np.pi, np.pi, (40, 6))))
+    M, lstsq, const, rank = ik_general._matrices(chain.X, f, CL, T)
+    M_ref, lstsq_ref, const_ref, rank_ref = _svd_matrices(chain.X, f, CL, T)
+    assert np.abs(lstsq - lstsq_ref).max() < 1e-9 * np.abs(lstsq_ref).max()
+    assert np.abs(const - const_ref).max() < 1e-12 * max(1.0, np.abs(const_ref).max())
+    qa = rng.uniform(-np.pi, np.pi, 40)
+    at = M[:, 0] + np.cos(qa)[:, None, None] * M[:, 1] + np.sin(qa)[:, None, None] * M[:, 2]
+    at_ref = M_ref[:, 0] + np.cos(qa)[:, None, None] * M_ref[:, 1] + np.sin(qa)[:, None, None] * M_ref[:, 2]
+    d, d_ref = np.linalg.det(at), np.linalg.det(at_ref)
+    assert np.abs(d - d_ref).max() < 1e-8 * np.abs(d_ref).max()
+    assert (rank < 8 * rank_ref).all() and (rank > rank_ref / 8).all()
