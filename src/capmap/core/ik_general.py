@@ -170,25 +170,27 @@ def _sampling(degree: int) -> tuple[np.ndarray, np.ndarray]:
     return 2 * np.pi * np.arange(S) / S, np.exp(-2j * np.pi * np.outer(k, np.arange(S)) / S) / S
 
 
-def _real_roots(poly: np.ndarray, usable: np.ndarray) -> RealRoots:
+def _real_roots(poly: np.ndarray, usable: np.ndarray, noise: np.ndarray) -> RealRoots:
     """Real roots of the polynomials poly (N, 2D+1) (x^0 upward) of the ``usable`` poses (see
     :func:`capmap.core.ik_roots.real_roots`). Eigenvalues with |imag| <= _REAL_TOL (1 + |real|) are
     kept: near-double roots split into complex pairs of small imaginary part, and every candidate is
     polished and checked later."""
-    return real_roots(poly, usable, _REAL_TOL)
+    return real_roots(poly, usable, _REAL_TOL, noise)
 
 
 class Solved(NamedTuple):
     """One formulation on N poses: theta (N, K, 6) rad, ok (N, K), status (N,) (see
     :func:`solve_formulation`), real (N,): the eigenvalues the QR iteration found exactly real, full
-    (N,): the polynomial kept its full degree 2D (no root escaped toward x = infinity)."""
+    (N,): the polynomial kept its full degree 2D (no root escaped toward x = infinity), doubt (N,):
+    how close a dropped complex eigenvalue's error bound comes to the real axis (see
+    :class:`capmap.core.ik_roots.RealRoots`)."""
 
     theta: np.ndarray
     ok: np.ndarray
     status: np.ndarray
     real: np.ndarray
     full: np.ndarray
-    gap: np.ndarray
+    doubt: np.ndarray
 
 
 def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: float, T: np.ndarray) -> Solved:
@@ -197,11 +199,11 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     whose QR iteration did not converge."""
     N = len(T)
     M, lstsq, const, rank = _matrices(chain.X, f, CL, T)
-    poly, status = np.zeros((N, 2 * degree + 1)), np.zeros(N, dtype=np.int64)
+    poly, status, noise = np.zeros((N, 2 * degree + 1)), np.zeros(N, dtype=np.int64), np.full(N, np.inf)
     theta_s, dft = _sampling(degree)
-    polynomials(M, dft, theta_s, _companion_map(degree, phase), degree, poly, status)
+    polynomials(M, dft, theta_s, _companion_map(degree, phase), degree, poly, status, noise)
     status[rank < _RANK_TOL] = 3
-    roots = _real_roots(poly, status == 0)
+    roots = _real_roots(poly, status == 0, noise)
     status[roots.failed] = 5
     qa, qb, qc = (np.zeros((N, MAX_ROOTS)) for _ in range(3))
     count = np.zeros(N, dtype=np.int64)
@@ -214,7 +216,7 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     theta = np.zeros((N, width, 6))
     finish_angles(chain.X, f, CL, lstsq, const, T, qa, qb, qc, count, theta)
     real = np.bincount(roots.pose[roots.imag == 0.0], minlength=N)
-    return Solved(theta, ok, status, real, roots.degree == 2 * degree, roots.gap)
+    return Solved(theta, ok, status, real, roots.degree == 2 * degree, roots.doubt)
 
 
 def recovered(theta: np.ndarray, ok: np.ndarray, q: np.ndarray) -> np.ndarray:

@@ -86,12 +86,14 @@ def _at(M, n, qa, A):
 
 
 @numba.njit(cache=True)
-def polynomials(M, dft, theta, W, degree, poly, status):
+def polynomials(M, dft, theta, W, degree, poly, status, noise):
     """Per pose n: det M(qa) sampled at ``theta`` (S,), its Fourier coefficients (dft (S, S), k =
     -(S-1)/2 ..) and the polynomial poly[n] (x^0 .. x^2D, W) whose real roots x give qa = phase + 2
     atan x. status[n]: 0 solved, 1 M(qa) singular for every qa (a degenerate elimination: at no
     sample do the partial-pivoting pivots span more than 1e12), 2 a determinant of higher degree
-    than the chain's (a coefficient above D larger than 1e-9 of the largest)."""
+    than the chain's (a coefficient above D larger than 1e-9 of the largest). noise[n]: the largest
+    coefficient above D relative to the largest (their exact value is 0: the polynomial's relative
+    error; inf when no harmonic above D is sampled, D = 12)."""
     N, S, D = M.shape[0], len(theta), degree
     c = (S - 1) // 2
     A = np.empty((12, 12))
@@ -112,6 +114,7 @@ def polynomials(M, dft, theta, W, degree, poly, status):
             if abs(k - c) > D:
                 high = max(high, abs(coef[k]))
         status[n] = 2 if high > _DEGREE_TOL * big else 0
+        noise[n] = high / big if S > 2 * D + 1 else np.inf
         poly[n] = (W @ coef[c - D: c + D + 1]).real
 
 

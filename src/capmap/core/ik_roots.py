@@ -21,15 +21,16 @@ _MAX_DEGREE = 24
 class RealRoots(NamedTuple):
     """pose (R,) int and x (R,): the kept eigenvalues' rows and real parts; imag (R,): their imaginary
     parts (exactly 0 where the QR iteration found a real eigenvalue); degree (N,): each polynomial's
-    effective degree; gap (N,): the smallest chordal distance 2 |z - w| / sqrt((1 + |z|^2)(1 + |w|^2))
-    between two of its eigenvalues (for z = tan(a/2), w = tan(b/2) real: 2 |sin((a - b)/2)|, the
-    chord of the angle between them); failed (N,) bool: rows whose QR iteration did not converge."""
+    effective degree; doubt (N,): over the eigenvalues z not kept (complex), the largest ratio of a
+    first-order bound on the error of z, noise max|p_j| sum_j |z|^j / |p'(z)|, to |Im z|: above ~0.1
+    the error could carry z (and its conjugate) to the real axis, i.e. a real root may have been
+    lost; failed (N,) bool: rows whose QR iteration did not converge."""
 
     pose: np.ndarray
     x: np.ndarray
     imag: np.ndarray
     degree: np.ndarray
-    gap: np.ndarray
+    doubt: np.ndarray
     failed: np.ndarray
 
 
@@ -193,12 +194,13 @@ def _hqr(a, n, wr, wi):
 
 
 @numba.njit(cache=True)
-def _count_roots(poly, usable, real_tol, pose_out, x_out, imag_out, degree_out, gap_out):
+def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, degree_out, doubt_out):
     """Per usable row of poly (N, n+1) (x^0 upward): its effective degree (trailing coefficients
     below 1e-14 of the largest are zero), the eigenvalues of its companion matrix, and those with
     |imag| <= real_tol (1 + |real|) written to pose_out, x_out, imag_out; the effective degrees to
-    degree_out, the smallest chordal distance between two eigenvalues to gap_out; returns (count,
-    failed rows)."""
+    degree_out, and to doubt_out the largest ratio, over the eigenvalues not kept, of a first-order
+    bound on its error to its distance from the real axis (see :class:`RealRoots`); returns
+    (count, failed rows)."""
     N, n1 = poly.shape
     a = np.empty((_MAX_DEGREE, _MAX_DEGREE))
     wr, wi = np.empty(_MAX_DEGREE), np.empty(_MAX_DEGREE)
@@ -229,13 +231,21 @@ def _count_roots(poly, usable, real_tol, pose_out, x_out, imag_out, degree_out, 
             usable[r] = False
             failed += 1
             continue
-        gap = 2.0
+        doubt = 0.0
         for k in range(deg):
-            for i in range(k):
-                d = 2 * math.hypot(wr[k] - wr[i], wi[k] - wi[i]) / math.sqrt(
-                    (1 + wr[k] ** 2 + wi[k] ** 2) * (1 + wr[i] ** 2 + wi[i] ** 2))
-                gap = min(gap, d)
-        gap_out[r] = gap
+            if abs(wi[k]) <= real_tol * (1.0 + abs(wr[k])):
+                continue
+            z = complex(wr[k], wi[k])
+            dp = 0j  # p'(z) by Horner
+            for j in range(deg, 0, -1):
+                dp = dp * z + j * poly[r, j]
+            size, zk = 0.0, 1.0  # sum_j |z|^j
+            for j in range(deg + 1):
+                size += zk
+                zk *= abs(z)
+            err = noise[r] * scale * size / max(abs(dp), 1e-300)
+            doubt = max(doubt, err / abs(wi[k]))
+        doubt_out[r] = doubt
         for k in range(deg):
             if abs(wi[k]) <= real_tol * (1.0 + abs(wr[k])):
                 pose_out[m] = r
@@ -245,10 +255,11 @@ def _count_roots(poly, usable, real_tol, pose_out, x_out, imag_out, degree_out, 
     return m, failed
 
 
-def real_roots(poly: np.ndarray, usable: np.ndarray, real_tol: float) -> RealRoots:
+def real_roots(poly: np.ndarray, usable: np.ndarray, real_tol: float, noise: np.ndarray | None = None) -> RealRoots:
     """The real roots of the ``usable`` polynomials poly (N, n+1) (x^0 upward, n <= 24): the
     eigenvalues of their companion matrices with |imag| <= real_tol (1 + |real|) (near-double roots
-    split into complex pairs of small imaginary part; the caller polishes and checks every one)."""
+    split into complex pairs of small imaginary part; the caller polishes and checks every one).
+    ``noise`` (N,): the coefficients' relative error (default 1e-15)."""
     poly = np.ascontiguousarray(poly, dtype=float)
     if poly.shape[1] - 1 > _MAX_DEGREE:
         raise ValueError(f"polynomials of degree {poly.shape[1] - 1} > {_MAX_DEGREE}")
@@ -256,6 +267,7 @@ def real_roots(poly: np.ndarray, usable: np.ndarray, real_tol: float) -> RealRoo
     pose = np.empty(len(poly) * (poly.shape[1] - 1), dtype=np.int64)
     x, imag = np.empty(len(pose)), np.empty(len(pose))
     degree = np.zeros(len(poly), dtype=np.int64)
-    gap = np.full(len(poly), 2.0)
-    m, _ = _count_roots(poly, live, real_tol, pose, x, imag, degree, gap)
-    return RealRoots(pose[:m], x[:m], imag[:m], degree, gap, usable & ~live)
+    noise = np.full(len(poly), 1e-15) if noise is None else np.maximum(np.asarray(noise, dtype=float), 1e-15)
+    doubt = np.full(len(poly), np.inf)
+    m, _ = _count_roots(poly, noise, live, real_tol, pose, x, imag, degree, doubt)
+    return RealRoots(pose[:m], x[:m], imag[:m], degree, doubt, usable & ~live)
