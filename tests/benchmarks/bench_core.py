@@ -2,8 +2,9 @@
 
     python -m tests.benchmarks.bench_core [--points 20000] [--workers 2] [--step 10]
 
-Prints its figures; targets: IK >= 14,000 points/s per core (closed form, all branches) and
->= 1,000 for every locked joint; capacity >= 30 M states/s on this machine's 2 cores (state =
+Prints its figures (IK: the shortest of 3 runs); targets: IK >= 14,000 points/s per core (closed
+form, all branches), >= 14,000 with the SSRMS's joint 3, 4 or 5 locked and >= 5,000 for the general
+6R method on the Panda and the xArm7 with any joint locked; capacity >= 30 M states/s on this machine's 2 cores (state =
 configuration x direction) and >= 8x the per-configuration Pinocchio path measured in the same run.
 """
 
@@ -63,6 +64,17 @@ def _reference_chunk(args):
     return len(pts) * len(_worker["dirs"])
 
 
+def _best_of(runs: int, f):
+    """(the result of f(), the shortest of ``runs`` wall times in s): a virtual machine's timer noise
+    only ever adds time."""
+    best, out = np.inf, None
+    for _ in range(runs):
+        t = time.perf_counter()
+        out = f()
+        best = min(best, time.perf_counter() - t)
+    return out, best
+
+
 def erd_chain(name: str, joint: int):
     """The 6-joint chain of example-robot-data's 7-DOF arm ``name`` (fingers held at 0) with ``joint``
     (1-based) locked at mid-range: (Chain, lower (6,), upper (6,)) rad."""
@@ -114,16 +126,12 @@ def main():
         arm_j = lock(robot, joint, np.deg2rad(angle))
         Tj = arm_j.fk(rng.uniform(-np.pi, np.pi, (n_lock, 6)))
         ik.solve(arm_j, Tj[:20, :3, 3], Tj[:20, :3, :3])  # compile the kernels once
-        t = time.perf_counter()
-        sol_j = ik.solve(arm_j, Tj[:, :3, 3], Tj[:, :3, :3])
-        dt = time.perf_counter() - t
+        sol_j, dt = _best_of(3, lambda: ik.solve(arm_j, Tj[:, :3, 3], Tj[:, :3, :3]))
         print(f"IK joint {joint} locked      : {n_lock / dt:12,.0f} points/s/core  ({sol_j.method}, "
               f"{sol_j.n_solutions.mean():.2f} branches per pose, max {sol_j.n_solutions.max()})")
         general = ik.GeneralSixR()
         general.solve_chain(arm_j.chain, Tj[:20], arm_j.q_lower, arm_j.q_upper)
-        t = time.perf_counter()
-        sol_g = general.solve_chain(arm_j.chain, Tj, arm_j.q_lower, arm_j.q_upper)
-        dt = time.perf_counter() - t
+        sol_g, dt = _best_of(3, lambda: general.solve_chain(arm_j.chain, Tj, arm_j.q_lower, arm_j.q_upper))
         print(f"  general 6R, same poses: {n_lock / dt:12,.0f} points/s/core  ({sol_g.n_solutions.sum()} branches, "
               f"{sol_j.method} {sol_j.n_solutions.sum()})")
 
@@ -133,9 +141,7 @@ def main():
             chain, lower, upper = erd_chain(name, joint)
             Tj = chain.fk(rng.uniform(lower, upper, (n_lock, 6)))
             ik.solve_chain(chain, Tj[:20], lower, upper)
-            t = time.perf_counter()
-            sol_j = ik.solve_chain(chain, Tj, lower, upper)
-            dt = time.perf_counter() - t
+            sol_j, dt = _best_of(3, lambda: ik.solve_chain(chain, Tj, lower, upper))
             print(f"IK {name:6s} joint {joint} locked: {n_lock / dt:10,.0f} points/s/core  ({sol_j.method}, "
                   f"{sol_j.n_solutions.mean():.2f} branches per pose, max {sol_j.n_solutions.max()})")
 

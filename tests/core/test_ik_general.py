@@ -138,3 +138,13 @@ def test_classify_known_shapes():
     assert ur5.method == "closed_form" and ur5.complete
     j3 = ik.classify(lock(load(SSRMS_YAML), 3, 0.3).chain)
     assert j3.method == "general_6r" and j3.complete and j3.pairs[2] == "parallel"
+
+
+def test_every_known_configuration_on_1000_poses():
+    """SSRMS with joint 4 locked at 130 deg, 1,000 seeded poses FK(q): every q is among the solutions
+    (with one formulation per pose the best one lost pose 249's: the reason for the union)."""
+    arm = lock(load(SSRMS_YAML), 4, np.deg2rad(130))
+    q = np.random.default_rng(5).uniform(-np.pi, np.pi, (1000, 6))
+    sol = ik.GeneralSixR().solve_chain(arm.chain, arm.chain.fk(q), np.full(6, -10.0), np.full(6, 10.0))
+    d = np.abs(np.mod(sol.q - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=-1)
+    assert (np.nanmin(d, axis=1) < 1e-6).all()

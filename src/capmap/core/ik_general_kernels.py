@@ -18,9 +18,12 @@ _LIVE_TOL = 1e-12  # smallest / largest partial-pivoting pivot of M(qa) above th
 
 @numba.njit(cache=True, inline="always")
 def _below(A, k):
-    """One elimination step: rows below pivot row k minus their multiple of it (columns > k)."""
+    """One elimination step: rows below pivot row k minus their multiple of it (columns > k; rows
+    with a zero there, as M(qa)'s lower half in its first three columns, skipped)."""
     n = A.shape[0]
     for i in range(k + 1, n):
+        if A[i, k] == 0.0:
+            continue
         m = A[i, k] / A[k, k]
         for j in range(k + 1, n):
             A[i, j] -= m * A[k, j]

@@ -5,23 +5,20 @@ line up, M(qa) loses rank and the true roots nearby cluster, turn into complex p
 back-substitute badly (measured: the xArm7 with joint 6 locked, qa = q2, 2 of 4 branches lost at
 one pose; the 6-DOF Kinova, qa = q5, 3 of 8; the SSRMS with joint 3 locked, qa = q2 near -90 deg,
 2 of 6 and 2 of 8 at two of 2,000 poses). A second formulation that eliminates a different joint
-sees those solutions well separated.
+sees those solutions well separated. Every pose is therefore solved by ``UNION`` (two)
+formulations, their candidates joined; a pose fewer than two solve (a rank-deficient
+elimination, a determinant vanishing identically) tries the next ones, and a pose none solves is
+reported (the caller falls back to a search there and says so).
 
-A pose is *confirmed* by a formulation when all of these hold, so that no root can have gone
-missing: it solved the pose (status 0); its polynomial kept its full degree (no root escaped to
-x = infinity); its exactly real eigenvalues gave as many valid solutions (FK residual <= tol,
-after the polish, all angles before the joint ranges) as there are of them, all distinct (a root
-whose back-substitution or polish fails, or two roots reaching one solution, break the count);
-and no dropped complex eigenvalue lies within 10 times its first-order error bound of the real
-axis (``doubt`` < 0.1, the bound from the polynomial's own measured noise, the harmonic above its
-degree: a real pair lost to rounding becomes such a near-real complex pair). Every pose is solved
-by the best formulation; a pose it does not confirm is solved by the next one, until one confirms
-it or ``UNION`` (two) have solved it, their candidates joined; a pose no formulation solves is
-reported (the caller falls back to a search there and says so). On 2,000 poses each of the SSRMS
-with joint 3, 4 or 5 locked and of five Panda and xArm7 locks this finds what solving every pose
-with the two best formulations finds (2026-12-02), the first formulation confirming 93-99 % of
-the poses on the SSRMS locks, 33-100 % on the xArm7's and 0-100 % on the Panda's (0 with joint 6
-or 7 locked: the wrist gives every pose double roots, so every pose takes two formulations).
+Solving a pose with one formulation when it *confirms* the pose was tried and rejected: a pose is
+confirmed when it solved it, its polynomial kept its full degree, its exactly real eigenvalues
+gave as many valid, distinct solutions as there are of them, and no dropped complex eigenvalue
+lies within 10 times its error bound (from the polynomial's own noise) of the real axis. That
+costs ~1.05 formulations per pose on the SSRMS locks (10,700-15,800 points/s/core against 8,000-9,000), but on 1,000
+seeded poses per chain it confirmed poses whose known configuration was lost: 1 with the SSRMS's
+joint 4 locked (the best formulation), 2-5 per chain with weaker formulations of the xArm7 and the
+Panda. The lost roots left no trace in the counts or the noise (the error sits in M, not in the
+determinant's sampling), so the confirmation only ranks the formulations.
 
 :func:`prepare` measures every formulation once per chain on poses FK(q) of a seeded generator
 (the share of the known q it recovers, the share of poses it confirms: a formulation with
@@ -136,8 +133,8 @@ def candidates(solver: GeneralSolver, T: np.ndarray, steps: int, tol: float,
                max_tries: int = len(FORMULATIONS)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Candidate solutions (N, K, 6) rad, Newton-polished (``steps``), their validity (N, K) (FK
     residual <= ``tol`` m and rad) and the poses no formulation solved (N,) bool, for targets T
-    (N, 4, 4) in the chain's base frame. Formulations run in the solver's order on the poses not
-    yet settled: confirmed by one formulation, or solved by ``UNION`` of them; up to ``max_tries``."""
+    (N, 4, 4) in the chain's base frame. Formulations run in the solver's order on the poses fewer
+    than ``UNION`` of them solved so far, up to ``max_tries``."""
     N = len(T)
     parts = []
     solved = np.zeros(N, dtype=int)
@@ -148,9 +145,9 @@ def candidates(solver: GeneralSolver, T: np.ndarray, steps: int, tol: float,
             break
         Tk = np.ascontiguousarray(T[rows])
         out, theta_k = _run(solver.chain, form, solver.left[k], solver.degrees[k], solver.phase, Tk)
-        confirmed, valid = _confirmed(solver.chain, out, theta_k, Tk, steps, tol)
+        _, valid = _confirmed(solver.chain, out, theta_k, Tk, steps, tol)
         solved[rows] += out.status == 0
-        settled[rows] = confirmed | (solved[rows] >= UNION)
+        settled[rows] = solved[rows] >= UNION
         theta, ok = np.zeros((N,) + theta_k.shape[1:]), np.zeros((N, theta_k.shape[1]), dtype=bool)
         theta[rows], ok[rows] = theta_k, valid
         parts.append((theta, ok))
