@@ -75,20 +75,25 @@ def test_polish_matches_numpy_newton():
     assert np.abs(np.mod(done[conv] - ref[conv] + np.pi, 2 * np.pi) - np.pi).max() < 1e-8
 
 
-def test_polish_rotation_error_near_pi():
-    """The rotation error of a pose turned by ~pi (the symmetric-part branch) equals kinematics'."""
+@pytest.mark.parametrize("short", [0.0, 5e-5, 3e-4])
+def test_polish_rotation_error_near_pi(short):
+    """The rotation error of poses turned by pi - short about the tip's z (the symmetric-part branch
+    below 1e-4, the antisymmetric one above) equals kinematics'."""
     rng = np.random.default_rng(2)
     chain = _random_chain(rng)
     q = rng.uniform(-np.pi, np.pi, (50, 6))
     T = chain.fk(q)
-    flip = np.diag([-1.0, -1.0, 1.0, 1.0])  # Rz(pi) about the tip
-    T_far = T @ flip
+    c, s_ = np.cos(np.pi - short), np.sin(np.pi - short)
+    turn = np.array([[c, -s_, 0, 0], [s_, c, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1.0]])
+    T_far = T @ turn
     _, err = ik_polish.polish(chain.X, q, T_far, np.arange(50), 0, 0.0)
     ref = pose_error(chain.fk(q), T_far)
     assert np.abs(err[:, :3] - ref[:, :3]).max() < 1e-12
-    # at pi, w and -w are one rotation (the sign is rounding's): same angle, parallel axes
-    assert np.abs(np.linalg.norm(err[:, 3:], axis=1) - np.pi).max() < 1e-6
-    assert np.abs(np.linalg.norm(np.cross(err[:, 3:], ref[:, 3:]), axis=1)).max() < 1e-6
+    assert np.abs(np.linalg.norm(err[:, 3:], axis=1) - (np.pi - short)).max() < 1e-6
+    if short == 0.0:  # at pi, w and -w are one rotation (the sign is rounding's): parallel axes
+        assert np.abs(np.linalg.norm(np.cross(err[:, 3:], ref[:, 3:]), axis=1)).max() < 1e-6
+    else:
+        assert np.abs(err[:, 3:] - ref[:, 3:]).max() < 1e-6
 
 
 def test_distinct_keeps_first_of_repeats():
@@ -160,3 +165,24 @@ def test_doubt_bounds_how_far_noise_moves_a_complex_pair(noise):
     assert moved <= 2 * doubt + 1e-9
     if doubt < 0.1:
         assert moved < 0.2  # no perturbation brought a pair near the real axis
+
+
+@pytest.mark.parametrize("k", [2, 3, 4])
+def test_null_space_split_recovers_every_monomial_vector(k):
+    """A null space spanned by k monomial vectors tan(qb/2)^i tan(qc/2)^j (random angles), given in a
+    random orthonormal basis: the split returns k vectors whose angles are the k pairs (1e-6 rad)."""
+    from capmap.core.ik_general_back import _angles_of, _split
+
+    rng = np.random.default_rng(k)
+    for _ in range(200):
+        ang = rng.uniform(-np.pi, np.pi, (k, 2))
+        x = np.tan(ang / 2)
+        vecs = np.array([[xb ** i * xc ** j for i in range(4) for j in range(3)] for xb, xc in x])
+        V, _ = np.linalg.qr(vecs.T @ rng.standard_normal((k, k)))  # (12, k) orthonormal, mixed
+        out = np.zeros((4, 12))
+        found = _split(np.ascontiguousarray(np.hstack([V, np.zeros((12, 4 - k))])), k, out)
+        assert found == k
+        got = np.array([_angles_of(out[f]) for f in range(found)])
+        for a in ang:
+            d = np.abs(np.mod(got - a + np.pi, 2 * np.pi) - np.pi).max(axis=1)
+            assert d.min() < 1e-6

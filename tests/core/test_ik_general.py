@@ -122,7 +122,7 @@ def test_collinear_axes_are_reported(caplog):
     X[1, 2, 3] = 0.1
     col = Chain(X)
     T = col.fk(np.random.default_rng(0).uniform(-np.pi, np.pi, (4, 6)))
-    _, _, degenerate = ik_general_select.candidates(ik_general_select.prepare(col), T, 8, 1e-9)
+    _, _, degenerate = ik_general_select.candidates(ik_general_select.prepare(col), T)
     assert degenerate.all()
     with caplog.at_level(logging.WARNING, logger="capmap.core.ik"):
         sol = ik.solve_chain(col, T, -np.pi * np.ones(6), np.pi * np.ones(6))

@@ -20,7 +20,9 @@ Semi-analytical (complete) for chains of the shape
 
     joint 0 | joint 1 | joints 2, 3 with parallel axes | joints 4, 5 with intersecting axes
 
-(the SSRMS-type arm with joint 3, 4 or 5 locked: two parallel joints left), and reversed:
+(the SSRMS-type arm with joint 3, 4 or 5 locked: two parallel joints left), and reversed;
+the general 6R method below is used there first (the same sets, 4x faster), the search takes
+the poses no elimination solves and stays as an independent method. It is
 a 1-D search over joint 0 (Xu, She, Xu, Acta Astronautica 105, 2014). For a fixed q0 steps
 1-3 above give joints 1, 4, 5 in closed form (2 x 2 branches) and leave the planar 2R group
 one condition too many: the wrist point must lie at the 2R's reach, a residual f(q0) in
@@ -248,7 +250,8 @@ class GeneralSixR(IKMethod):
     """Every solution of any 6-joint revolute chain (:mod:`capmap.core.ik_general`: Raghavan-Roth /
     Manocha-Canny elimination, a companion eigenproblem per pose). Poses where every formulation is
     degenerate (a continuum of solutions, or an ill-conditioned elimination) are solved by the
-    multi-start search as well, with a warning that branches may be missing there."""
+    semi-analytical search where the chain has its shape (complete), else by the multi-start search,
+    with a warning that branches may be missing there."""
 
     polish: int = 8  # the eliminated roots of clustered solutions can be 1e-2 rad off: Newton converges from there
 
@@ -264,18 +267,21 @@ class GeneralSixR(IKMethod):
         return chain.n == 6
 
     def candidates(self, chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        theta, ok, degenerate = ik_general_select.candidates(_general_solver(chain), np.ascontiguousarray(T),
-                                                             self.polish, RESIDUAL_TOL)
-        if degenerate.any():
+        theta, ok, degenerate = ik_general_select.candidates(_general_solver(chain), np.ascontiguousarray(T))
+        if not degenerate.any():
+            return theta, ok
+        search = next((m for m in (SemiAnalytic(), SemiAnalytic(reversed=True)) if m.applies(chain)), None)
+        if search is not None:  # a complete method for this chain shape takes the poses no elimination solved
+            extra, extra_ok = search.candidates(chain, T[degenerate], lower, upper)
+        else:
             log.warning("IK: %d of %d poses are degenerate for the exact 6R method (a continuum of solutions "
                         "or an ill-conditioned elimination); multi-start Newton is used there and may miss "
                         "branches (the map may overstate there)", int(degenerate.sum()), len(T))
             extra, extra_ok = multi_start(chain, T[degenerate], lower, upper)
-            pad = np.zeros((len(T), extra.shape[1], chain.n))
-            pad_ok = np.zeros((len(T), extra.shape[1]), dtype=bool)
-            pad[degenerate], pad_ok[degenerate] = extra, extra_ok
-            theta, ok = np.concatenate([theta, pad], axis=1), np.concatenate([ok, pad_ok], axis=1)
-        return theta, ok
+        pad = np.zeros((len(T), extra.shape[1], chain.n))
+        pad_ok = np.zeros((len(T), extra.shape[1]), dtype=bool)
+        pad[degenerate], pad_ok[degenerate] = extra, extra_ok
+        return np.concatenate([theta, pad], axis=1), np.concatenate([ok, pad_ok], axis=1)
 
 
 @dataclass(frozen=True)

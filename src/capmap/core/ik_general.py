@@ -18,9 +18,12 @@ by the left null space of their 14 x 8 coefficient matrix Q: 6 equations in the 
 (qb, qc) with coefficients linear in cos qa, sin qa. With the half-angle substitution in qb, qc and
 a copy multiplied by tan(qb/2) they are a 12 x 12 matrix M(qa) acting on tan(qb/2)^i tan(qc/2)^j,
 i < 4, j < 3; every solution makes M(qa) singular. det M(qa) is a trigonometric polynomial of
-degree <= 12 in qa (8 for a general chain: at most 16 solutions); it is sampled at 25 equispaced
-qa, its Fourier coefficients are exact, and its real roots are the eigenvalues of a companion
-matrix (in x = tan((qa - phase)/2), a fixed phase chosen so that no root lies at x = infinity).
+degree D <= 12 in qa (8 for a general chain: at most 16 solutions); it is sampled at 2D + 3
+equispaced qa (25 for D = 12), its Fourier coefficients are exact (the one harmonic above D
+measures the rounding noise), and its real roots are the eigenvalues of a companion matrix (in x =
+tan((qa - phase)/2), a seeded random phase, so that a root at x = infinity, qa = phase + 180 deg,
+has probability zero; a formulation whose polynomial loses degree at a pose does not count as
+having solved it, :mod:`capmap.core.ik_general_select`).
 For each root the null vector of M(qa) gives qb, qc (from projective ratios, so qb = 180 deg is
 no special case), the least-squares solution of Q gives qu, qv, and the orientation gives qf.
 
@@ -220,7 +223,7 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
 
 
 def recovered(theta: np.ndarray, ok: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """(N,) bool: the known solution q (N, 6) is within 1e-4 rad of one of the raw candidates."""
+    """(N,) bool: the known solution q (N, 6) is within 1e-4 rad of one of the candidates theta (N, K, 6)."""
     d = np.abs(np.mod(theta - q[:, None] + np.pi, 2 * np.pi) - np.pi).max(axis=-1)
     return np.any(ok & (d < 1e-4), axis=1)
 

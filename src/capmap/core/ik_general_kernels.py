@@ -92,8 +92,8 @@ def _at(M, n, qa, A):
 def polynomials(M, dft, theta, W, degree, poly, status, noise):
     """Per pose n: det M(qa) sampled at ``theta`` (S,), its Fourier coefficients (dft (S, S), k =
     -(S-1)/2 ..) and the polynomial poly[n] (x^0 .. x^2D, W) whose real roots x give qa = phase + 2
-    atan x. status[n]: 0 solved, 1 M(qa) singular for every qa (a degenerate elimination: at no
-    sample do the partial-pivoting pivots span more than 1e12), 2 a determinant of higher degree
+    atan x. status[n]: 0 solved, 1 M(qa) singular for every qa (a degenerate elimination: at
+    every sample the partial-pivoting pivots span more than 1e12), 2 a determinant of higher degree
     than the chain's (a coefficient above D larger than 1e-9 of the largest). noise[n]: the largest
     coefficient above D relative to the largest (their exact value is 0: the polynomial's relative
     error; inf when no harmonic above D is sampled, D = 12)."""

@@ -51,10 +51,10 @@ def _qr(Q, H, R, perm):
                 A[i, c], A[i, bj] = A[i, bj], A[i, c]
             perm[c], perm[bj] = perm[bj], perm[c]
         norm = math.sqrt(best)
-        if norm == 0.0:
-            for i in range(c, k):
+        if norm == 0.0:  # rank c: R's rows from c on are 0 (the rows above are written on the way out)
+            for i in range(k):
                 for j in range(k):
-                    R[i, j] = 0.0
+                    R[i, j] = A[i, j] if (i < c and j >= i) else 0.0
             return 0.0
         alpha = -norm if A[c, c] >= 0 else norm
         for i in range(m):

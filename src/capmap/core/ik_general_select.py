@@ -129,27 +129,24 @@ def prepare(chain: Chain, rng: np.random.Generator | None = None, n_poses: int =
                          confirmed=tuple(r[4] for r in rows))
 
 
-def candidates(solver: GeneralSolver, T: np.ndarray, steps: int, tol: float,
+def candidates(solver: GeneralSolver, T: np.ndarray,
                max_tries: int = len(FORMULATIONS)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Candidate solutions (N, K, 6) rad, Newton-polished (``steps``), their validity (N, K) (FK
-    residual <= ``tol`` m and rad) and the poses no formulation solved (N,) bool, for targets T
-    (N, 4, 4) in the chain's base frame. Formulations run in the solver's order on the poses fewer
-    than ``UNION`` of them solved so far, up to ``max_tries``."""
+    """Raw candidate solutions (N, K, 6) rad (the caller polishes and checks them), their validity
+    (N, K) and the poses no formulation solved (N,) bool, for targets T (N, 4, 4) in the chain's
+    base frame. Formulations run in the solver's order on the poses fewer than ``UNION`` of them
+    solved so far, up to ``max_tries``."""
     N = len(T)
     parts = []
     solved = np.zeros(N, dtype=int)
-    settled = np.zeros(N, dtype=bool)
     for k, form in enumerate(solver.order[:max_tries]):
-        rows = np.flatnonzero(~settled)
+        rows = np.flatnonzero(solved < UNION)
         if not len(rows):
             break
-        Tk = np.ascontiguousarray(T[rows])
-        out, theta_k = _run(solver.chain, form, solver.left[k], solver.degrees[k], solver.phase, Tk)
-        _, valid = _confirmed(solver.chain, out, theta_k, Tk, steps, tol)
-        solved[rows] += out.status == 0
-        settled[rows] = solved[rows] >= UNION
+        out, theta_k = _run(solver.chain, form, solver.left[k], solver.degrees[k], solver.phase,
+                            np.ascontiguousarray(T[rows]))
+        solved[rows] += (out.status == 0) & out.full  # a root escaped to x = infinity: not solved
         theta, ok = np.zeros((N,) + theta_k.shape[1:]), np.zeros((N, theta_k.shape[1]), dtype=bool)
-        theta[rows], ok[rows] = theta_k, valid
+        theta[rows], ok[rows] = theta_k, out.ok
         parts.append((theta, ok))
     theta = np.concatenate([p[0] for p in parts], axis=1)
     ok = np.concatenate([p[1] for p in parts], axis=1)

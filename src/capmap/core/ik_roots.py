@@ -2,7 +2,7 @@
 balanced (EISPACK ``balanc``) and reduced by the Francis double-shift QR iteration (EISPACK
 ``hqr``, as in Numerical Recipes). The companion matrix is already upper Hessenberg, so the
 Hessenberg reduction LAPACK's ``dgeev`` performs is skipped: about half the time of
-``numpy.linalg.eigvals`` on a 16 x 16 companion, with the same accuracy (tests/core/test_ik_roots.py
+``numpy.linalg.eigvals`` on a 16 x 16 companion, with the same accuracy (tests/core/test_ik_compiled.py
 compares both on polynomials whose coefficients span six decades)."""
 
 from __future__ import annotations
