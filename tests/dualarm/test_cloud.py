@@ -59,7 +59,8 @@ def test_min_area_rectangle_equals_brute_force_rotation():
     rng = np.random.default_rng(3)
     xy = rng.normal(size=(200, 2)) * [1.0, 0.3] @ np.array([[np.cos(0.4), np.sin(0.4)], [-np.sin(0.4), np.cos(0.4)]])
     c = min_area_rectangle(xy)
-    area = abs(np.cross(c[1] - c[0], c[3] - c[0]))
+    u, v = c[1] - c[0], c[3] - c[0]
+    area = abs(u[0] * v[1] - u[1] * v[0])
     brute = min(np.prod(np.ptp(xy @ np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]), axis=0))
                 for a in np.linspace(0, np.pi / 2, 20001))
     assert area == pytest.approx(brute, rel=1e-4) and area <= brute * (1 + 1e-9)

@@ -29,14 +29,14 @@ def test_a_template_or_a_bad_key_is_one_line(tmp_path):
 
 
 def test_arm_prints_each_lock_classification():
-    """The SSRMS: joints 1, 2, 6, 7 locked -> closed forms, 3, 4, 5 -> the general 6R method; the Panda with joint 2
+    """The SSRMS: joints 1, 2, 6, 7 locked -> closed forms, 3, 4, 5 -> the search; the Panda with joint 2
     at mid-range (0 deg: joints 1 and 3 on one line) is flagged as a continuum."""
     out = _cli("arm", "config/robots/ssrms7.yaml")
     assert out.returncode == 0, out.stderr
     lines = [ln for ln in out.stdout.splitlines() if "locked at" in ln]
     assert len(lines) == 7
     assert all("closed_form" in lines[j - 1] for j in (1, 2, 6, 7))
-    assert all("general_6r (complete)" in lines[j - 1] for j in (3, 4, 5))
+    assert all("semi_analytic" in lines[j - 1] for j in (3, 4, 5))
     out = _cli("arm", "config/robots/panda.yaml")
     assert out.returncode == 0, out.stderr
     lines = [ln for ln in out.stdout.splitlines() if "locked at" in ln]
