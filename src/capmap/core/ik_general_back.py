@@ -11,7 +11,7 @@ import numba
 import numpy as np
 
 from capmap.core.ik_general_kernels import _at, _eliminate
-from capmap.core.ik_general_matrices import _qr
+from capmap.core.ik_general_matrices import _matmul, _qr, _solve_upper
 from capmap.core.ik_roots import _balance, _hqr
 
 __all__ = ["back_substitute"]
@@ -100,19 +100,9 @@ def _split(V, k, out):
     perm = np.empty(k, dtype=np.int64)
     if _qr(B0, H, R, perm) < 1e-14:
         return 0
-    Z = np.empty((k, k))
-    for c in range(k):
-        for r in range(k - 1, -1, -1):
-            acc = 0.0
-            for i in range(6):
-                acc += H[i, r] * B1[i, c]
-            for j in range(r + 1, k):
-                acc -= R[r, j] * Z[j, c]
-            Z[r, c] = acc / R[r, r]
-    G = np.empty((k, k))
-    for r in range(k):
-        for c in range(k):
-            G[perm[r], c] = Z[r, c]
+    Y, G = np.empty((k, k)), np.empty((k, k))
+    _matmul(H[:, :k].T, B1, Y)
+    _solve_upper(R, Y, perm, G)
     A = G.copy()
     _hessenberg(A, k)
     _balance(A, k)

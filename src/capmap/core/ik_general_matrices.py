@@ -10,6 +10,8 @@ import math
 import numba
 import numpy as np
 
+from capmap.core.ik_general_kernels import _times
+
 __all__ = ["matrices"]
 
 
@@ -85,6 +87,34 @@ def _qr(Q, H, R, perm):
 
 
 @numba.njit(cache=True)
+def _matmul(A, B, out):
+    """out = A @ B for small matrices (loops: no BLAS call per pose)."""
+    for i in range(A.shape[0]):
+        for j in range(B.shape[1]):
+            s = 0.0
+            for k in range(A.shape[1]):
+                s += A[i, k] * B[k, j]
+            out[i, j] = s
+
+
+@numba.njit(cache=True)
+def _solve_upper(R, Y, perm, out):
+    """The least-squares solution of Q X = B from the pivoted QR of :func:`_qr`: given Y = H[:, :k]^T B
+    (k, c), out[perm[r], :] = (R^-1 Y)[r, :] (a zero pivot gives 0 in its row)."""
+    k, c = Y.shape
+    Z = np.empty((k, c))
+    for col in range(c):
+        for r in range(k - 1, -1, -1):
+            s = Y[r, col]
+            for j in range(r + 1, k):
+                s -= R[r, j] * Z[j, col]
+            Z[r, col] = s / R[r, r] if R[r, r] != 0.0 else 0.0
+    for r in range(k):
+        for col in range(c):
+            out[perm[r], col] = Z[r, col]
+
+
+@numba.njit(cache=True)
 def matrices(Ainv, Binv, B2inv, HH, CL, T, M, lstsq, const, rank):
     """Per pose n of the targets T (N, 4, 4): the quantities of F = A^-1 T B^-1 on the 9 grid
     points (Ainv, Binv (9, 4, 4)), their monomial coefficients CR = B2inv @ V (9, 14), the left null
@@ -97,39 +127,18 @@ def matrices(Ainv, Binv, B2inv, HH, CL, T, M, lstsq, const, rank):
     Q, H, R = np.empty((14, 8)), np.empty((14, 14)), np.empty((8, 8))
     perm = np.empty(8, dtype=np.int64)
     P, E = np.empty((6, 9)), np.empty((6, 9))
-    W = np.empty((8, 14))
     for n in range(N):
         for g in range(9):
-            for i in range(4):
-                for j in range(4):
-                    G[i, j] = T[n, i, 0] * Binv[g, 0, j] + T[n, i, 1] * Binv[g, 1, j] + T[n, i, 2] * Binv[g, 2, j] \
-                        + T[n, i, 3] * Binv[g, 3, j]
-            for i in range(4):
-                for j in range(4):
-                    F[i, j] = Ainv[g, i, 0] * G[0, j] + Ainv[g, i, 1] * G[1, j] + Ainv[g, i, 2] * G[2, j] \
-                        + Ainv[g, i, 3] * G[3, j]
+            _times(T[n], Binv[g], G)
+            _times(Ainv[g], G, F)
             _quantities(F, V[g])
-        for r in range(9):
-            for q in range(14):
-                s = 0.0
-                for g in range(9):
-                    s += B2inv[r, g] * V[g, q]
-                CR[r, q] = s
+        _matmul(B2inv, V, CR)
         for q in range(14):
             const[n, q] = CR[0, q]
             for r in range(8):
                 Q[q, r] = CR[r + 1, q]
         rank[n] = _qr(Q, H, R, perm)
-        # least squares: y[perm] = R^-1 H[:, :8]^T b, i.e. lstsq[perm[r]] = (R^-1 H1^T)[r]
-        for q in range(14):
-            for r in range(7, -1, -1):
-                s = H[q, r]
-                for j in range(r + 1, 8):
-                    s -= R[r, j] * W[j, q]
-                W[r, q] = s / R[r, r] if R[r, r] != 0.0 else 0.0
-        for r in range(8):
-            for q in range(14):
-                lstsq[n, perm[r], q] = W[r, q]
+        _solve_upper(R, H[:, :8].T, perm, lstsq[n])  # least squares of Q y = b: lstsq[n] b (B = I)
         for a in range(3):
             for e in range(6):  # P = Nl CL_a (minus the constant in monomial 0 for a = 0)
                 for mo in range(9):
@@ -138,12 +147,7 @@ def matrices(Ainv, Binv, B2inv, HH, CL, T, M, lstsq, const, rank):
                         c = CL[a, q, mo] - (const[n, q] if a == 0 and mo == 0 else 0.0)
                         s += H[q, 8 + e] * c
                     P[e, mo] = s
-            for e in range(6):
-                for mo in range(9):
-                    s = 0.0
-                    for k in range(9):
-                        s += P[e, k] * HH[k, mo]
-                    E[e, mo] = s
+            _matmul(P, HH, E)
             for i in range(12):
                 for j in range(12):
                     M[n, a, i, j] = 0.0
