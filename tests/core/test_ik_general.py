@@ -59,20 +59,6 @@ def test_agrees_with_the_closed_forms(name, arm):
     assert _missing(a, b) == 0 and _missing(b, a) == 0
 
 
-@pytest.mark.parametrize("joint", [3, 4, 5])
-@pytest.mark.parametrize("angle", [0.3, -1.2, 2.5])
-def test_agrees_with_the_search_on_the_middle_locks(joint, angle):
-    """SSRMS with joint 3, 4 or 5 locked (the semi-analytical search's chains): exactly the search's
-    set, both ways, on 300 poses (2026-12-02: 18,014 branches over the 9 cases, none missed either
-    way, also under OPENBLAS_CORETYPE=Prescott)."""
-    arm = lock(load(SSRMS_YAML), joint, angle)
-    rng = np.random.default_rng(joint)
-    T = arm.chain.fk(rng.uniform(arm.q_lower, arm.q_upper, (300, 6)))
-    a = ik.SemiAnalytic().solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
-    b = ik.GeneralSixR().solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
-    assert _missing(a, b) == 0 and _missing(b, a) == 0
-
-
 def test_random_chains_every_branch():
     """Five random 6R chains (no special geometry), 60 poses each: every returned solution exact by
     the chain's FK, the sampled configuration among them, and every solution of a 64-start Newton
@@ -141,10 +127,10 @@ def test_classify_known_shapes():
 
 
 def test_every_known_configuration_on_1000_poses():
-    """SSRMS with joint 4 locked at 130 deg, 1,000 seeded poses FK(q): the arm's method (the search)
-    returns every q. (The general method, solving each pose with two eliminations, loses pose 249's
-    under OPENBLAS_CORETYPE=Prescott: joints 2 and 6 both within 1 deg of the angles at which the two
-    eliminations lose rank; with one elimination per pose it loses it everywhere.)"""
+    """SSRMS with joint 4 locked at 130 deg, 1,000 seeded poses FK(q): the arm's method (the resultant
+    polynomial, :mod:`capmap.core.ik_semi_poly`) returns every q. (The general method, solving each
+    pose with two eliminations, loses pose 249's under OPENBLAS_CORETYPE=Prescott: joints 2 and 6
+    both within 1 deg of the angles at which the two eliminations lose rank.)"""
     arm = lock(load(SSRMS_YAML), 4, np.deg2rad(130))
     q = np.random.default_rng(5).uniform(-np.pi, np.pi, (1000, 6))
     sol = ik.solve_chain(arm.chain, arm.chain.fk(q), np.full(6, -10.0), np.full(6, 10.0))

@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik_classify, ik_closed, ik_general_select, ik_semi
+from capmap.core import ik_classify, ik_closed, ik_general_select, ik_semi, ik_semi_poly
 from capmap.core.ik_classify import ChainClass
 from capmap.core.ik_finish import RESIDUAL_TOL, IKSolutions, _finish, wrap_to_range
 from capmap.core.ik_numeric import multi_start, newton
@@ -221,15 +221,28 @@ class ClosedForm(_ShapeMethod):
     _raw = staticmethod(ik_closed.branches)
 
 
+_SEMI: dict[bytes, ik_semi_poly.SemiPolynomial] = {}
+
+
+def _semi_candidates(chain: Chain, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    key = chain.X.tobytes()
+    if key not in _SEMI:
+        _SEMI[key] = ik_semi_poly.prepare(chain)
+    return ik_semi_poly.candidates(_SEMI[key], T)
+
+
 @dataclass(frozen=True)
 class SemiAnalytic(_ShapeMethod):
-    """The semi-analytical 1-D search over joint 0 (complete; :mod:`capmap.core.ik_semi`) for chains
-    ``0 | 1 | 2 3 parallel | 4 5 intersecting``; ``reversed``: that shape from the tip."""
+    """The semi-analytical method (complete) for chains ``0 | 1 | 2 3 parallel | 4 5 intersecting``:
+    the real roots in joint 0 of one resultant polynomial (:mod:`capmap.core.ik_semi_poly`), the
+    1-D search (:mod:`capmap.core.ik_semi`) around roots known only approximately and on degenerate
+    poses; ``reversed``: that shape from the tip."""
 
     reversed: bool = False
+    polish: int = 8  # roots of clustered solutions beside a fold are known to ~1e-5 rad: Newton converges from there
     _label = "semi_analytic"
     _shape = staticmethod(semi_analytic_shape)
-    _raw = staticmethod(ik_semi.candidates)
+    _raw = staticmethod(_semi_candidates)
 
 
 _GENERAL: dict[bytes, "ik_general_select.GeneralSolver"] = {}

@@ -49,6 +49,7 @@ from capmap.core.ik_roots import RealRoots, real_roots
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["Formulation", "FORMULATIONS", "Solved", "solve_formulation", "left_coefficients", "degree_of",
+           "companion_map", "sampling",
            "recovered", "quantities", "MAX_ROOTS"]
 
 MAX_ROOTS = 48  # candidates per pose (24 roots of a degree-12 determinant, some shared by several solutions); more: degenerate
@@ -146,7 +147,7 @@ def _matrices(X: np.ndarray, f: int, CL: np.ndarray, T: np.ndarray):
 
 
 @lru_cache(maxsize=None)
-def _companion_map(degree: int, phase: float) -> np.ndarray:
+def companion_map(degree: int, phase: float) -> np.ndarray:
     """W (2D+1, 2D+1) complex: the coefficients (x^0 .. x^2D) of (1+x^2)^D P(phase + 2 atan x) are
     Re(W @ c) for the Fourier coefficients c_k, k = -D..D, of P."""
     D = degree
@@ -164,7 +165,7 @@ _THETA = 2 * np.pi * np.arange(_SAMPLES) / _SAMPLES
 
 
 @lru_cache(maxsize=None)
-def _sampling(degree: int) -> tuple[np.ndarray, np.ndarray]:
+def sampling(degree: int) -> tuple[np.ndarray, np.ndarray]:
     """The qa samples (S,) rad and the DFT (S k, S n) for a determinant of the chain's degree D: S =
     2D + 3 (one harmonic above D, to check the degree; the chain's degree is the largest measured over
     random poses, so a pose's is no higher), 25 for D = 12 (the largest possible)."""
@@ -203,8 +204,8 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     N = len(T)
     M, lstsq, const, rank = _matrices(chain.X, f, CL, T)
     poly, status, noise = np.zeros((N, 2 * degree + 1)), np.zeros(N, dtype=np.int64), np.full(N, np.inf)
-    theta_s, dft = _sampling(degree)
-    polynomials(M, dft, theta_s, _companion_map(degree, phase), degree, poly, status, noise)
+    theta_s, dft = sampling(degree)
+    polynomials(M, dft, theta_s, companion_map(degree, phase), degree, poly, status, noise)
     status[rank < _RANK_TOL] = 3
     roots = _real_roots(poly, status == 0, noise)
     status[roots.failed] = 5

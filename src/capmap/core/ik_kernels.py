@@ -21,7 +21,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["pack", "evaluate", "evaluate_grid", "evaluate_branch"]
+__all__ = ["pack", "evaluate", "evaluate_grid", "evaluate_branch", "residuals", "branch_angles"]
 
 _jit = numba.njit(cache=True)
 _inline = numba.njit(cache=True, inline="always")
@@ -33,13 +33,14 @@ def pack(X: np.ndarray, u, wc, n1, t1, a, h: float, sigma: float, reach: float) 
 
 
 @_inline
-def _roots(A, B, C):
+def _roots(A, B, C, slack):
     """A cos x + B sin x = C, as ``capmap.core.ik_closed._trig_roots`` but as cosines and sines of the
-    two roots phi + delta, phi - delta: (c1, s1, c2, s2, ok)."""
+    two roots phi + delta, phi - delta: (c1, s1, c2, s2, ok); |C| / hypot(A, B) up to 1 + slack counts
+    as a (double) root."""
     rho = math.hypot(A, B)
     ok = rho > 1e-12
     cp, sp, ratio = (A / rho, B / rho, C / rho) if ok else (1.0, 0.0, C)
-    ok = ok and abs(ratio) <= 1 + 1e-10
+    ok = ok and abs(ratio) <= 1 + slack
     cd = min(1.0, max(-1.0, ratio))
     sd = math.sqrt(1.0 - cd * cd)
     return cp * cd - sp * sd, sp * cd + cp * sd, cp * cd + sp * sd, sp * cd - cp * sd, ok
@@ -71,10 +72,11 @@ def _mtm(A, B, out):
 
 
 @_inline
-def _one(X, c, T, q0, theta, ok, f, s, sv, angles, only):
+def _one(X, c, T, q0, theta, ok, f, s, sv, angles, only, slack=1e-10):
     """Branches at one (target T (4, 4), q0): theta (4, 6) (only when ``angles``), ok (4,), f (4,).
     X (7, 4, 4) and the constants c (130,); s: scratch (8, 3, 3), sv: scratch (5, 3); only:
-    the one branch to evaluate (0-3), or -1 for all four (others are left untouched). Joint
+    the one branch to evaluate (0-3), or -1 for all four (others are left untouched); slack: see
+    :func:`_roots` (1e-10; more where the angle q0 is a root known only approximately). Joint
     angles are carried as cosines and sines (no trigonometric call but for q0 and the output)."""
     u, wc, n1, t1, a = c[112:115], c[115:118], c[118:121], c[121:124], c[124:127]
     h, sigma, reach = c[127], c[128], c[129]
@@ -98,7 +100,7 @@ def _one(X, c, T, q0, theta, ok, f, s, sv, angles, only):
     A1 = n1[0] * r[0] + n1[1] * r[1]
     B1 = n1[0] * r[1] - n1[1] * r[0]
     C1 = h + n1[0] * t1[0] + n1[1] * t1[1] + n1[2] * t1[2] - n1[2] * r[2]
-    c1a, s1a, c1b, s1b, ok1 = _roots(A1, B1, C1)
+    c1a, s1a, c1b, s1b, ok1 = _roots(A1, B1, C1, slack)
     d5 = X[5, :3, 2]
     A4 = d5[0] * a[0] + d5[1] * a[1]
     B4 = d5[0] * a[1] - d5[1] * a[0]
@@ -114,7 +116,7 @@ def _one(X, c, T, q0, theta, ok, f, s, sv, angles, only):
         _mtm(P2, V, W)
         b0, b1, b2 = sigma * W[2, 0], sigma * W[2, 1], sigma * W[2, 2]
         # 2. joints 4, 5
-        c4a, s4a, c4b, s4b, ok4 = _roots(A4, B4, b2 - d5[2] * a[2])
+        c4a, s4a, c4b, s4b, ok4 = _roots(A4, B4, b2 - d5[2] * a[2], slack)
         nb = math.hypot(b0, b1)
         okb = nb > 1e-12
         for i in range(3):
@@ -165,12 +167,13 @@ def _one(X, c, T, q0, theta, ok, f, s, sv, angles, only):
 
 
 @_jit
-def evaluate(c, T, q0, theta, ok, f):
-    """Rows m: target T[m] (M, 4, 4) at q0[m] (M,) -> theta (M, 4, 6), ok (M, 4), f (M, 4)."""
+def evaluate(c, T, q0, theta, ok, f, slack=1e-10):
+    """Rows m: target T[m] (M, 4, 4) at q0[m] (M,) -> theta (M, 4, 6), ok (M, 4), f (M, 4); slack: see
+    :func:`_roots`."""
     s, sv = np.empty((8, 3, 3)), np.empty((5, 3))
     X = c[:112].reshape(7, 4, 4)
     for m in range(len(q0)):
-        _one(X, c, T[m], q0[m], theta[m], ok[m], f[m], s, sv, True, -1)
+        _one(X, c, T[m], q0[m], theta[m], ok[m], f[m], s, sv, True, -1, slack)
 
 
 @_jit
@@ -194,3 +197,25 @@ def evaluate_branch(c, T, target, q0, branch, ok, f):
         b = branch[m]
         _one(X, c, T[target[m]], q0[m], theta, ok4, f4, s, sv, False, b)
         ok[m], f[m] = ok4[b], f4[b]
+
+
+@_jit
+def residuals(c, T, q0, ok, f, slack):
+    """Rows m: target T[m] (M, 4, 4) at q0[m] (M,) -> ok (M, 4), f (M, 4) (no angles); slack: see :func:`_roots`."""
+    s, sv = np.empty((8, 3, 3)), np.empty((5, 3))
+    X = c[:112].reshape(7, 4, 4)
+    theta = np.empty((4, 6))
+    for m in range(len(q0)):
+        _one(X, c, T[m], q0[m], theta, ok[m], f[m], s, sv, False, -1, slack)
+
+
+@_jit
+def branch_angles(c, T, q0, branch, theta, slack):
+    """Rows m: branch ``branch[m]`` of target T[m] (M, 4, 4) at q0[m] (M,) -> theta (M, 6) rad."""
+    s, sv = np.empty((8, 3, 3)), np.empty((5, 3))
+    X = c[:112].reshape(7, 4, 4)
+    th4, ok4, f4 = np.empty((4, 6)), np.zeros(4, dtype=np.bool_), np.zeros(4)
+    for m in range(len(q0)):
+        b = branch[m]
+        _one(X, c, T[m], q0[m], th4, ok4, f4, s, sv, True, b, slack)
+        theta[m] = th4[b]

@@ -20,15 +20,16 @@ _MAX_DEGREE = 24
 
 class RealRoots(NamedTuple):
     """pose (R,) int and x (R,): the kept eigenvalues' rows and real parts; imag (R,): their imaginary
-    parts (exactly 0 where the QR iteration found a real eigenvalue); degree (N,): each polynomial's
-    effective degree; doubt (N,): over the eigenvalues z not kept (complex), the largest ratio of a
-    first-order bound on the error of z, noise max|p_j| sum_j |z|^j / |p'(z)|, to |Im z|: above ~0.1
-    the error could carry z (and its conjugate) to the real axis, i.e. a real root may have been
-    lost; failed (N,) bool: rows whose QR iteration did not converge."""
+    parts (exactly 0 where the QR iteration found a real eigenvalue); error (R,): a first-order bound
+    on each one's error, noise max|p_j| sum_j |z|^j / |p'(z)|; degree (N,): each polynomial's
+    effective degree; doubt (N,): over the eigenvalues z not kept (complex), the largest ratio of the
+    same bound to |Im z|: above ~0.1 the error could carry z (and its conjugate) to the real axis,
+    i.e. a real root may have been lost; failed (N,) bool: rows whose QR iteration did not converge."""
 
     pose: np.ndarray
     x: np.ndarray
     imag: np.ndarray
+    error: np.ndarray
     degree: np.ndarray
     doubt: np.ndarray
     failed: np.ndarray
@@ -194,10 +195,11 @@ def _hqr(a, n, wr, wi):
 
 
 @numba.njit(cache=True)
-def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, degree_out, doubt_out):
+def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, error_out, degree_out, doubt_out):
     """Per usable row of poly (N, n+1) (x^0 upward): its effective degree (trailing coefficients
     below 1e-14 of the largest are zero), the eigenvalues of its companion matrix, and those with
-    |imag| <= real_tol (1 + |real|) written to pose_out, x_out, imag_out; the effective degrees to
+    |imag| <= real_tol (1 + |real|) written to pose_out, x_out, imag_out, their error bounds (see
+    :class:`RealRoots`) to error_out; the effective degrees to
     degree_out, and to doubt_out the largest ratio, over the eigenvalues not kept, of a first-order
     bound on its error to its distance from the real axis (see :class:`RealRoots`); returns
     (count, failed rows)."""
@@ -233,8 +235,6 @@ def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, degre
             continue
         doubt = 0.0
         for k in range(deg):
-            if abs(wi[k]) <= real_tol * (1.0 + abs(wr[k])):
-                continue
             z = complex(wr[k], wi[k])
             dp = 0j  # p'(z) by Horner
             for j in range(deg, 0, -1):
@@ -244,14 +244,15 @@ def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, degre
                 size += zk
                 zk *= abs(z)
             err = noise[r] * scale * size / max(abs(dp), 1e-300)
-            doubt = max(doubt, err / abs(wi[k]))
-        doubt_out[r] = doubt
-        for k in range(deg):
             if abs(wi[k]) <= real_tol * (1.0 + abs(wr[k])):
                 pose_out[m] = r
                 x_out[m] = wr[k]
                 imag_out[m] = wi[k]
+                error_out[m] = err
                 m += 1
+            else:
+                doubt = max(doubt, err / abs(wi[k]))
+        doubt_out[r] = doubt
     return m, failed
 
 
@@ -265,9 +266,9 @@ def real_roots(poly: np.ndarray, usable: np.ndarray, real_tol: float, noise: np.
         raise ValueError(f"polynomials of degree {poly.shape[1] - 1} > {_MAX_DEGREE}")
     live = np.ascontiguousarray(usable, dtype=np.bool_).copy()
     pose = np.empty(len(poly) * (poly.shape[1] - 1), dtype=np.int64)
-    x, imag = np.empty(len(pose)), np.empty(len(pose))
+    x, imag, error = np.empty(len(pose)), np.empty(len(pose)), np.empty(len(pose))
     degree = np.zeros(len(poly), dtype=np.int64)
     noise = np.full(len(poly), 1e-15) if noise is None else np.maximum(np.asarray(noise, dtype=float), 1e-15)
     doubt = np.full(len(poly), np.inf)
-    m, _ = _count_roots(poly, noise, live, real_tol, pose, x, imag, degree, doubt)
-    return RealRoots(pose[:m], x[:m], imag[:m], degree, doubt, usable & ~live)
+    m, _ = _count_roots(poly, noise, live, real_tol, pose, x, imag, error, degree, doubt)
+    return RealRoots(pose[:m], x[:m], imag[:m], error[:m], degree, doubt, usable & ~live)

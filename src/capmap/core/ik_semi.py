@@ -14,7 +14,7 @@ from capmap.core import ik_kernels
 from capmap.core.ik_numeric import newton
 from capmap.core.kinematics import Chain, inverse_transform
 
-__all__ = ["search", "candidates", "SEARCH_STEPS"]
+__all__ = ["search", "search_windows", "candidates", "SEARCH_STEPS"]
 
 SEARCH_STEPS = 720  # grid of the 1-D search over joint 0 (0.5 deg)
 _CHUNK_EVALS = 400_000  # (target, grid point) pairs per batch of the search: bounds memory (~0.1 GB)
@@ -68,8 +68,7 @@ def _semi_curve(c: np.ndarray, T: np.ndarray, q0: np.ndarray, curve: np.ndarray)
 def search(chain: Chain, T: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Candidate solutions (N, K, 6) rad for targets T (N, 4, 4), their validity (N, K), and which
     of them are starts at a (near-)double root that still need Newton steps (N, K)."""
-    k = _SemiConstants.of(chain)
-    c = k.packed(chain)
+    c = _SemiConstants.of(chain).packed(chain)
     T = np.ascontiguousarray(T)
     N = len(T)
     step = 2 * np.pi / steps
@@ -78,7 +77,26 @@ def search(chain: Chain, T: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.n
     ik_kernels.evaluate_grid(c, T, grid, ok, f)
     seq = lambda a: np.moveaxis(a, 2, 1).reshape(N * 4, -1)  # noqa: E731 - one sequence per (target, branch)
     tgt, crv = np.repeat(np.arange(N), 4), np.tile(np.arange(4), N)
-    x, ok, f = np.broadcast_to(grid, (N * 4, steps + 2)), seq(ok), seq(f)
+    return _roots_of(c, T, tgt, crv, np.broadcast_to(grid, (N * 4, steps + 2)), seq(ok), seq(f), N)
+
+
+def search_windows(chain: Chain, T: np.ndarray, target: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                   points: int = 16) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """As :func:`search`, on the intervals [lo, hi] (W,) rad of joint 0 of targets T[target] (W,):
+    ``points`` + 1 samples per interval on each branch, then the same refinement."""
+    c = _SemiConstants.of(chain).packed(chain)
+    T = np.ascontiguousarray(T)
+    W = len(target)
+    x = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, points + 1)  # (W, P)
+    tgt, crv = np.repeat(target, 4), np.tile(np.arange(4), W)
+    x = np.repeat(x, 4, axis=0)
+    ok, f = _residual(c, T, np.repeat(tgt, points + 1), x.ravel(), np.repeat(crv, points + 1))
+    return _roots_of(c, T, tgt, crv, x, ok.reshape(x.shape), f.reshape(x.shape), len(T))
+
+
+def _roots_of(c, T, tgt, crv, x, ok, f, N):
+    """The refinement of :func:`search` from sampled residual sequences f (B, S) at angles x (B, S) on
+    branch crv (B,) of target tgt (B,), valid where ok (B, S)."""
     brackets, seeds, edges = [], [], []
     for level in range(_REFINE_LEVELS + 1):
         br, refine, edge = _scan(tgt, crv, x, ok, f)
@@ -189,7 +207,7 @@ class _Brackets:
     def solve(self, c: np.ndarray, T: np.ndarray, iters: int = 90) -> np.ndarray:
         """The root in each bracket (B,) rad: the Illinois variant of false position, with a
         bisection every third step (f can be steep near a wrist singularity, where false
-        position alone crawls); stops at |f| <= 1e-13 m or a bracket narrower than 1e-14 rad."""
+        position alone crawls); stops at |f| <= 1e-12 m or a bracket narrower than 1e-9 rad (Newton polishes every root)."""
         lo, hi, f_lo, f_hi = self.lo.copy(), self.hi.copy(), self.f_lo.copy(), self.f_hi.copy()
         side = np.zeros(len(lo), dtype=int)
         x = np.where(np.abs(f_lo) <= np.abs(f_hi), lo, hi)
@@ -213,7 +231,7 @@ class _Brackets:
             hi[idx], f_hi[idx] = np.where(left, h, xi), np.where(left, fh, fx)
             side[idx] = np.where(left, 1, -1)
             x[idx] = xi
-            live[idx] = (np.abs(hi[idx] - lo[idx]) > 1e-14) & (np.abs(fx) > 1e-13)
+            live[idx] = (np.abs(hi[idx] - lo[idx]) > 1e-9) & (np.abs(fx) > 1e-12)
         return x
 
 
