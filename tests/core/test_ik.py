@@ -86,7 +86,7 @@ def test_other_locks_closed_form(ssrms, joint, method):
 
 
 @pytest.mark.parametrize("joint", [3, 4, 5])
-def test_middle_locks_use_the_search(ssrms, joint):
+def test_middle_locks_use_the_semi_analytical_method(ssrms, joint):
     chain = lock(ssrms, joint, 0.4).chain
     assert method_for(chain) == "semi_analytic"
     assert SemiAnalytic().applies(chain)

@@ -10,8 +10,8 @@ import pytest
 from capmap.config.robot_file import load
 from capmap.core import ik, ik_semi, ik_semi_poly
 from capmap.core.ik_finish import _finish
-from tests.core.test_ik_general import _missing
 from capmap.core.reduction import lock
+from tests.core.test_ik_general import _missing
 from tests.scenario import SSRMS_YAML
 
 
@@ -54,10 +54,10 @@ def test_the_resultant_is_a_trigonometric_polynomial_vanishing_at_every_solution
 def test_nothing_missed_against_two_other_algorithms(joint, angle):
     """300 poses per case: every solution of the 1-D search and of the general 6R method is among the
     polynomial method's, and each of its solutions is found by one of them (2026-12-02: 18,014
-    solutions over the 9 cases, none missed by any method; on 12 cases x 1,000 poses, 80,030
+    solutions over the 9 cases, none missed by any method; on 15 cases x 1,000 poses, 100,842
     solutions, the polynomial method missed none, the search 2 (two solutions within 2e-3 rad of
-    each other beside a fold) and the general method 14 (its eliminations near rank loss); under
-    OPENBLAS_CORETYPE=Prescott on another 1,000 x 12, 80,788: none, 2 and 6)."""
+    each other beside a fold) and the general method 16 (its eliminations near rank loss); under
+    OPENBLAS_CORETYPE=Prescott on another 1,000 x 15, 101,628: none, 2 and 6)."""
     arm = _arm(joint, angle)
     rng = np.random.default_rng(joint)
     T = arm.chain.fk(rng.uniform(arm.q_lower, arm.q_upper, (300, 6)))

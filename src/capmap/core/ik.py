@@ -20,20 +20,15 @@ Semi-analytical (complete) for chains of the shape
 
     joint 0 | joint 1 | joints 2, 3 with parallel axes | joints 4, 5 with intersecting axes
 
-(the SSRMS-type arm with joint 3, 4 or 5 locked: two parallel joints left), and reversed:
-a 1-D search over joint 0 (Xu, She, Xu, Acta Astronautica 105, 2014). For a fixed q0 steps
-1-3 above give joints 1, 4, 5 in closed form (2 x 2 branches) and leave the planar 2R group
-one condition too many: the wrist point must lie at the 2R's reach, a residual f(q0) in
-metres that is continuous along each branch. Its roots are bracketed on a fine periodic grid
-(``SEARCH_STEPS`` over 360 deg; where a branch ends, the interval is subdivided and finally
-closed at the end point found by bisection, so roots next to the fold are kept), refined by
-Illinois false position and polished by Newton on the full pose. Two roots closer than a
-grid step leave no sign change, and f can swing steeply near a wrist singularity: every
-interval whose end values are small against the local change of f is subdivided (8 x, up
-to 4 levels), and what stays suspect at the finest level is a Newton start (a double
-root). Every root returned is an exact solution.
+(the SSRMS-type arm with joint 3, 4 or 5 locked: two parallel joints left), and reversed.
+For a fixed q0 steps 1-3 above give joints 1, 4, 5 in closed form and leave the planar 2R group
+one condition too many (Xu, She, Xu, Acta Astronautica 105, 2014, search q0 for it); it is
+eliminated exactly, a resultant polynomial in q0 solved per pose, with the 1-D search around
+roots known only approximately and on degenerate poses (:mod:`capmap.core.ik_semi_poly`,
+:mod:`capmap.core.ik_semi`).
 
-Every solution is polished by two Newton steps, checked by forward kinematics
+Every solution is polished by Newton steps (two; up to eight for the semi-analytical and general
+methods, whose roots can be ~1e-5 rad off), checked by forward kinematics
 (position and orientation residual <= ``tol``), put inside the joint ranges and
 de-duplicated. Every other chain of 6 revolute joints is solved by the general 6R method
 (:mod:`capmap.core.ik_general`: Raghavan-Roth / Manocha-Canny elimination, up to 16 solutions,
@@ -42,11 +37,9 @@ uses a multi-start Newton solver (a deterministic Halton set of starts): found s
 exact, but completeness is not guaranteed (a warning, once per chain, says the map may overstate).
 
 Each method is one :class:`IKMethod` (one call signature, a ``complete`` property):
-:class:`ClosedForm` (raw branches in :mod:`capmap.core.ik_closed`), :class:`SemiAnalytic`
-(:mod:`capmap.core.ik_semi`, :mod:`capmap.core.ik_kernels`), each also ``reversed``, and
-:class:`GeneralSixR` (:mod:`capmap.core.ik_general`),
-:class:`MultiStartNewton` (:mod:`capmap.core.ik_numeric`); :func:`solve` takes the first of
-:data:`METHODS` that applies to the arm's chain.
+:class:`ClosedForm` (:mod:`capmap.core.ik_closed`), :class:`SemiAnalytic` (:mod:`capmap.core.ik_semi_poly`),
+each also ``reversed``, :class:`GeneralSixR` (:mod:`capmap.core.ik_general`), :class:`MultiStartNewton`
+(:mod:`capmap.core.ik_numeric`); :func:`solve` takes the first of :data:`METHODS` that applies.
 """
 
 from __future__ import annotations
@@ -227,7 +220,7 @@ _SEMI: dict[bytes, ik_semi_poly.SemiPolynomial] = {}
 def _semi_candidates(chain: Chain, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     key = chain.X.tobytes()
     if key not in _SEMI:
-        _SEMI[key] = ik_semi_poly.prepare(chain)
+        _SEMI[key] = ik_semi_poly.prepare(chain, reversible=semi_analytic_shape(chain.reversed()))
     return ik_semi_poly.candidates(_SEMI[key], T)
 
 
@@ -260,7 +253,7 @@ class GeneralSixR(IKMethod):
     """Every solution of any 6-joint revolute chain (:mod:`capmap.core.ik_general`: Raghavan-Roth /
     Manocha-Canny elimination, a companion eigenproblem per pose). Poses where every formulation is
     degenerate (a continuum of solutions, or an ill-conditioned elimination) are solved by the
-    semi-analytical search where the chain has its shape (complete), else by the multi-start search,
+    semi-analytical method where the chain has its shape (complete), else by the multi-start search,
     with a warning that branches may be missing there."""
 
     polish: int = 8  # the eliminated roots of clustered solutions can be 1e-2 rad off: Newton converges from there
@@ -316,11 +309,8 @@ class MultiStartNewton(IKMethod):
 
 METHODS: tuple[IKMethod, ...] = (ClosedForm(), ClosedForm(reversed=True), SemiAnalytic(), SemiAnalytic(reversed=True),
                                  GeneralSixR(), MultiStartNewton())  # in the order :func:`solve` tries them
-# The semi-analytical search comes before the general 6R method on its chains (the SSRMS with joint 3, 4 or 5
-# locked): the general one is 4x faster and returns the same 18,014 branches on 2,700 poses
-# (tests/core/test_ik_general.py), but on 1,000 seeded poses with joint 4 locked it lost one known configuration
-# under OPENBLAS_CORETYPE=Prescott (pose 249: joints 2 and 6 both within 1 deg of the angles at which the two
-# eliminations lose rank), which the search finds.
+# Semi-analytical before general 6R on the SSRMS middle locks: on 30,000 seeded poses it missed none of the 202,470
+# solutions the 1-D search and the general method found (they missed 4 and 22), and it is faster (README).
 COMPLETE_METHODS = tuple(m.name for m in METHODS if m.complete)
 
 

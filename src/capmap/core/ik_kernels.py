@@ -1,6 +1,7 @@
 """Compiled kernel of the semi-analytical IK (see :mod:`capmap.core.ik`): for a target pose and
 a joint-0 angle, the four branches of joints 1-5 in closed form and the residual of the planar
-2R group. The 1-D search evaluates it about 1,500 times per target, so it is a scalar loop
+2R group. The 1-D search evaluates it about 1,500 times per target (the resultant polynomial of
+:mod:`capmap.core.ik_semi_poly` once per root), so it is a scalar loop
 compiled with numba, and carries angles as cosines and sines (about 0.3 us per evaluation
 against 13 us for the same steps in numpy).
 
