@@ -29,7 +29,8 @@ roots are better conditioned on seeded poses is used (:func:`prepare`).
 
 A pose is degenerate when P is (numerically) zero for every q0, has a harmonic above D (its
 samples are not accurate: rho near 0 at a sample), loses degree (a root toward x = infinity), its
-QR iteration fails, or a complex eigenvalue's error bound reaches the real axis (``doubt`` > 0.1,
+QR iteration fails, a root's error bound exceeds ``_MAX_WINDOW``, or a complex eigenvalue's error
+bound reaches the real axis (``doubt`` > 0.1,
 :class:`capmap.core.ik_roots.RealRoots`): those poses are solved by the 1-D search, complete as well.
 """
 
@@ -58,7 +59,7 @@ _BRANCH_TOL = 1e-4  # at a root: the branch of least residual, and others below 
 _FOLD_SLACK = 1e-3  # a root this close past the fold of joint 1 or 4 (where two branches meet) keeps them
 _WINDOW = 1e-3  # rad: half-width of the search around a root known only approximately
 _ROOT_SPREAD = 1e-5  # rad: a root whose error bound exceeds this is searched around (clusters of 3 or more)
-_MAX_WINDOW = 0.02  # rad: the widest window added for a root's error bound
+_MAX_WINDOW = 5e-3  # rad: a pose with a root known to worse than this gets the full search
 _WINDOW_POINTS = 8  # samples of each branch across a window (then the search's refinement)
 _PREP_POSES = 32
 _SCORE_POSES = 128  # seeded poses on which the two directions of a reversible chain are compared
@@ -221,8 +222,11 @@ def roots(solver: SemiPolynomial, T: np.ndarray) -> Roots:
     found = real_roots(poly, status == 0, _REAL_TOL, noise)
     degenerate = (status != 0) | found.failed | (found.degree != 2 * D) | (found.doubt > _DOUBT)
     # the real roots, and one of each complex pair whose error bound could reach the real axis
-    keep = ~degenerate[found.pose] & ((found.imag == 0) | ((found.imag > 0) & (found.error > _PAIR_DOUBT * found.imag)))
-    pose, x, imag = found.pose[keep], found.x[keep], found.imag[keep]
+    kept = (found.imag == 0) | ((found.imag > 0) & (found.error > _PAIR_DOUBT * found.imag))
+    spread = 2 * (np.abs(found.imag) + found.error) / (1 + found.x ** 2)  # rad: how far the root may be off
+    degenerate[found.pose[kept & (spread > _MAX_WINDOW)]] = True  # wider than a window: the full search
+    keep = ~degenerate[found.pose] & kept
+    pose, x, imag, spread = found.pose[keep], found.x[keep], found.imag[keep], spread[keep]
     q0 = solver.phase + 2 * np.arctan(x)
     M = len(pose)
     ok, f, Tp = np.empty((M, 4), dtype=bool), np.empty((M, 4)), np.ascontiguousarray(T[pose])
@@ -234,10 +238,9 @@ def roots(solver: SemiPolynomial, T: np.ndarray) -> Roots:
     ik_kernels.branch_angles(solver.c, np.ascontiguousarray(Tp[row]), np.ascontiguousarray(q0[row]), branch, theta,
                              _FOLD_SLACK)
     rows = [(pose[row], theta)]
-    spread = 2 * (np.abs(imag) + found.error[keep]) / (1 + x * x)  # rad: how far the root may be off
     loose = (imag != 0) | ~tight.any(axis=1) | (spread > _ROOT_SPREAD)
     if loose.any():
-        half = _WINDOW + np.minimum(4 * spread[loose], _MAX_WINDOW)  # rad
+        half = _WINDOW + 4 * spread[loose]  # rad
         wt, wok, _ = ik_semi.search_windows(solver.chain, T, pose[loose], q0[loose] - half, q0[loose] + half, _WINDOW_POINTS)
         n, k = np.nonzero(wok)
         rows.append((n, wt[n, k]))
