@@ -167,6 +167,25 @@ def test_doubt_bounds_how_far_noise_moves_a_complex_pair(noise):
         assert moved < 0.2  # no perturbation brought a pair near the real axis
 
 
+@pytest.mark.parametrize("noise", [1e-14, 1e-8, 1e-5])
+def test_error_bounds_how_far_noise_moves_a_real_root(noise):
+    """Each kept root's error bound (first order, as the doubt's) against brute force: 200 random
+    relative perturbations of the coefficients at ``noise`` move every real root by at most twice its
+    bound (two of the roots 1e-3 apart: a cluster, whose bound is large)."""
+    rng = np.random.default_rng(8)
+    roots_true = np.array([-2.0, 0.5, 0.501, 1.5, 3.0 + 0.4j, 3.0 - 0.4j])
+    poly = np.real(np.poly(roots_true))[::-1].copy()
+    r = ik_roots.real_roots(poly[None], np.array([True]), 1e-3, np.array([noise]))
+    real = roots_true[roots_true.imag == 0].real
+    bound = np.array([r.error[np.abs(r.x - x).argmin()] for x in real])
+    moved = np.zeros(len(real))
+    for _ in range(200):
+        ev = np.roots((poly * (1 + noise * rng.uniform(-1, 1, poly.shape)))[::-1])
+        moved = np.maximum(moved, [np.abs(ev - x).min() for x in real])
+    assert (moved <= 2 * bound + 1e-12).all()
+    assert bound[1] > 100 * bound[0]  # the cluster is flagged
+
+
 @pytest.mark.parametrize("k", [2, 3, 4])
 def test_null_space_split_recovers_every_monomial_vector(k):
     """A null space spanned by k monomial vectors tan(qb/2)^i tan(qc/2)^j (random angles), given in a
