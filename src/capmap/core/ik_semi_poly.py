@@ -150,17 +150,20 @@ def polynomial_samples(k, T, theta, out, scale):
 
 
 def _polynomials(solver: SemiPolynomial, T: np.ndarray, degree: int):
-    """poly (N, 2D+1) in x (x^0 upward), status (N,) (0 usable, 1 identically zero, 2 a harmonic above D),
-    noise (N,) for a degree-``degree`` sampling."""
+    """poly (N, 2D+1) in x (x^0 upward), status (N,) (0 usable, 1 identically zero, 2 a harmonic above D
+    or a sample not finite), noise (N,) for a degree-``degree`` sampling."""
     theta, dft = sampling(degree)
     N = len(T)
     vals, scale = np.empty((N, len(theta))), np.empty((N, len(theta)))
     polynomial_samples(solver.k, np.ascontiguousarray(T, dtype=float), theta, vals, scale)
+    finite = np.isfinite(vals).all(axis=1) & np.isfinite(scale).all(axis=1)  # rho = 0 exactly at a sample
+    vals[~finite], scale[~finite] = 0.0, 1.0
     coef = vals @ dft.T  # (N, S) harmonics -(S-1)/2 ..
     c = (len(theta) - 1) // 2
     big = np.abs(coef).max(axis=1)
     high = np.abs(np.concatenate([coef[:, : c - degree], coef[:, c + degree + 1:]], axis=1)).max(axis=1, initial=0.0)
     status = np.where(big <= _ZERO_TOL * scale.max(axis=1), 1, np.where(high > _DEGREE_TOL * big, 2, 0))
+    status[~finite] = 2
     poly = (coef[:, c - degree: c + degree + 1] @ companion_map(degree, solver.phase).T).real
     return poly, status, np.where(big > 0, high / np.where(big > 0, big, 1.0), np.inf)
 
