@@ -238,7 +238,7 @@ class _Brackets:
 def _pack(target, theta, ok, seed, N):
     """Rows (B, 6) belonging to targets ``target`` (B,) -> (N, K, 6), validity and seed flags (N, K)."""
     count = np.bincount(target, minlength=N)
-    K = int(count.max(initial=0))
+    K = max(1, int(count.max(initial=0)))
     order = np.argsort(target, kind="stable")
     slot = np.arange(len(target)) - np.repeat(np.cumsum(count) - count, count)
     out = np.zeros((N, K, 6))

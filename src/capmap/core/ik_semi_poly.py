@@ -80,9 +80,8 @@ class SemiPolynomial:
     reversed: bool = False
 
 
-def _constants(chain: Chain) -> tuple[np.ndarray, float]:
+def _constants(chain: Chain, semi: "ik_semi._SemiConstants") -> tuple[np.ndarray, float]:
     X = chain.X
-    semi = ik_semi._SemiConstants.of(chain)
     u = (np.linalg.inv(X[6]) @ np.array([0.0, 0.0, semi.s_star, 1.0]))[:3]
     S = np.diag([1.0, semi.sigma, semi.sigma])  # Rz(q2) R3 Rz(q3) = Rz(phi) S
     v, m = S @ X[4][:3, 2], S @ semi.wc
@@ -194,7 +193,8 @@ def _prepare(chain: Chain, seed: int, reversed: bool = False) -> SemiPolynomial:
     """The chain's constants, its degree D (the highest harmonic of P above 1e-9 of the largest over
     ``_PREP_POSES`` seeded poses, sampled at 25 angles) and a seeded phase."""
     rng = np.random.default_rng(seed)
-    k, length = _constants(chain)
+    semi = ik_semi._SemiConstants.of(chain)
+    k, length = _constants(chain, semi)
     phase = float(rng.uniform(-np.pi, np.pi))
     T = chain.fk(rng.uniform(-np.pi, np.pi, (_PREP_POSES, 6)))
     theta, dft = sampling(12)
@@ -203,7 +203,7 @@ def _prepare(chain: Chain, seed: int, reversed: bool = False) -> SemiPolynomial:
     coef = np.abs(vals @ dft.T)
     harmonic = np.abs(np.arange(len(theta)) - (len(theta) - 1) // 2)
     degree = max(1, max(int(harmonic[row > 1e-9 * row.max()].max()) for row in coef if row.max() > 0))
-    return SemiPolynomial(chain, k, ik_semi._SemiConstants.of(chain).packed(chain), degree, phase, length, reversed)
+    return SemiPolynomial(chain, k, semi.packed(chain), degree, phase, length, reversed)
 
 
 class Roots(NamedTuple):
@@ -247,18 +247,9 @@ def roots(solver: SemiPolynomial, T: np.ndarray) -> Roots:
         wt, wok, _ = ik_semi.search_windows(solver.chain, T, pose[loose], q0[loose] - half, q0[loose] + half, _WINDOW_POINTS)
         n, k = np.nonzero(wok)
         rows.append((n, wt[n, k]))
-    return Roots(*_rows(np.concatenate([r[0] for r in rows]), np.concatenate([r[1] for r in rows]), N), degenerate)
-
-
-def _rows(pose: np.ndarray, theta: np.ndarray, N: int) -> tuple[np.ndarray, np.ndarray]:
-    """Rows theta (B, 6) of poses ``pose`` (B,) -> (N, K, 6) and validity (N, K)."""
-    count = np.bincount(pose, minlength=N)
-    K = max(1, int(count.max(initial=0)))
-    order = np.argsort(pose, kind="stable")
-    slot = np.arange(len(pose)) - np.repeat(np.cumsum(count) - count, count)
-    out, ok = np.zeros((N, K, 6)), np.zeros((N, K), dtype=bool)
-    out[pose[order], slot], ok[pose[order], slot] = theta[order], True
-    return out, ok
+    pose, theta = np.concatenate([r[0] for r in rows]), np.concatenate([r[1] for r in rows])
+    out, ok, _ = ik_semi._pack(pose, theta, np.ones(len(pose), dtype=bool), np.zeros(len(pose), dtype=bool), N)
+    return Roots(out, ok, degenerate)
 
 
 def candidates(solver: SemiPolynomial, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
