@@ -153,12 +153,14 @@ def _valid(chain, T, theta, ok):
 
 def _lost_on_settled(chain, T, settle) -> int:
     """Solutions of the union of every formulation (each run on every pose) that the first one misses
-    on the poses ``settle`` (the rule under test) says it settled."""
+    on the poses ``settle`` (the rule under test) says it settled. Two solutions within 1e-4 rad are
+    one: at condition numbers 1e4-2e7 the FK tolerance (1e-9) admits solutions 2e-6 to 1.3e-5 rad
+    apart (measured on the xArm7 with joint 2 locked, the Panda with joint 4)."""
     solver = ik_general_select.prepare(chain)
-    parts = [ik_general_select._run(chain, f, solver.left[k], solver.degrees[k], solver.phase, T)
+    parts = [ik_general_select._run(chain, f, solver.left[k], solver.degrees[k], solver.phase, T, solver.structural[k])
              for k, f in enumerate(solver.order)]
     first, theta1 = parts[0]
-    settled = settle(chain, first, theta1.copy(), T, 8, 1e-9)
+    settled = settle(solver, first, theta1.copy(), T, 8, 1e-9)
     Q1, g1 = _valid(chain, T, theta1, first.ok)
     lost = 0
     for out, theta in parts[1:]:
@@ -166,12 +168,12 @@ def _lost_on_settled(chain, T, settle) -> int:
         for n in np.flatnonzero(settled):
             a = Q1[n][g1[n]]
             for q in Q[n][g[n]]:
-                lost += not len(a) or bool((np.abs(np.mod(a - q + np.pi, 2 * np.pi) - np.pi).max(axis=1) > 1e-6).all())
+                lost += not len(a) or bool((np.abs(np.mod(a - q + np.pi, 2 * np.pi) - np.pi).max(axis=1) > 1e-4).all())
     return lost
 
 
-def _confirmed_only(chain, out, theta, T, steps, tol):
-    return ik_general_select._confirmed(chain, out, theta, T, steps, tol)[0]
+def _confirmed_only(solver, out, theta, T, steps, tol):
+    return ik_general_select._confirmed(solver.chain, out, theta, T, steps, tol)[0]
 
 
 @pytest.mark.parametrize("joint, share", [(6, 0.25), (7, 0.5), (4, 0.75)])

@@ -49,12 +49,13 @@ from capmap.core.ik_roots import RealRoots, real_roots
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["Formulation", "FORMULATIONS", "Solved", "solve_formulation", "left_coefficients", "degree_of",
-           "companion_map", "sampling",
+           "companion_map", "sampling", "structural_roots", "in_cluster", "CLUSTER_TOL",
            "recovered", "quantities", "MAX_ROOTS"]
 
 MAX_ROOTS = 48  # candidates per pose (24 roots of a degree-12 determinant, some shared by several solutions); more: degenerate
 _SAMPLES = 25  # qa samples of the determinant: exact for degree <= 12
 _RANK_TOL = 1e-9  # |R_88| / |R_11| of Q's pivoted QR below this: Q is rank deficient (special geometry)
+CLUSTER_TOL = 1e-2  # rad: a root this close (|real part| + |imag part|) to a structural root is one of its cluster
 _REAL_TOL = 1e-2  # companion eigenvalues with |imag| <= this (relative) are candidates (then polished, checked)
 
 _G1 = np.array([0.0, 2 * np.pi / 3, 4 * np.pi / 3])
@@ -184,7 +185,9 @@ def _real_roots(poly: np.ndarray, usable: np.ndarray, noise: np.ndarray) -> Real
 
 class Solved(NamedTuple):
     """One formulation on N poses: theta (N, K, 6) rad, ok (N, K), status (N,) (see
-    :func:`solve_formulation`), real (N,): the eigenvalues the QR iteration found exactly real, full
+    :func:`solve_formulation`), real (N,): the eigenvalues the QR iteration found exactly real (not
+    counting those of the structural roots' clusters), clustered (N,): the kept eigenvalues in those
+    clusters (see :func:`structural_roots`), full
     (N,): the polynomial kept its full degree 2D (no root escaped toward x = infinity), doubt (N,):
     how close a dropped complex eigenvalue's error bound comes to the real axis (see
     :class:`capmap.core.ik_roots.RealRoots`)."""
@@ -195,10 +198,12 @@ class Solved(NamedTuple):
     real: np.ndarray
     full: np.ndarray
     doubt: np.ndarray
+    clustered: np.ndarray
 
 
-def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: float, T: np.ndarray) -> Solved:
-    """One formulation on ``chain``; status 0 solved, 1 a determinant vanishing identically, 2 of too
+def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: float, T: np.ndarray,
+                      structural: np.ndarray | None = None) -> Solved:
+    """One formulation on ``chain`` (its structural roots, rad: :func:`structural_roots`); status 0 solved, 1 a determinant vanishing identically, 2 of too
     high a degree, 3 a rank-deficient Q, 4 more candidates than MAX_ROOTS, 5 a companion matrix
     whose QR iteration did not converge."""
     N = len(T)
@@ -219,8 +224,47 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     ok = (np.arange(width)[None] < count[:, None]) & (status == 0)[:, None]
     theta = np.zeros((N, width, 6))
     finish_angles(chain.X, f, CL, lstsq, const, T, qa, qb, qc, count, theta)
-    real = np.bincount(roots.pose[roots.imag == 0.0], minlength=N)
-    return Solved(theta, ok, status, real, roots.degree == 2 * degree, roots.doubt)
+    near = in_cluster(phase + 2 * np.arctan(roots.x + 1j * roots.imag), structural)
+    real = np.bincount(roots.pose[(roots.imag == 0.0) & ~near], minlength=N)
+    return Solved(theta, ok, status, real, roots.degree == 2 * degree, roots.doubt,
+                  np.bincount(roots.pose[near], minlength=N))
+
+
+def in_cluster(qa: np.ndarray, structural: np.ndarray | None) -> np.ndarray:
+    """(R,) bool: the angles qa (R,) rad (complex: a complex root's angle) within CLUSTER_TOL of a
+    structural root (|difference of real parts| + |imaginary part|)."""
+    qa = np.asarray(qa)
+    if structural is None or not len(structural):
+        return np.zeros(qa.shape, dtype=bool)
+    d = np.abs(np.angle(np.exp(1j * (qa.real[..., None] - np.asarray(structural)))))
+    return np.any(d + np.abs(qa.imag)[..., None] < CLUSTER_TOL, axis=-1)
+
+
+def structural_roots(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: float, T: np.ndarray) -> np.ndarray:
+    """Structural roots of formulation f on ``chain`` (rad, each repeated by its multiplicity; empty
+    when none): angles where det M(qa) vanishes at every pose of T (n, 4, 4), special geometry (the
+    xArm7's formulation f4: 4 at q1 = 0 and 4 at 180 deg of its 16, so at most 8 solutions). An m-fold
+    root is computed as m roots within ~eps^(1/m) (complex ones included), which give no solution and
+    can hide a true root beside them; the multiplicity is the smallest count within CLUSTER_TOL over
+    the poses, the location the mean over poses of each cluster's mean (accurate to rounding, unlike
+    its members)."""
+    M, _, _, _ = _matrices(chain.X, f, CL, np.ascontiguousarray(T))
+    theta_s, dft = sampling(degree)
+    N = len(T)
+    poly, status, noise = np.zeros((N, 2 * degree + 1)), np.zeros(N, dtype=np.int64), np.full(N, np.inf)
+    polynomials(M, dft, theta_s, companion_map(degree, phase), degree, poly, status, noise)
+    if (status != 0).any():
+        return np.zeros(0)
+    qa = [phase + 2 * np.arctan(np.roots(p[::-1]).astype(complex)) for p in poly]  # complex angles
+    found: list[float] = []
+    for r0 in qa[0]:
+        near = [q[in_cluster(q, [r0.real])] for q in qa]
+        m = min(len(c) for c in near)
+        if not m or in_cluster(np.array([r0.real]), found).any():
+            continue
+        centres = [np.mean(np.exp(1j * c.real)) for c in near if len(c) == m]  # poses with no true root nearby
+        found += [float(np.angle(np.mean(centres)))] * m
+    return np.array(found) if len(found) < 2 * degree else np.zeros(0)
 
 
 def recovered(theta: np.ndarray, ok: np.ndarray, q: np.ndarray) -> np.ndarray:

@@ -32,7 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.core.ik_finish import DUPLICATE_TOL, POLISHED
-from capmap.core.ik_general import FORMULATIONS, Formulation, Solved, degree_of, left_coefficients, recovered, solve_formulation
+from capmap.core.ik_general import (FORMULATIONS, Formulation, Solved, degree_of, in_cluster, left_coefficients, recovered,
+                                    solve_formulation, structural_roots)
 from capmap.core.ik_polish import distinct, polish
 from capmap.core.kinematics import Chain, inverse_transform
 
@@ -55,6 +56,7 @@ class GeneralSolver:
     phase: float  # rad: x = tan((qa - phase) / 2)
     recovered: tuple[float, ...]  # share of the test poses whose known solution each formulation recovered
     confirmed: tuple[float, ...]  # share of the test poses each formulation confirmed
+    structural: tuple[np.ndarray, ...]  # rad: each formulation's structural roots (ik_general.structural_roots)
 
     @property
     def degree(self) -> int:
@@ -71,12 +73,12 @@ def _eliminated_joint(form: Formulation) -> int:
 
 
 def _run(chain: Chain, form: Formulation, CL: np.ndarray, degree: int, phase: float,
-         T: np.ndarray) -> tuple[Solved, np.ndarray]:
+         T: np.ndarray, structural: np.ndarray | None = None) -> tuple[Solved, np.ndarray]:
     """One formulation on targets T (N, 4, 4) of ``chain``: its raw output and its candidates in the
     chain's angles (N, K, 6) rad."""
     ch = chain.reversed() if form.reversed else chain
     Tk = inverse_transform(T) if form.reversed else T
-    out = solve_formulation(ch, form.f, CL, degree, phase, np.ascontiguousarray(Tk))
+    out = solve_formulation(ch, form.f, CL, degree, phase, np.ascontiguousarray(Tk), structural)
     return out, (-out.theta[..., ::-1] if form.reversed else out.theta)
 
 
@@ -114,19 +116,21 @@ def prepare(chain: Chain, rng: np.random.Generator | None = None, n_poses: int =
     for form in FORMULATIONS:
         ch = chain.reversed() if form.reversed else chain
         CL = left_coefficients(ch.X, form.f)
-        degree = degree_of(ch, form.f, CL, inverse_transform(T) if form.reversed else T)
-        out, theta = _run(chain, form, CL, degree, phase, T)
+        Tk = inverse_transform(T) if form.reversed else T
+        degree = degree_of(ch, form.f, CL, Tk)
+        structural = structural_roots(ch, form.f, CL, degree, phase, Tk[:16])
+        out, theta = _run(chain, form, CL, degree, phase, T, structural)
         confirmed, _ = _confirmed(chain, out, theta, T, steps, tol)
         found = float((recovered(theta, out.ok, q) & (out.status == 0)).mean())
-        rows.append((form, CL, degree, found, float(confirmed.mean())))
-    rows.sort(key=lambda r: (r[3], r[4]), reverse=True)
+        rows.append((form, CL, degree, found, float(confirmed.mean()), structural))
+    rows.sort(key=lambda r: (r[3], r[4], -r[2]), reverse=True)  # ties: the lower degree (fewer roots to solve)
     rows = rows[:1] + [r for r in rows[1:] if r[3] > 0]  # one that recovers nothing is not run (the Panda's joint 6 or 7: 5 of 6)
     first = _eliminated_joint(rows[0][0])
     second = next((i for i in range(1, len(rows)) if _eliminated_joint(rows[i][0]) != first), 1)
     rows = rows[:1] + rows[second:second + 1] + [r for i, r in enumerate(rows) if i not in (0, second)]
     return GeneralSolver(chain=chain, order=tuple(r[0] for r in rows), left=tuple(r[1] for r in rows),
                          degrees=tuple(r[2] for r in rows), phase=phase, recovered=tuple(r[3] for r in rows),
-                         confirmed=tuple(r[4] for r in rows))
+                         confirmed=tuple(r[4] for r in rows), structural=tuple(r[5] for r in rows))
 
 
 def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = len(FORMULATIONS), steps: int = 8,
@@ -145,10 +149,10 @@ def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = len(FORMUL
         if not len(rows):
             break
         Tk = np.ascontiguousarray(T[rows])
-        out, theta_k = _run(solver.chain, form, solver.left[k], solver.degrees[k], solver.phase, Tk)
+        out, theta_k = _run(solver.chain, form, solver.left[k], solver.degrees[k], solver.phase, Tk, solver.structural[k])
         solved[rows] += (out.status == 0) & out.full  # a root escaped to x = infinity: not solved
         if k == 0:
-            settled[rows] = _settled(solver.chain, out, theta_k, Tk, steps, tol)
+            settled[rows] = _settled(solver, out, theta_k, Tk, steps, tol)
         theta, ok = np.zeros((N,) + theta_k.shape[1:]), np.zeros((N, theta_k.shape[1]), dtype=bool)
         theta[rows], ok[rows] = theta_k, out.ok
         parts.append((theta, ok))
@@ -157,15 +161,18 @@ def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = len(FORMUL
     return theta, ok, solved == 0
 
 
-def _settled(chain: Chain, out: Solved, theta: np.ndarray, T: np.ndarray, steps: int, tol: float) -> np.ndarray:
-    """(N,) bool: the poses one formulation settles, its candidates theta (N, K, 6) polished here in
-    place: it confirms them (:func:`_confirmed`) and every one of its candidates converged to a
-    solution. A candidate that does not converge is the trace a lost solution leaves (a root whose
-    back-substitution went wrong, a real pair that came out complex); measured 2026-12-02 on 96,000
-    seeded poses (the SSRMS with joint 3, 4 or 5 locked at 3 angles, the Panda and the xArm7 with each
-    joint locked at 3 angles, 2,000 each), the first formulation lost 1,042 solutions on 149 poses
-    against the union of two, every one on a pose it did not settle; 0.1-14 % of poses are unsettled
-    on most chains, 60-67 % on the xArm7 with joint 4 (mid-range), 6 or 7 locked, where the first
-    formulation has spurious real roots."""
-    confirmed, valid = _confirmed(chain, out, theta, T, steps, tol)
-    return confirmed & ~np.any(out.ok & ~valid, axis=1)
+def _settled(solver: GeneralSolver, out: Solved, theta: np.ndarray, T: np.ndarray, steps: int, tol: float) -> np.ndarray:
+    """(N,) bool: the poses the solver's first formulation (its output ``out``) settles, its candidates
+    theta (N, K, 6) polished here in place: it confirms them (:func:`_confirmed`; real roots in the
+    clusters of structural roots not counted), each structural root's cluster holds exactly its
+    multiplicity of roots (one more: a true root beside it), and every candidate not from a cluster
+    converged to a solution. A candidate that does not converge is the trace a lost solution leaves (a
+    root whose back-substitution went wrong, a real pair that came out complex); measured 2026-12-02
+    on 96,000 seeded poses (the SSRMS with joint 3, 4 or 5 locked at 3 angles, the Panda and the xArm7
+    with each joint locked at 3 angles, 2,000 each), the first formulation lost 1,042 solutions on 149
+    poses against the union of two, every one on a pose it did not settle."""
+    form, structural = solver.order[0], solver.structural[0]
+    confirmed, valid = _confirmed(solver.chain, out, theta, T, steps, tol)
+    qa = theta[..., _eliminated_joint(form)] * (-1.0 if form.reversed else 1.0)  # the formulation's own qa
+    failed = out.ok & ~valid & ~in_cluster(qa, structural)
+    return confirmed & (out.clustered == len(structural)) & ~np.any(failed, axis=1)
