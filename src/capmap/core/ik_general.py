@@ -203,7 +203,8 @@ class Solved(NamedTuple):
 
 def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: float, T: np.ndarray,
                       structural: np.ndarray | None = None) -> Solved:
-    """One formulation on ``chain`` (its structural roots, rad: :func:`structural_roots`); status 0 solved, 1 a determinant vanishing identically, 2 of too
+    """One formulation on ``chain`` (its structural roots, rad: :func:`structural_roots`); status 0
+    solved, 1 a determinant vanishing identically, 2 of too
     high a degree, 3 a rank-deficient Q, 4 more candidates than MAX_ROOTS, 5 a companion matrix
     whose QR iteration did not converge."""
     N = len(T)

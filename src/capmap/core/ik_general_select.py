@@ -32,8 +32,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.core.ik_finish import DUPLICATE_TOL, POLISHED
-from capmap.core.ik_general import (FORMULATIONS, Formulation, Solved, degree_of, in_cluster, left_coefficients, recovered,
-                                    solve_formulation, structural_roots)
+from capmap.core.ik_general import (
+    FORMULATIONS,
+    Formulation,
+    Solved,
+    degree_of,
+    in_cluster,
+    left_coefficients,
+    recovered,
+    solve_formulation,
+    structural_roots,
+)
 from capmap.core.ik_polish import distinct, polish
 from capmap.core.kinematics import Chain, inverse_transform
 
