@@ -201,6 +201,16 @@ class Solved(NamedTuple):
     clustered: np.ndarray
 
 
+def _polynomials(M: np.ndarray, degree: int, phase: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """det M(qa) of each pose as the polynomial (N, 2D+1) in x = tan((qa - phase) / 2), its status (N,)
+    and noise (N,) (compiled: :func:`capmap.core.ik_general_kernels.polynomials`)."""
+    N = len(M)
+    poly, status, noise = np.zeros((N, 2 * degree + 1)), np.zeros(N, dtype=np.int64), np.full(N, np.inf)
+    theta_s, dft = sampling(degree)
+    polynomials(M, dft, theta_s, companion_map(degree, phase), degree, poly, status, noise)
+    return poly, status, noise
+
+
 def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: float, T: np.ndarray,
                       structural: np.ndarray | None = None) -> Solved:
     """One formulation on ``chain`` (its structural roots, rad: :func:`structural_roots`); status 0
@@ -209,9 +219,7 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     whose QR iteration did not converge."""
     N = len(T)
     M, lstsq, const, rank = _matrices(chain.X, f, CL, T)
-    poly, status, noise = np.zeros((N, 2 * degree + 1)), np.zeros(N, dtype=np.int64), np.full(N, np.inf)
-    theta_s, dft = sampling(degree)
-    polynomials(M, dft, theta_s, companion_map(degree, phase), degree, poly, status, noise)
+    poly, status, noise = _polynomials(M, degree, phase)
     status[rank < _RANK_TOL] = 3
     roots = _real_roots(poly, status == 0, noise)
     status[roots.failed] = 5
@@ -250,10 +258,7 @@ def structural_roots(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: f
     the poses, the location the mean over poses of each cluster's mean (accurate to rounding, unlike
     its members)."""
     M, _, _, _ = _matrices(chain.X, f, CL, np.ascontiguousarray(T))
-    theta_s, dft = sampling(degree)
-    N = len(T)
-    poly, status, noise = np.zeros((N, 2 * degree + 1)), np.zeros(N, dtype=np.int64), np.full(N, np.inf)
-    polynomials(M, dft, theta_s, companion_map(degree, phase), degree, poly, status, noise)
+    poly, status, _ = _polynomials(M, degree, phase)
     if (status != 0).any():
         return np.zeros(0)
     qa = [phase + 2 * np.arctan(np.roots(p[::-1]).astype(complex)) for p in poly]  # complex angles
