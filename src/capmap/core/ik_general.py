@@ -223,9 +223,11 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     status[rank < _RANK_TOL] = 3
     roots = _real_roots(poly, status == 0, noise)
     status[roots.failed] = 5
+    angle = phase + 2 * np.arctan(roots.x + 1j * roots.imag)
+    near, skip = _structural_clusters(angle, roots.pose, N, structural)
     qa, qb, qc = (np.zeros((N, MAX_ROOTS)) for _ in range(3))
     count = np.zeros(N, dtype=np.int64)
-    back_substitute(M, roots.pose, roots.x, phase, qa, qb, qc, count)
+    back_substitute(M, roots.pose[~skip], roots.x[~skip], phase, qa, qb, qc, count)
     status[count > MAX_ROOTS] = 4
     count = np.minimum(count, MAX_ROOTS)
     width = max(int(count.max(initial=0)), 1)
@@ -233,10 +235,26 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     ok = (np.arange(width)[None] < count[:, None]) & (status == 0)[:, None]
     theta = np.zeros((N, width, 6))
     finish_angles(chain.X, f, CL, lstsq, const, T, qa, qb, qc, count, theta)
-    near = in_cluster(phase + 2 * np.arctan(roots.x + 1j * roots.imag), structural)
     real = np.bincount(roots.pose[(roots.imag == 0.0) & ~near], minlength=N)
     return Solved(theta, ok, status, real, roots.degree == 2 * degree, roots.doubt,
                   np.bincount(roots.pose[near], minlength=N))
+
+
+def _structural_clusters(angle: np.ndarray, pose: np.ndarray, N: int,
+                         structural: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """For kept roots at complex angles ``angle`` (R,) rad of poses ``pose`` (R,) of N: which lie in a
+    structural root's cluster (R,) bool, and which of those are the structural roots themselves (R,)
+    bool: their pose's clusters each hold exactly the root's multiplicity, so none is a true root
+    (they give no solution, and are not back-substituted). A cluster holding more keeps all of its
+    roots: a true one sits beside the structural ones."""
+    near = in_cluster(angle, structural)
+    if not near.any():
+        return near, near
+    exact = np.ones(N, dtype=bool)
+    for centre in np.unique(structural):
+        mine = in_cluster(angle, [centre])
+        exact &= np.bincount(pose[mine], minlength=N) == np.count_nonzero(np.asarray(structural) == centre)
+    return near, near & exact[pose]
 
 
 def in_cluster(qa: np.ndarray, structural: np.ndarray | None) -> np.ndarray:
