@@ -251,9 +251,9 @@ def _general_solver(chain: Chain) -> "ik_general_select.GeneralSolver":
 @dataclass(frozen=True)
 class GeneralSixR(IKMethod):
     """Every solution of any 6-joint revolute chain (:mod:`capmap.core.ik_general`: Raghavan-Roth /
-    Manocha-Canny elimination, a companion eigenproblem per pose). Poses where every formulation is
-    degenerate (a continuum of solutions, or an ill-conditioned elimination) are solved by the
-    semi-analytical method where the chain has its shape (complete), else by the multi-start search,
+    Manocha-Canny elimination, a companion eigenproblem per pose). Poses it cannot vouch for (every
+    formulation degenerate, a solution lost, four axes nearly parallel: ik_general_select) go to the
+    semi-analytical method where the chain has its shape (complete), else to the multi-start search,
     with a warning that branches may be missing there."""
 
     polish: int = 8  # the eliminated roots of clustered solutions can be 1e-2 rad off: Newton converges from there
@@ -277,8 +277,8 @@ class GeneralSixR(IKMethod):
         if search is not None:  # a complete method for this chain shape takes the poses no elimination solved
             extra, extra_ok = search.candidates(chain, T[degenerate], lower, upper)
         else:
-            log.warning("IK: %d of %d poses are degenerate for the exact 6R method (a continuum of solutions "
-                        "or an ill-conditioned elimination); multi-start Newton is used there and may miss "
+            log.warning("IK: %d of %d poses are degenerate for the exact 6R method (a continuum of solutions, "
+                        "four nearly parallel axes, a lost root); multi-start Newton is used there and may miss "
                         "branches (the map may overstate there)", int(degenerate.sum()), len(T))
             extra, extra_ok = multi_start(chain, T[degenerate], lower, upper)
         pad = np.zeros((len(T), extra.shape[1], chain.n))
