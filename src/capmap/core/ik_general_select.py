@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from capmap.core.ik_finish import DUPLICATE_TOL, POLISHED
@@ -46,15 +47,14 @@ from capmap.core.ik_general import (
     solve_formulation,
     structural_roots,
 )
-from capmap.core.ik_numeric import newton
-from capmap.core.ik_polish import distinct, polish
+from capmap.core.ik_polish import _fk, distinct, polish
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["GeneralSolver", "prepare", "candidates", "four_parallel", "UNION"]
 
 DOUBT = 0.1  # a dropped complex root whose error bound reaches this share of |Im| may be a lost real one
 FOUR_PARALLEL = np.deg2rad(3.0)  # rad: see four_parallel (the solutions lost lay within 1.7 deg)
-RESCUE_STEPS, RESCUE_DAMPING = 40, 1e-2  # damped Newton from a candidate that did not converge (as ik_numeric.multi_start)
+RESCUE_STEPS = 40  # Newton steps (each joint's clipped to 0.5 rad) from a candidate that did not converge
 UNION = 2  # formulations (eliminating different joints where the chain allows) that solve every pose
 
 
@@ -113,32 +113,49 @@ def four_parallel(chain: Chain, q: np.ndarray, tol: float = FOUR_PARALLEL) -> np
     """(M,) bool: the configurations q (M, 6) rad with four joint axes parallel to within ``tol`` rad
     (a planar 4R sub-chain, one joint redundant in its plane: next to a continuum of solutions).
     There the eliminations' roots crowd and lose solutions: measured 2026-12-03 on the SSRMS with
-    joint 3, 4 or 5 locked, 1,800 poses with q2 and q5 within 1.7 deg of +-90 deg, the general
-    method lost 84-204 of ~4,000 solutions per chain with the rescue (:func:`_rescued`) alone,
-    2-6 when these poses also go to the fallback. Two nearly collinear axes did not lose any (the
-    Panda, 300 poses each within 1.7 deg of joints 1-3 or 5-7 collinear, against 400 restarts)."""
-    _, J = chain.jacobian(q)
-    w = np.swapaxes(J[:, 3:], 1, 2)  # (M, 6, 3): the joint axes
-    sin = np.linalg.norm(np.cross(w[:, :, None], w[:, None, :]), axis=-1)  # (M, 6, 6)
-    return ((sin < tol).sum(axis=2) >= 4).any(axis=1)
+    joint 5 locked, 600 poses with q2 and q5 within 1.7 deg of +-90 deg, the general method lost 135
+    of 4,538 solutions with the rescue (:func:`_rescued`) alone, 2 when these poses also go to the
+    fallback. Two nearly collinear axes did not lose any (the Panda, 300 poses each within 1.7 deg
+    of joints 1-3 or 5-7 collinear, against 400 restarts), so they are not flagged."""
+    q = np.ascontiguousarray(np.atleast_2d(q), dtype=float)
+    out = np.zeros(len(q), dtype=bool)
+    _four_parallel(np.ascontiguousarray(chain.X, dtype=float), q, float(np.cos(tol)), out)
+    return out
+
+
+@numba.njit(cache=True)
+def _four_parallel(X, q, cos_tol, out):
+    """:func:`four_parallel`, compiled: joint k's axis is the z axis of the frame before its rotation."""
+    n = q.shape[1]
+    frames = np.empty((n + 1, 4, 4))
+    for m in range(len(q)):
+        _fk(X, q[m], frames)
+        for i in range(n):
+            count = 0
+            for j in range(n):
+                dot = frames[i, 0, 2] * frames[j, 0, 2] + frames[i, 1, 2] * frames[j, 1, 2] + frames[i, 2, 2] * frames[j, 2, 2]
+                count += abs(dot) > cos_tol
+            if count >= 4:
+                out[m] = True
+                break
 
 
 def _rescued(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, steps: int,
-             tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Damped Newton from every candidate (theta (N, K, 6) rad, ``ok`` (N, K); polished here in place)
-    that does not converge: the solutions it reaches (N, K', 6) rad, their validity (N, K') and the
-    poses (N,) bool where one of them is a solution no candidate converged to, i.e. where the
-    eliminations lost a solution. Near a continuum of solutions (the SSRMS with joint 3, 4 or 5
-    locked, q1 and q4 within ~2 deg of +-90 deg: four nearly parallel axes) the roots crowd and
-    back-substitute badly; measured 2026-12-03 on 18,000 seeded poses of those chains, the general
-    method alone lost 6 solutions on 5 poses; every such pose was one found here, 4 in all."""
+             tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Newton (RESCUE_STEPS, clipped) from every candidate (theta (N, K, 6) rad, ``ok`` (N, K);
+    polished here in place) that does not converge in ``steps``: the solutions it reaches (N, K', 6)
+    rad, their validity (N, K'), the poses (N,) bool where one of them is a solution no candidate
+    converged to, i.e. where the eliminations lost a solution, and the candidates' validity (N, K).
+    Near a continuum of solutions (the SSRMS with joint 3, 4 or 5 locked, q1 and q4 within ~2 deg
+    of +-90 deg: four nearly parallel axes) the roots crowd and back-substitute badly; measured
+    2026-12-03 on 18,000 seeded poses of those chains, the general method alone lost 6 solutions on
+    5 poses; every such pose was one found here, 4 in all (damped Newton then)."""
     N, K = ok.shape
     valid = _polished(chain, theta, ok, T, steps, tol)
     rows, cols = np.nonzero(ok & ~valid)
     if not len(rows):
-        return np.zeros((N, 0, 6)), np.zeros((N, 0), dtype=bool), np.zeros(N, dtype=bool)
-    start = newton(chain, theta[rows, cols], np.ascontiguousarray(T[rows]), iters=RESCUE_STEPS, damping=RESCUE_DAMPING)
-    start, err = polish(chain.X, start, T, rows, steps, POLISHED)
+        return np.zeros((N, 0, 6)), np.zeros((N, 0), dtype=bool), np.zeros(N, dtype=bool), valid
+    start, err = polish(chain.X, theta[rows, cols], T, rows, RESCUE_STEPS, POLISHED, give_up=np.inf)
     conv = (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
     slot = np.arange(len(rows)) - np.searchsorted(rows, rows)  # rows is sorted: each one's rank within its pose
     width = int(slot.max()) + 1
@@ -147,7 +164,7 @@ def _rescued(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, ste
     wrap = np.mod(np.concatenate([theta, extra], axis=1) + np.pi, 2 * np.pi) - np.pi
     _, before = distinct(wrap[:, :K], valid, DUPLICATE_TOL)
     _, after = distinct(wrap, np.concatenate([valid, extra_ok], axis=1), DUPLICATE_TOL)
-    return extra, extra_ok, after > before
+    return extra, extra_ok, after > before, valid
 
 
 def _confirmed(chain: Chain, out: Solved, theta: np.ndarray, T: np.ndarray, steps: int,
@@ -222,18 +239,19 @@ def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = len(FORMUL
         parts.append((theta, ok))
     theta = np.concatenate([p[0] for p in parts], axis=1)
     ok = np.concatenate([p[1] for p in parts], axis=1)
-    rest = np.flatnonzero(~settled)  # a settled pose's candidates all converged
+    rest = np.flatnonzero(~settled)
     extra, extra_ok = np.zeros((N, 0, 6)), np.zeros((N, 0), dtype=bool)
     lost = np.zeros(N, dtype=bool)
+    good = ok.copy()  # a settled pose's candidates all converged (those of exact structural clusters are not made)
     if len(rest):
         sub = np.ascontiguousarray(theta[rest])
-        e, e_ok, lost[rest] = _rescued(solver.chain, sub, ok[rest], np.ascontiguousarray(T[rest]), steps, tol)
+        e, e_ok, lost[rest], good[rest] = _rescued(solver.chain, sub, ok[rest], np.ascontiguousarray(T[rest]), steps, tol)
         theta[rest] = sub
         extra, extra_ok = np.zeros((N,) + e.shape[1:]), np.zeros((N, e.shape[1]), dtype=bool)
         extra[rest], extra_ok[rest] = e, e_ok
     theta, ok = np.concatenate([theta, extra], axis=1), np.concatenate([ok, extra_ok], axis=1)
     near = np.zeros(N, dtype=bool)
-    n, k = np.nonzero(_polished(solver.chain, theta, ok, T, 0, tol))
+    n, k = np.nonzero(np.concatenate([good, extra_ok], axis=1))
     near[n[four_parallel(solver.chain, theta[n, k])]] = True
     return theta, ok, (solved == 0) | lost | near
 
