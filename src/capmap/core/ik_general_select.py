@@ -8,8 +8,8 @@ one pose; the 6-DOF Kinova, qa = q5, 3 of 8; the SSRMS with joint 3 locked, qa =
 sees those solutions well separated. Every pose the first formulation does not settle (below) is
 therefore solved by ``UNION`` (two) formulations, their candidates joined; a pose fewer than two solve (a rank-deficient
 elimination, a determinant vanishing identically) tries the next ones, and a pose none solves is
-reported (the caller falls back to a search there and says so). So is a pose where damped Newton
-from a candidate that did not converge reaches a solution no candidate gave (the eliminations
+reported (the caller falls back to a search there and says so). So is a pose where Newton (clipped
+steps, :func:`_rescued`) from a candidate that did not converge reaches a solution no candidate gave (the eliminations
 demonstrably lost one there) or where a solution has four nearly parallel axes (next to a
 continuum of solutions, where the roots crowd: :func:`four_parallel`).
 
@@ -148,8 +148,9 @@ def _rescued(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, ste
     converged to, i.e. where the eliminations lost a solution, and the candidates' validity (N, K).
     Near a continuum of solutions (the SSRMS with joint 3, 4 or 5 locked, q1 and q4 within ~2 deg
     of +-90 deg: four nearly parallel axes) the roots crowd and back-substitute badly; measured
-    2026-12-03 on 18,000 seeded poses of those chains, the general method alone lost 6 solutions on
-    5 poses; every such pose was one found here, 4 in all (damped Newton then)."""
+    2026-12-03 on 18,000 seeded poses of those chains (3 lock angles each), the general method
+    alone lost 6 solutions on 5 poses, none with this rescue and the fallbacks (2-8 poses of 2,000
+    go to the fallback)."""
     N, K = ok.shape
     valid = _polished(chain, theta, ok, T, steps, tol)
     rows, cols = np.nonzero(ok & ~valid)
@@ -216,7 +217,7 @@ def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = len(FORMUL
                tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Candidate solutions (N, K, 6) rad (polished, ``steps`` Newton steps; the caller checks them
     all), their validity (N, K) and the poses left to the caller's fallback (N,) bool, for targets T
-    (N, 4, 4) in the chain's base frame: no formulation solved them, damped Newton from a candidate
+    (N, 4, 4) in the chain's base frame: no formulation solved them, Newton from a candidate
     that did not converge found a solution the others missed (:func:`_rescued`), or a solution has
     four axes nearly parallel (:func:`four_parallel`). The first formulation runs on
     every pose; the next ones, in the solver's order and up to ``max_tries``, on the poses it does not
