@@ -45,6 +45,30 @@ def test_companion_roots_match_lapack(degree):
     assert len(kept.pose) == small.sum()
 
 
+def test_dropped_roots_and_their_pseudo_zero_ratio():
+    """The eigenvalues not kept are returned with |p(Re z)| / (noise sum |p_j| |Re z|^j), recomputed
+    here by numpy's polyval; a real double root split into a complex pair by a perturbation within
+    the noise is a pseudo-zero (ratio <= 1), a well-separated complex pair is not."""
+    rng = np.random.default_rng(4)
+    poly = rng.normal(size=(200, 9))
+    noise = np.full(200, 1e-12)
+    roots = ik_roots.real_roots(poly, np.ones(200, dtype=bool), 1e-2, noise)
+    z = roots.dropped
+    assert len(z) + len(roots.x) == 200 * 8
+    p = poly[roots.dropped_pose]
+    x = z.real
+    value = np.abs(np.array([np.polyval(c[::-1], v) for c, v in zip(p, x)]))
+    size = np.array([np.polyval(np.abs(c[::-1]), abs(v)) for c, v in zip(p, x)])
+    assert roots.pseudo == pytest.approx(value / (1e-12 * size), rel=1e-6, abs=1e-3)
+    # (x - 1)^2 (x^2 + 1) + 1e-13: the double root at 1 becomes a pair 1 +- 3e-7 i
+    double = np.polymul([1.0, -2.0, 1.0], [1.0, 0.0, 1.0])[::-1].copy()
+    double[0] += 1e-13
+    r = ik_roots.real_roots(double[None], np.ones(1, dtype=bool), 1e-9, np.array([1e-12]))
+    near_one = np.abs(r.dropped - 1.0) < 1e-3
+    assert near_one.sum() == 2 and (r.pseudo[near_one] <= 1.0).all()
+    assert (r.pseudo[~near_one] > 1e6).all()  # +-i: |p(0)| = 1 against 1e-12
+
+
 def test_companion_roots_trailing_zeros_and_unusable_rows():
     """A vanishing leading coefficient lowers the degree; rows not usable give no roots."""
     poly = np.array([[2.0, -3.0, 1.0, 0.0, 0.0], [1.0, 0.0, -1.0, 0.0, 1e-20], [1.0, 2.0, 1.0, 0.0, 0.0]])

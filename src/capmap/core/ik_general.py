@@ -56,6 +56,7 @@ MAX_ROOTS = 48  # candidates per pose (24 roots of a degree-12 determinant, some
 _SAMPLES = 25  # qa samples of the determinant: exact for degree <= 12
 _RANK_TOL = 1e-9  # |R_88| / |R_11| of Q's pivoted QR below this: Q is rank deficient (special geometry)
 CLUSTER_TOL = 1e-2  # rad: a root this close (|real part| + |imag part|) to a structural root is one of its cluster
+PSEUDO = 10.0  # a dropped eigenvalue whose real part is a pseudo-zero below this ratio (RealRoots.pseudo) is a candidate too
 _REAL_TOL = 1e-2  # companion eigenvalues with |imag| <= this (relative) are candidates (then polished, checked)
 
 _G1 = np.array([0.0, 2 * np.pi / 3, 4 * np.pi / 3])
@@ -227,7 +228,11 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     near, skip = _structural_clusters(angle, roots.pose, N, structural)
     qa, qb, qc = (np.zeros((N, MAX_ROOTS)) for _ in range(3))
     count = np.zeros(N, dtype=np.int64)
-    back_substitute(M, roots.pose[~skip], roots.x[~skip], phase, qa, qb, qc, count)
+    split = roots.x + roots.imag  # a near-real pair z, conj z: candidates at Re z +- |Im z|, where a split double root lies
+    doubtful = (roots.pseudo < PSEUDO) & ~in_cluster(phase + 2 * np.arctan(roots.dropped), structural)
+    back_substitute(M, np.concatenate([roots.pose[~skip], roots.dropped_pose[doubtful]]),
+                    np.concatenate([split[~skip], roots.dropped.real[doubtful] + roots.dropped.imag[doubtful]]),
+                    phase, qa, qb, qc, count)
     status[count > MAX_ROOTS] = 4
     count = np.minimum(count, MAX_ROOTS)
     width = max(int(count.max(initial=0)), 1)
@@ -247,14 +252,23 @@ def _structural_clusters(angle: np.ndarray, pose: np.ndarray, N: int,
     bool: their pose's clusters each hold exactly the root's multiplicity, so none is a true root
     (they give no solution, and are not back-substituted). A cluster holding more keeps all of its
     roots: a true one sits beside the structural ones."""
-    near = in_cluster(angle, structural)
+    if structural is None or not len(structural):
+        none = np.zeros(angle.shape, dtype=bool)
+        return none, none
+    centres, multiplicity = np.unique(structural, return_counts=True)
+    inside = _distance(angle, centres) < CLUSTER_TOL  # (R, C)
+    near = inside.any(axis=1)
     if not near.any():
         return near, near
-    exact = np.ones(N, dtype=bool)
-    for centre in np.unique(structural):
-        mine = in_cluster(angle, [centre])
-        exact &= np.bincount(pose[mine], minlength=N) == np.count_nonzero(np.asarray(structural) == centre)
+    counts = np.stack([np.bincount(pose[inside[:, c]], minlength=N) for c in range(len(centres))], axis=1)
+    exact = np.all(counts == multiplicity, axis=1)
     return near, near & exact[pose]
+
+
+def _distance(qa: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """(..., C): |wrapped difference of qa's real part (..., rad, complex) and each centre (C,)| + |Im qa|."""
+    d = np.abs(np.mod(qa.real[..., None] - centres + np.pi, 2 * np.pi) - np.pi)
+    return d + np.abs(qa.imag)[..., None]
 
 
 def in_cluster(qa: np.ndarray, structural: np.ndarray | None) -> np.ndarray:
@@ -263,8 +277,7 @@ def in_cluster(qa: np.ndarray, structural: np.ndarray | None) -> np.ndarray:
     qa = np.asarray(qa)
     if structural is None or not len(structural):
         return np.zeros(qa.shape, dtype=bool)
-    d = np.abs(np.angle(np.exp(1j * (qa.real[..., None] - np.asarray(structural)))))
-    return np.any(d + np.abs(qa.imag)[..., None] < CLUSTER_TOL, axis=-1)
+    return np.any(_distance(qa, np.unique(np.asarray(structural, dtype=float))) < CLUSTER_TOL, axis=-1)
 
 
 def structural_roots(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: float, T: np.ndarray) -> np.ndarray:

@@ -10,8 +10,15 @@ therefore solved by ``UNION`` (two) formulations, their candidates joined; a pos
 elimination, a determinant vanishing identically) tries the next ones, and a pose none solves is
 reported (the caller falls back to a search there and says so). So is a pose where Newton (clipped
 steps, :func:`_rescued`) from a candidate that did not converge reaches a solution no candidate gave (the eliminations
-demonstrably lost one there) or where a solution has four nearly parallel axes (next to a
-continuum of solutions, where the roots crowd: :func:`four_parallel`).
+demonstrably lost one there) or where a candidate, converged or not, has four axes within 5 deg of
+parallel (next to a continuum of solutions, where the roots crowd: :func:`four_parallel`). On the
+poses the first formulation does not settle, solutions within 10 deg of four parallel axes seed
+Newton restarts around them (:func:`_restarts_nearby`). In :mod:`capmap.core.ik_general` a near-real
+complex pair is back-substituted at Re z +- Im z (where the two roots of a split double root lie)
+and a dropped complex root whose real part is a pseudo-zero of the polynomial is a candidate too.
+Measured 2026-12-03 together: 0 of 189,324 solutions lost on poses next to the SSRMS's continuum
+(joint 3, 4 or 5 locked at 4 angles, two joints within 1.7-15 deg of +-90 deg) and 0 of 118,096 on
+18,000 random poses of those chains; 39 of 8,346 lost in the test's set without them.
 
 A formulation *confirms* a pose when it solved it, its polynomial kept its full degree, its exactly
 real eigenvalues gave as many valid, distinct solutions as there are of them, and no dropped complex
@@ -53,7 +60,9 @@ from capmap.core.kinematics import Chain, inverse_transform
 __all__ = ["GeneralSolver", "prepare", "candidates", "four_parallel", "UNION"]
 
 DOUBT = 0.1  # a dropped complex root whose error bound reaches this share of |Im| may be a lost real one
-FOUR_PARALLEL = np.deg2rad(3.0)  # rad: see four_parallel (the solutions lost lay within 1.7 deg)
+FOUR_PARALLEL = np.deg2rad(5.0)  # rad: see four_parallel (the solutions lost lay within 8 deg; 3 deg lost 2)
+NEARBY = np.deg2rad(10.0)  # rad: solutions this close to four parallel axes seed _restarts_nearby
+NEARBY_STEPS = np.array([0.15, 0.4, 0.8, 1.6])  # rad: the seeds' distances from a solution, both ways
 RESCUE_STEPS = 40  # Newton steps (each joint's clipped to 0.5 rad) from a candidate that did not converge
 UNION = 2  # formulations (eliminating different joints where the chain allows) that solve every pose
 
@@ -113,10 +122,11 @@ def four_parallel(chain: Chain, q: np.ndarray, tol: float = FOUR_PARALLEL) -> np
     """(M,) bool: the configurations q (M, 6) rad with four joint axes parallel to within ``tol`` rad
     (a planar 4R sub-chain, one joint redundant in its plane: next to a continuum of solutions).
     There the eliminations' roots crowd and lose solutions: measured 2026-12-03 on the SSRMS with
-    joint 5 locked, 600 poses with q2 and q5 within 1.7 deg of +-90 deg, the general method lost 135
-    of 4,538 solutions with the rescue (:func:`_rescued`) alone, 2 when these poses also go to the
-    fallback. Two nearly collinear axes did not lose any (the Panda, 300 poses each within 1.7 deg
-    of joints 1-3 or 5-7 collinear, against 400 restarts), so they are not flagged."""
+    joint 3, 4 or 5 locked, poses with two joints within 8 deg of +-90 deg (37,866 solutions), the
+    solutions lost lay 6.2-8.0 deg from four parallel axes, and with the other defences 2 were lost
+    at a 3 deg tolerance, none at 5 deg. Two nearly collinear axes did not lose any (the Panda,
+    300 poses each within 1.7 deg of joints 1-3 or 5-7 collinear, against 400 restarts), so they
+    are not flagged."""
     q = np.ascontiguousarray(np.atleast_2d(q), dtype=float)
     out = np.zeros(len(q), dtype=bool)
     _four_parallel(np.ascontiguousarray(chain.X, dtype=float), q, float(np.cos(tol)), out)
@@ -149,8 +159,7 @@ def _rescued(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, ste
     Near a continuum of solutions (the SSRMS with joint 3, 4 or 5 locked, q1 and q4 within ~2 deg
     of +-90 deg: four nearly parallel axes) the roots crowd and back-substitute badly; measured
     2026-12-03 on 18,000 seeded poses of those chains (3 lock angles each), the general method
-    alone lost 6 solutions on 5 poses, none with this rescue and the fallbacks (2-8 poses of 2,000
-    go to the fallback)."""
+    alone lost 6 solutions on 5 poses, none with this rescue and the fallbacks."""
     N, K = ok.shape
     valid = _polished(chain, theta, ok, T, steps, tol)
     rows, cols = np.nonzero(ok & ~valid)
@@ -158,14 +167,40 @@ def _rescued(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, ste
         return np.zeros((N, 0, 6)), np.zeros((N, 0), dtype=bool), np.zeros(N, dtype=bool), valid
     start, err = polish(chain.X, theta[rows, cols], T, rows, RESCUE_STEPS, POLISHED, give_up=np.inf)
     conv = (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
-    slot = np.arange(len(rows)) - np.searchsorted(rows, rows)  # rows is sorted: each one's rank within its pose
-    width = int(slot.max()) + 1
-    extra, extra_ok = np.zeros((N, width, 6)), np.zeros((N, width), dtype=bool)
-    extra[rows, slot], extra_ok[rows, slot] = start, conv
+    extra, extra_ok = _per_pose(rows, start, conv, N)
     wrap = np.mod(np.concatenate([theta, extra], axis=1) + np.pi, 2 * np.pi) - np.pi
     _, before = distinct(wrap[:, :K], valid, DUPLICATE_TOL)
     _, after = distinct(wrap, np.concatenate([valid, extra_ok], axis=1), DUPLICATE_TOL)
     return extra, extra_ok, after > before, valid
+
+
+def _per_pose(rows: np.ndarray, q: np.ndarray, conv: np.ndarray, N: int) -> tuple[np.ndarray, np.ndarray]:
+    """Configurations q (M, 6) rad of poses ``rows`` (M,) (sorted), their convergence conv (M,), laid
+    out per pose: (N, K', 6) rad and (N, K') bool."""
+    slot = np.arange(len(rows)) - np.searchsorted(rows, rows)  # each one's rank within its pose
+    width = int(slot.max(initial=-1)) + 1
+    out, out_ok = np.zeros((N, width, 6)), np.zeros((N, width), dtype=bool)
+    out[rows, slot], out_ok[rows, slot] = q, conv
+    return out, out_ok
+
+
+def _restarts_nearby(chain: Chain, q: np.ndarray, rows: np.ndarray, T: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Newton (RESCUE_STEPS, clipped) from solutions q (M, 6) rad of poses ``rows`` (M,) (sorted)
+    of targets T (N, 4, 4), each moved by NEARBY_STEPS rad both ways along each of its Jacobian's
+    right singular vectors (48 seeds): next to a continuum the solutions lie close together along
+    a near-continuous family, where the eliminations' crowded roots back-substitute onto a
+    neighbour (measured 2026-12-03, the SSRMS with joint 3, 4 or 5 locked, poses with two joints
+    within 8 deg of the continuum: from the generating solution alone these seeds reached 455 of
+    the 784 other solutions within 10 deg of four parallel axes, 109 along the weakest direction
+    alone). Returns the solutions reached, per pose (N, K', 6) rad, and which converged (N, K')."""
+    _, J = chain.jacobian(q)
+    V = np.linalg.svd(J)[2]  # (M, 6, 6): the right singular vectors, rows
+    step = np.concatenate([NEARBY_STEPS, -NEARBY_STEPS])
+    seeds = (q[:, None, None] + step[None, None, :, None] * V[:, :, None]).reshape(-1, 6)
+    which = np.repeat(rows, 6 * len(step))
+    reached, err = polish(chain.X, seeds, T, which, RESCUE_STEPS, POLISHED, give_up=np.inf)
+    conv = (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
+    return _per_pose(which, reached, conv, len(T))
 
 
 def _confirmed(chain: Chain, out: Solved, theta: np.ndarray, T: np.ndarray, steps: int,
@@ -218,10 +253,11 @@ def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = len(FORMUL
     """Candidate solutions (N, K, 6) rad (polished, ``steps`` Newton steps; the caller checks them
     all), their validity (N, K) and the poses left to the caller's fallback (N,) bool, for targets T
     (N, 4, 4) in the chain's base frame: no formulation solved them, Newton from a candidate
-    that did not converge found a solution the others missed (:func:`_rescued`), or a solution has
+    that did not converge found a solution the others missed (:func:`_rescued`), or a candidate has
     four axes nearly parallel (:func:`four_parallel`). The first formulation runs on
     every pose; the next ones, in the solver's order and up to ``max_tries``, on the poses it does not
-    settle (see :func:`_settled`) that fewer than ``UNION`` formulations have solved so far."""
+    settle (see :func:`_settled`) that fewer than ``UNION`` formulations have solved so far; on those
+    poses, solutions within NEARBY of four parallel axes also seed :func:`_restarts_nearby`."""
     N = len(T)
     parts = []
     solved = np.zeros(N, dtype=int)
@@ -252,9 +288,15 @@ def candidates(solver: GeneralSolver, T: np.ndarray, max_tries: int = len(FORMUL
         extra[rest], extra_ok[rest] = e, e_ok
     theta, ok = np.concatenate([theta, extra], axis=1), np.concatenate([ok, extra_ok], axis=1)
     near = np.zeros(N, dtype=bool)
-    n, k = np.nonzero(np.concatenate([good, extra_ok], axis=1))
+    n, k = np.nonzero(ok)  # every candidate, converged or not (one that did not, beside a continuum: a lost solution's trace)
     near[n[four_parallel(solver.chain, theta[n, k])]] = True
-    return theta, ok, (solved == 0) | lost | near
+    unresolved = (solved == 0) | lost | near
+    n, k = np.nonzero(np.concatenate([good, extra_ok], axis=1) & ~(unresolved | settled)[:, None])
+    close = four_parallel(solver.chain, theta[n, k], NEARBY)
+    if close.any():
+        f, f_ok = _restarts_nearby(solver.chain, theta[n[close], k[close]], n[close], T, tol)
+        theta, ok = np.concatenate([theta, f], axis=1), np.concatenate([ok, f_ok], axis=1)
+    return theta, ok, unresolved
 
 
 def _settled(solver: GeneralSolver, out: Solved, theta: np.ndarray, T: np.ndarray, steps: int, tol: float) -> np.ndarray:

@@ -24,7 +24,11 @@ class RealRoots(NamedTuple):
     on each one's error, noise max|p_j| sum_j |z|^j / |p'(z)|; degree (N,): each polynomial's
     effective degree; doubt (N,): over the eigenvalues z not kept (complex), the largest ratio of the
     same bound to |Im z|: above ~0.1 the error could carry z (and its conjugate) to the real axis,
-    i.e. a real root may have been lost; failed (N,) bool: rows whose QR iteration did not converge."""
+    i.e. a real root may have been lost; failed (N,) bool: rows whose QR iteration did not converge.
+    dropped_pose (D,) int, dropped (D,) complex: the eigenvalues not kept; pseudo (D,): each one's
+    real part as a pseudo-zero, |p(x)| / (noise sum_j |p_j| |x|^j) at x = Re z (below ~1, x is a root
+    of a polynomial within the noise of p: in a crowd of roots, where first-order bounds fail, the
+    pair z, conj(z) may be a real root that rounding moved off the axis)."""
 
     pose: np.ndarray
     x: np.ndarray
@@ -33,6 +37,9 @@ class RealRoots(NamedTuple):
     degree: np.ndarray
     doubt: np.ndarray
     failed: np.ndarray
+    dropped_pose: np.ndarray
+    dropped: np.ndarray
+    pseudo: np.ndarray
 
 
 @numba.njit(cache=True)
@@ -195,18 +202,20 @@ def _hqr(a, n, wr, wi):
 
 
 @numba.njit(cache=True)
-def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, error_out, degree_out, doubt_out):
+def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, error_out, degree_out, doubt_out, pseudo_out):
     """Per usable row of poly (N, n+1) (x^0 upward): its effective degree (trailing coefficients
     below 1e-14 of the largest are zero), the eigenvalues of its companion matrix, and those with
     |imag| <= real_tol (1 + |real|) written to pose_out, x_out, imag_out, their error bounds (see
     :class:`RealRoots`) to error_out; the effective degrees to
     degree_out, and to doubt_out the largest ratio, over the eigenvalues not kept, of a first-order
-    bound on its error to its distance from the real axis (see :class:`RealRoots`); returns
-    (count, failed rows)."""
+    bound on its error to its distance from the real axis (see :class:`RealRoots`); the eigenvalues
+    not kept to the end of pose_out, x_out, imag_out (backward from the last slot), their pseudo-zero
+    ratios to pseudo_out there; returns (count kept, count dropped, failed rows)."""
     N, n1 = poly.shape
     a = np.empty((_MAX_DEGREE, _MAX_DEGREE))
     wr, wi = np.empty(_MAX_DEGREE), np.empty(_MAX_DEGREE)
-    m, failed = 0, 0
+    m, failed, dropped = 0, 0, 0
+    top = len(pose_out) - 1
     for r in range(N):
         if not usable[r]:
             continue
@@ -252,8 +261,16 @@ def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, error
                 m += 1
             else:
                 doubt = max(doubt, err / abs(wi[k]))
+                x, px, size = wr[k], 0.0, 0.0  # p(x) and sum_j |p_j| |x|^j by Horner
+                for j in range(deg, -1, -1):
+                    px = px * x + poly[r, j]
+                    size = size * abs(x) + abs(poly[r, j])
+                slot = top - dropped
+                pose_out[slot], x_out[slot], imag_out[slot] = r, wr[k], wi[k]
+                pseudo_out[slot] = abs(px) / (noise[r] * size)
+                dropped += 1
         doubt_out[r] = doubt
-    return m, failed
+    return m, dropped, failed
 
 
 def real_roots(poly: np.ndarray, usable: np.ndarray, real_tol: float, noise: np.ndarray | None = None) -> RealRoots:
@@ -270,5 +287,8 @@ def real_roots(poly: np.ndarray, usable: np.ndarray, real_tol: float, noise: np.
     degree = np.zeros(len(poly), dtype=np.int64)
     noise = np.full(len(poly), 1e-15) if noise is None else np.maximum(np.asarray(noise, dtype=float), 1e-15)
     doubt = np.full(len(poly), np.inf)
-    m, _ = _count_roots(poly, noise, live, real_tol, pose, x, imag, error, degree, doubt)
-    return RealRoots(pose[:m], x[:m], imag[:m], error[:m], degree, doubt, usable & ~live)
+    pseudo = np.empty(len(pose))
+    m, d, _ = _count_roots(poly, noise, live, real_tol, pose, x, imag, error, degree, doubt, pseudo)
+    tail = slice(len(pose) - d, len(pose))
+    return RealRoots(pose[:m], x[:m], imag[:m], error[:m], degree, doubt, usable & ~live,
+                     pose[tail], x[tail] + 1j * imag[tail], pseudo[tail])
