@@ -71,8 +71,9 @@ def _error(T, Tt, err):
 
 
 @numba.njit(cache=True)
-def _step(frames, err, n, dq):
-    """dq (n,) = J^T (J J^T)^-1 err, J the geometric Jacobian of the frames; False if J J^T is singular."""
+def _step(frames, err, n, dq, damping2):
+    """dq (n,) = J^T (J J^T + damping2 I)^-1 err, J the geometric Jacobian of the frames; False if
+    that matrix is singular."""
     J = np.empty((6, n))
     tip = frames[n]
     for k in range(n):
@@ -82,6 +83,8 @@ def _step(frames, err, n, dq):
         J[0, k], J[1, k], J[2, k] = z1 * r2 - z2 * r1, z2 * r0 - z0 * r2, z0 * r1 - z1 * r0
         J[3, k], J[4, k], J[5, k] = z0, z1, z2
     A = J @ J.T
+    for k in range(6):
+        A[k, k] += damping2
     b = err.copy()
     for k in range(6):  # Gaussian elimination with partial pivoting
         p = k
@@ -113,7 +116,7 @@ def _step(frames, err, n, dq):
 
 
 @numba.njit(cache=True)
-def _polish(X, theta, targets, which, steps, done_tol, give_up, err_out):
+def _polish(X, theta, targets, which, steps, done_tol, give_up, damping2, err_out):
     n = theta.shape[1]
     frames = np.empty((n + 1, 4, 4))
     err, dq = np.empty(6), np.empty(n)
@@ -123,7 +126,7 @@ def _polish(X, theta, targets, which, steps, done_tol, give_up, err_out):
         e = _error(frames[n], Tt, err)
         k = 0
         while k < steps and e > done_tol and (k < 2 or e < give_up):
-            if not _step(frames, err, n, dq):
+            if not _step(frames, err, n, dq, damping2):
                 break
             for i in range(n):
                 theta[m, i] += dq[i]
@@ -134,18 +137,19 @@ def _polish(X, theta, targets, which, steps, done_tol, give_up, err_out):
 
 
 def polish(X: np.ndarray, theta: np.ndarray, targets: np.ndarray, which: np.ndarray, steps: int,
-           done_tol: float, give_up: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
+           done_tol: float, give_up: float = 0.1, damping: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Newton-polished candidates theta (M, n) rad of the chain X (n+1, 4, 4) toward the poses
     targets[which] ((P, 4, 4), which (M,) int) and their final errors (M, 6) [m; rad].
 
     Each candidate takes up to ``steps`` steps, stopping once max |error| <= done_tol; after two
     steps it goes on only while max |error| < give_up (what has not come close by then is another
-    branch's start or no solution)."""
+    branch's start or no solution). ``damping`` (m, rad): the steps solve J J^T + damping^2 I."""
     theta = np.ascontiguousarray(theta, dtype=float).copy()
     err = np.empty((len(theta), 6))
     if len(theta):
         _polish(np.ascontiguousarray(X, dtype=float), theta, np.ascontiguousarray(targets, dtype=float),
-                np.ascontiguousarray(which, dtype=np.int64), int(steps), float(done_tol), float(give_up), err)
+                np.ascontiguousarray(which, dtype=np.int64), int(steps), float(done_tol), float(give_up),
+                float(damping) ** 2, err)
     return theta, err
 
 
