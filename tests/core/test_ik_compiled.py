@@ -60,13 +60,15 @@ def test_dropped_roots_and_their_pseudo_zero_ratio():
     value = np.abs(np.array([np.polyval(c[::-1], v) for c, v in zip(p, x)]))
     size = np.array([np.polyval(np.abs(c[::-1]), abs(v)) for c, v in zip(p, x)])
     assert roots.pseudo == pytest.approx(value / (1e-12 * size), rel=1e-6, abs=1e-3)
-    # (x - 1)^2 (x^2 + 1) + 1e-13: the double root at 1 becomes a pair 1 +- 3e-7 i
+    # (x - 1)^2 (x^2 + 1) + 1e-13: the double root at 1 becomes a pair 1 +- 2.2e-7 i (sqrt(1e-13 / 2))
     double = np.polymul([1.0, -2.0, 1.0], [1.0, 0.0, 1.0])[::-1].copy()
     double[0] += 1e-13
     r = ik_roots.real_roots(double[None], np.ones(1, dtype=bool), 1e-9, np.array([1e-12]))
     near_one = np.abs(r.dropped - 1.0) < 1e-3
     assert near_one.sum() == 2 and (r.pseudo[near_one] <= 1.0).all()
     assert (r.pseudo[~near_one] > 1e6).all()  # +-i: |p(0)| = 1 against 1e-12
+    unknown = ik_roots.real_roots(poly[:5], np.ones(5, dtype=bool), 1e-2, np.full(5, np.inf))
+    assert len(unknown.pseudo) and np.isinf(unknown.pseudo).all()  # noise not measured (degree 12): no test
 
 
 def test_companion_roots_trailing_zeros_and_unusable_rows():

@@ -231,7 +231,7 @@ def solve_formulation(chain: Chain, f: int, CL: np.ndarray, degree: int, phase: 
     split = roots.x + roots.imag  # a near-real pair z, conj z: candidates at Re z +- |Im z|, where a split double root lies
     doubtful = (roots.pseudo < PSEUDO) & ~in_cluster(phase + 2 * np.arctan(roots.dropped), structural)
     back_substitute(M, np.concatenate([roots.pose[~skip], roots.dropped_pose[doubtful]]),
-                    np.concatenate([split[~skip], roots.dropped.real[doubtful] + roots.dropped.imag[doubtful]]),
+                    np.concatenate([split[~skip], roots.dropped.real[doubtful]]),  # at Re z, where it was tested
                     phase, qa, qb, qc, count)
     status[count > MAX_ROOTS] = 4
     count = np.minimum(count, MAX_ROOTS)

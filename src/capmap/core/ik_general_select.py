@@ -18,7 +18,8 @@ complex pair is back-substituted at Re z +- Im z (where the two roots of a split
 and a dropped complex root whose real part is a pseudo-zero of the polynomial is a candidate too.
 Measured 2026-12-03 together: 0 of 189,324 solutions lost on poses next to the SSRMS's continuum
 (joint 3, 4 or 5 locked at 4 angles, two joints within 1.7-15 deg of +-90 deg) and 0 of 118,096 on
-18,000 random poses of those chains; 39 of 8,346 lost in the test's set without them.
+18,000 random poses of those chains; 39 of 8,346 lost in the test's set without the rescue, the
+four-parallel test, the restarts and the pseudo-zero candidates (the split kept).
 
 A formulation *confirms* a pose when it solved it, its polynomial kept its full degree, its exactly
 real eigenvalues gave as many valid, distinct solutions as there are of them, and no dropped complex
@@ -200,7 +201,7 @@ def _restarts_nearby(chain: Chain, q: np.ndarray, rows: np.ndarray, T: np.ndarra
     which = np.repeat(rows, 6 * len(step))
     reached, err = polish(chain.X, seeds, T, which, RESCUE_STEPS, POLISHED, give_up=np.inf)
     conv = (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
-    return _per_pose(which, reached, conv, len(T))
+    return _per_pose(which[conv], reached[conv], conv[conv], len(T))  # only what converged: 48 seeds per solution
 
 
 def _confirmed(chain: Chain, out: Solved, theta: np.ndarray, T: np.ndarray, steps: int,
@@ -305,7 +306,8 @@ def _settled(solver: GeneralSolver, out: Solved, theta: np.ndarray, T: np.ndarra
     clusters of structural roots not counted), each structural root's cluster holds exactly its
     multiplicity of roots (one more: a true root beside it), and every candidate not from a cluster
     converged to a solution. A candidate that does not converge is the trace a lost solution leaves (a
-    root whose back-substitution went wrong, a real pair that came out complex); measured 2026-12-02
+    root whose back-substitution went wrong, a real pair that came out complex), or a pseudo-zero
+    candidate of a truly complex pair (either way the pose gets the second formulation); measured 2026-12-02
     on 96,000 seeded poses (the SSRMS with joint 3, 4 or 5 locked at 3 angles, the Panda and the xArm7
     with each joint locked at 3 angles, 2,000 each), the first formulation lost 1,042 solutions on 149
     poses against the union of two, every one on a pose it did not settle."""

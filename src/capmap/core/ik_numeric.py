@@ -46,7 +46,8 @@ def multi_start(chain: Chain, T_target: np.ndarray, lower: np.ndarray, upper: np
                 n_starts: int = 64) -> tuple[np.ndarray, np.ndarray]:
     """Multi-start Newton from a deterministic Halton set of starts: 40 damped steps (1e-2) then 5
     undamped, each joint's step clipped to 0.5 rad, compiled (:func:`capmap.core.ik_polish.polish`,
-    stopping at rounding level): (N, n_starts, n) rad."""
+    stopping at rounding level; a start whose undamped J J^T is exactly singular stops there, where
+    numpy's version took a pseudo-inverse step): (N, n_starts, n) rad."""
     N, n = len(T_target), chain.n
     starts = lower + (upper - lower) * _halton(n_starts, n)
     theta = np.broadcast_to(starts, (N, n_starts, n)).reshape(-1, n).copy()

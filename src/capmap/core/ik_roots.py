@@ -26,9 +26,10 @@ class RealRoots(NamedTuple):
     same bound to |Im z|: above ~0.1 the error could carry z (and its conjugate) to the real axis,
     i.e. a real root may have been lost; failed (N,) bool: rows whose QR iteration did not converge.
     dropped_pose (D,) int, dropped (D,) complex: the eigenvalues not kept; pseudo (D,): each one's
-    real part as a pseudo-zero, |p(x)| / (noise sum_j |p_j| |x|^j) at x = Re z (below ~1, x is a root
-    of a polynomial within the noise of p: in a crowd of roots, where first-order bounds fail, the
-    pair z, conj(z) may be a real root that rounding moved off the axis)."""
+    real part as a pseudo-zero, |p(x)| / (noise sum_j |p_j| |x|^j) at x = Re z (below 1, x is a root
+    of a polynomial whose coefficients each differ from p's by at most their noise share: in a
+    crowd of roots, where first-order bounds fail, the pair z, conj(z) may be a real root that
+    rounding moved off the axis; inf where the noise is unknown)."""
 
     pose: np.ndarray
     x: np.ndarray
@@ -267,7 +268,7 @@ def _count_roots(poly, noise, usable, real_tol, pose_out, x_out, imag_out, error
                     size = size * abs(x) + abs(poly[r, j])
                 slot = top - dropped
                 pose_out[slot], x_out[slot], imag_out[slot] = r, wr[k], wi[k]
-                pseudo_out[slot] = abs(px) / (noise[r] * size)
+                pseudo_out[slot] = abs(px) / (noise[r] * size) if noise[r] < np.inf else np.inf  # unknown noise: no test
                 dropped += 1
         doubt_out[r] = doubt
     return m, dropped, failed
