@@ -172,8 +172,8 @@ def _lost_on_settled(chain, T, settle) -> int:
     return lost
 
 
-def _confirmed_only(solver, out, theta, T, steps, tol):
-    return ik_general_select._confirmed(solver.chain, out, theta, T, steps, tol)[0]
+def _solved_only(solver, out, theta, T, steps, tol):
+    return out.status == 0
 
 
 @pytest.mark.parametrize("joint, share", [(6, 0.25), (7, 0.5), (4, 0.75)])
@@ -181,14 +181,17 @@ def test_a_settled_pose_lost_nothing(joint, share):
     """The xArm7 with joint 4, 6 or 7 locked (its first formulation loses 50-380 solutions per 2,000
     poses against the union of two, measured 2026-12-02): on 1,500 seeded poses, no solution of any
     other formulation is missing from the first one's on a pose it settles (then no second one runs
-    there). Planted: settling by the confirmation alone (every candidate's convergence not required)
-    lets 6 lost solutions through with joint 6 locked (measured 2026-12-02; 0 on the other two)."""
+    there). Planted: settling every pose the formulation solved lets 70 lost solutions through with
+    joint 6 locked (59 under OpenBLAS's Prescott kernels; measured 2026-12-03). Asserted: >= 10.
+    Settling by the confirmation alone (every candidate's convergence not required) lets 12 through
+    on the default kernels and 0 under Prescott since the near-real pairs are split (6 before), too
+    rounding-dependent to be the plant."""
     robot = load(SSRMS_YAML.parent / "xarm7.yaml")
     arm = lock(robot, joint, robot.q_lower[joint - 1] + share * (robot.q_upper[joint - 1] - robot.q_lower[joint - 1]))
     T = np.ascontiguousarray(arm.chain.fk(np.random.default_rng(joint).uniform(-np.pi, np.pi, (1500, 6))))
     assert _lost_on_settled(arm.chain, T, ik_general_select._settled) == 0
     if joint == 6:
-        assert _lost_on_settled(arm.chain, T, _confirmed_only) > 0
+        assert _lost_on_settled(arm.chain, T, _solved_only) >= 10
 
 
 def _no_defences(monkeypatch):
