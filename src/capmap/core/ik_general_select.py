@@ -107,6 +107,11 @@ def _run(chain: Chain, form: Formulation, CL: np.ndarray, degree: int, phase: fl
     return out, (-out.theta[..., ::-1] if form.reversed else out.theta)
 
 
+def _converged(err: np.ndarray, tol: float) -> np.ndarray:
+    """(M,) bool: final errors err (M, 6) [m; rad] within tol in position and in rotation."""
+    return (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
+
+
 def _polished(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, steps: int, tol: float) -> np.ndarray:
     """Candidates theta (N, K, 6) rad of targets T (N, 4, 4), ``ok`` (N, K), polished in place by
     ``steps`` Newton steps; (N, K) bool: each converged (FK residual <= tol m and rad)."""
@@ -115,7 +120,7 @@ def _polished(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, st
     idx = np.flatnonzero(ok.reshape(-1))
     flat[idx], err = polish(chain.X, flat[idx], T, idx // K, steps, POLISHED)
     valid = np.zeros(N * K, dtype=bool)
-    valid[idx] = (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
+    valid[idx] = _converged(err, tol)
     return valid.reshape(N, K)
 
 
@@ -167,7 +172,7 @@ def _rescued(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, ste
     if not len(rows):
         return np.zeros((N, 0, 6)), np.zeros((N, 0), dtype=bool), np.zeros(N, dtype=bool), valid
     start, err = polish(chain.X, theta[rows, cols], T, rows, RESCUE_STEPS, POLISHED, give_up=np.inf)
-    conv = (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
+    conv = _converged(err, tol)
     extra, extra_ok = _per_pose(rows, start, conv, N)
     wrap = np.mod(np.concatenate([theta, extra], axis=1) + np.pi, 2 * np.pi) - np.pi
     _, before = distinct(wrap[:, :K], valid, DUPLICATE_TOL)
@@ -200,7 +205,7 @@ def _restarts_nearby(chain: Chain, q: np.ndarray, rows: np.ndarray, T: np.ndarra
     seeds = (q[:, None, None] + step[None, None, :, None] * V[:, :, None]).reshape(-1, 6)
     which = np.repeat(rows, 6 * len(step))
     reached, err = polish(chain.X, seeds, T, which, RESCUE_STEPS, POLISHED, give_up=np.inf)
-    conv = (np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)
+    conv = _converged(err, tol)
     return _per_pose(which[conv], reached[conv], conv[conv], len(T))  # only what converged: 48 seeds per solution
 
 
