@@ -56,9 +56,8 @@ def _fk(X, q, frames):
 
 
 @numba.njit(cache=True)
-def _error(T, Tt, err):
-    """err (6,): [p_t - p; log(R_t R^T)]; returns max |err|."""
-    dR = np.empty((3, 3))
+def _error(T, Tt, err, dR):
+    """err (6,): [p_t - p; log(R_t R^T)] (dR (3, 3): scratch); returns max |err|."""
     for i in range(3):
         err[i] = Tt[i, 3] - T[i, 3]
         for j in range(3):
@@ -71,10 +70,9 @@ def _error(T, Tt, err):
 
 
 @numba.njit(cache=True)
-def _step(frames, err, n, dq, damping2):
+def _step(frames, err, n, dq, damping2, J, A, b):
     """dq (n,) = J^T (J J^T + damping2 I)^-1 err, J the geometric Jacobian of the frames; False if
-    that matrix is singular."""
-    J = np.empty((6, n))
+    that matrix is singular. J (6, n), A (6, 6), b (6,): scratch (no allocation, no BLAS call per step)."""
     tip = frames[n]
     for k in range(n):
         F = frames[k]
@@ -82,10 +80,15 @@ def _step(frames, err, n, dq, damping2):
         r0, r1, r2 = tip[0, 3] - F[0, 3], tip[1, 3] - F[1, 3], tip[2, 3] - F[2, 3]
         J[0, k], J[1, k], J[2, k] = z1 * r2 - z2 * r1, z2 * r0 - z0 * r2, z0 * r1 - z1 * r0
         J[3, k], J[4, k], J[5, k] = z0, z1, z2
-    A = J @ J.T
-    for k in range(6):
-        A[k, k] += damping2
-    b = err.copy()
+    for i in range(6):
+        b[i] = err[i]
+        for j in range(i + 1):
+            s = 0.0
+            for k in range(n):
+                s += J[i, k] * J[j, k]
+            A[i, j] = s
+            A[j, i] = s
+        A[i, i] += damping2
     for k in range(6):  # Gaussian elimination with partial pivoting
         p = k
         for i in range(k + 1, 6):
@@ -120,18 +123,19 @@ def _polish(X, theta, targets, which, steps, done_tol, give_up, damping2, err_ou
     n = theta.shape[1]
     frames = np.empty((n + 1, 4, 4))
     err, dq = np.empty(6), np.empty(n)
+    J, A, b, dR = np.empty((6, n)), np.empty((6, 6)), np.empty(6), np.empty((3, 3))
     for m in range(len(theta)):
         Tt = targets[which[m]]
         _fk(X, theta[m], frames)
-        e = _error(frames[n], Tt, err)
+        e = _error(frames[n], Tt, err, dR)
         k = 0
         while k < steps and e > done_tol and (k < 2 or e < give_up):
-            if not _step(frames, err, n, dq, damping2):
+            if not _step(frames, err, n, dq, damping2, J, A, b):
                 break
             for i in range(n):
                 theta[m, i] += dq[i]
             _fk(X, theta[m], frames)
-            e = _error(frames[n], Tt, err)
+            e = _error(frames[n], Tt, err, dR)
             k += 1
         err_out[m] = err
 
