@@ -4,6 +4,7 @@
 - :mod:`~capmap.core.reduction`   lock a joint (or none) -> the arm that still moves
 - :mod:`~capmap.core.kinematics`  batched serial-chain FK and Jacobians, pose errors
 - :mod:`~capmap.core.ik`          every inverse-kinematics branch of a 6-joint arm
+- :mod:`~capmap.core.configuration` configuration labels of IK solutions (shoulder / elbow / wrist, or aspects)
 - :mod:`~capmap.core.dynamics`    joint torques and base wrench (Pinocchio RNEA), payload models
 - :mod:`~capmap.core.coefficients` the exact capacity coefficients c0, L, Q, S (one type, batched or not)
 - :mod:`~capmap.core.tracking`    one IK branch followed continuously along a path
@@ -17,6 +18,8 @@ from capmap._lazy import lazy_exports
 
 _EXPORTS = {
     'coefficients': 'coefficients',
+    'configuration': 'configuration',
+    'configurations_of': 'configuration',
     'dynamics': 'dynamics',
     'ik': 'ik',
     'kinematics': 'kinematics',
@@ -45,6 +48,8 @@ __all__ = [
     "RobotDescription",
     "build_robot",
     "coefficients",
+    "configuration",
+    "configurations_of",
     "dynamics",
     "free",
     "ik",

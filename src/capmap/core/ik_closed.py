@@ -4,11 +4,13 @@
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from capmap.core.kinematics import Chain, inverse_transform
 
-__all__ = ["branches"]
+__all__ = ["branches", "flags"]
 
 
 def _trig_roots(A, B, C):
@@ -37,37 +39,86 @@ def _rz4(theta):
     return T
 
 
-def branches(chain: Chain, T_target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Raw branches (N, 8, 6) rad and their validity (N, 8) for a ``closed_form_shape`` chain and
-    targets T_target (N, 4, 4) (before polishing, range and duplicate checks)."""
+class _Constants(NamedTuple):
+    """The chain's fixed quantities the closed form uses (see :func:`branches`)."""
+
+    s_star: float
+    w3: np.ndarray
+    h: float
+    n1: np.ndarray
+    t1: np.ndarray
+    sigma: float
+    a: np.ndarray
+    d5: np.ndarray
+    p_: np.ndarray
+    u1: np.ndarray
+    u2: np.ndarray
+
+
+def _constants(chain: Chain) -> _Constants:
     X = chain.X
-    N = len(T_target)
-    # -- constants of the chain
     p5, d5 = X[5][:3, 3], X[5][:3, 2]
     s_star = -(p5[:2] @ d5[:2]) / (d5[:2] @ d5[:2])  # axis 5 meets axis 4 at (0, 0, s*) in frame 5
     w3 = (X[4] @ np.array([0, 0, p5[2] + s_star * d5[2], 1.0]))[:3]  # that point, in link 3
     h = (X[2] @ X[3] @ np.append(w3, 1.0))[2]  # its coordinate along the parallel axes
-    n1, t1 = X[1][:3, 2], X[1][:3, 3]
-    sigma = (X[2][:3, :3] @ X[3][:3, :3])[2, 2]
-    a = X[4][2, :3]  # n in frame 4 coordinates (R4^T e_z)
     R2, t2, t3 = X[2][:3, :3], X[2][:3, 3], X[3][:3, 3]
-    R4, R5 = X[4][:3, :3], X[5][:3, :3]
-    p_ = t2 + R2 @ np.array([0, 0, t3[2]])
-    u1 = R2 @ np.array([t3[0], t3[1], 0])
-    u2 = R2 @ np.array([-t3[1], t3[0], 0])
+    return _Constants(s_star=s_star, w3=w3, h=h, n1=X[1][:3, 2], t1=X[1][:3, 3],
+                      sigma=(X[2][:3, :3] @ X[3][:3, :3])[2, 2], a=X[4][2, :3], d5=d5,
+                      p_=t2 + R2 @ np.array([0, 0, t3[2]]), u1=R2 @ np.array([t3[0], t3[1], 0]),
+                      u2=R2 @ np.array([-t3[1], t3[0], 0]))
+
+
+def _wrist_point(chain: Chain, c: _Constants, T: np.ndarray) -> np.ndarray:
+    """(N, 3): the point where axes 4 and 5 meet, in the frame X[0] (before joint 0's rotation), for
+    end poses T (N, 4, 4)."""
+    w = (T @ (inverse_transform(chain.X[6]) @ np.array([0, 0, c.s_star, 1.0])))[:, :3]
+    return (inverse_transform(chain.X[0]) @ np.concatenate([w, np.ones((len(w), 1))], 1).T).T[:, :3]
+
+
+def _coefficients(c: _Constants, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float, float, float]:
+    """A, B of the three trigonometric equations A cos x + B sin x = C the branches choose between:
+    joint 0 (from the wrist point r (N, 3)), joint 4 and joint 2 (constants)."""
+    A0 = c.n1[0] * r[:, 0] + c.n1[1] * r[:, 1]
+    B0 = c.n1[0] * r[:, 1] - c.n1[1] * r[:, 0]
+    A4 = c.d5[0] * c.a[0] + c.d5[1] * c.a[1]
+    B4 = c.d5[0] * c.a[1] - c.d5[1] * c.a[0]
+    return A0, B0, A4, B4, 2 * c.p_[:2] @ c.u1[:2], 2 * c.p_[:2] @ c.u2[:2]
+
+
+def flags(chain: Chain, theta: np.ndarray) -> np.ndarray:
+    """(M, 3) float: for configurations theta (M, 6) rad of a ``closed_form_shape`` chain, the values
+    B cos x - A sin x of the equations for joints 0, 2 and 4 (shoulder, elbow, wrist) at the
+    configuration's own x. Their signs are the branch choices of :func:`branches` (x = phi -+ delta:
+    + / -); each vanishes exactly where its two roots merge, a fold of the IK map, i.e. a singular
+    configuration, so each sign is constant between singular surfaces."""
+    c = _constants(chain)
+    theta = np.asarray(theta, dtype=float)
+    A0, B0, A4, B4, A2, B2 = _coefficients(c, _wrist_point(chain, c, chain.fk(theta)))
+    q0, q2, q4 = theta[:, 0], theta[:, 2], theta[:, 4]
+    return np.stack([B0 * np.cos(q0) - A0 * np.sin(q0), B2 * np.cos(q2) - A2 * np.sin(q2),
+                     B4 * np.cos(q4) - A4 * np.sin(q4)], axis=1)
+
+
+def branches(chain: Chain, T_target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Raw branches (N, 8, 6) rad and their validity (N, 8) for a ``closed_form_shape`` chain and
+    targets T_target (N, 4, 4) (before polishing, range and duplicate checks). Branch k = 4 i + 2 j + l
+    takes the root phi + delta (i, j, l = 0: :func:`flags` < 0) or phi - delta (1: > 0) of the
+    equations of joints 0, 4 and 2."""
+    X = chain.X
+    N = len(T_target)
+    c = _constants(chain)
+    s_star, w3, h, n1, t1, sigma, a, d5, p_, u1, u2 = c
+    R2, R4, R5 = X[2][:3, :3], X[4][:3, :3], X[5][:3, :3]
     # -- 1. joint 0 from the coordinate of w along n
     w = (T_target @ (inverse_transform(X[6]) @ np.array([0, 0, s_star, 1.0])))[:, :3]  # (N, 3)
-    r = (inverse_transform(X[0]) @ np.concatenate([w, np.ones((N, 1))], 1).T).T[:, :3]
-    A0 = n1[0] * r[:, 0] + n1[1] * r[:, 1]
-    B0 = n1[0] * r[:, 1] - n1[1] * r[:, 0]
+    r = _wrist_point(chain, c, T_target)
+    A0, B0, A4, B4, A2, B2 = _coefficients(c, r)
     C0 = h + n1 @ t1 - n1[2] * r[:, 2]
     q0, ok0 = _trig_roots(A0, B0, C0)  # (N, 2)
     P1 = X[0] @ _rz4(q0) @ X[1]  # (N, 2, 4, 4) frame of joint 1 before its rotation
     # -- 2. joints 4, 5 from the orientation: n maps to the target through them
     W = np.swapaxes(P1[..., :3, :3], -1, -2) @ T_target[:, None, :3, :3] @ X[6][:3, :3].T  # (N, 2, 3, 3)
     b = sigma * W[..., 2, :]  # (N, 2, 3)
-    A4 = d5[0] * a[0] + d5[1] * a[1]
-    B4 = d5[0] * a[1] - d5[1] * a[0]
     C4 = b[..., 2] - d5[2] * a[2]
     q4, ok4 = _trig_roots(np.full_like(C4, A4), np.full_like(C4, B4), C4)  # (N, 2, 2)
     v = np.einsum("ji,...jk,k->...i", R5, _rz(-q4), a)  # R5^T Rz(-q4) a, (N, 2, 2, 3)
@@ -78,7 +129,7 @@ def branches(chain: Chain, T_target: np.ndarray) -> tuple[np.ndarray, np.ndarray
     w_P1 = np.einsum("...ij,...j->...i", inverse_transform(P1), np.concatenate([w, np.ones((N, 1))], 1)[:, None])[..., :3]
     e = w_P1[:, :, None] - Rg @ w3  # (N, 2, 2, 3)
     C2 = e[..., 0] ** 2 + e[..., 1] ** 2 - p_[:2] @ p_[:2] - u1[:2] @ u1[:2]
-    q2, ok2 = _trig_roots(np.full_like(C2, 2 * p_[:2] @ u1[:2]), np.full_like(C2, 2 * p_[:2] @ u2[:2]), C2)  # (N, 2, 2, 2)
+    q2, ok2 = _trig_roots(np.full_like(C2, A2), np.full_like(C2, B2), C2)  # (N, 2, 2, 2)
     k = p_ + np.cos(q2)[..., None] * u1 + np.sin(q2)[..., None] * u2  # (N, 2, 2, 2, 3)
     q1 = np.arctan2(e[..., None, 1], e[..., None, 0]) - np.arctan2(k[..., 1], k[..., 0])
     M = np.swapaxes(_rz(q1) @ R2 @ _rz(q2) @ X[3][:3, :3], -1, -2) @ Rg[..., None, :, :]
