@@ -29,8 +29,8 @@ _TASK = {"name": "t", "start_m": [0.379, 4.8432, 1.8878], "goal_m": [2.625, 1.87
 
 CONFIG_CASES = [
     ({"limts": 3}, "unknown key limts"),
-    ({"tasks": [_TASK]}, "tasks[0] (t).q_start_deg is"),
-    ({"tasks": [{**_TASK, "q_start_deg": [90, 0, 0, 0, 0, 0, 0]}]}, "tasks[0] (t).q_start_deg[0] = 90 but joint 1"),
+    ({"tasks": [{**_TASK, "start_m": [30, 0, 0]}]}, "tasks[0] (t).start_m = [30, 0, 0] is not reachable"),
+    ({"tasks": [{**_TASK, "q_start_deg": [90, 0, 0]}]}, "tasks[0] (t).q_start_deg has 3 values but"),
     ({"tasks": [{**_TASK, "name": "Bad Name"}]}, "tasks"),
     ({"tasks": [{**_TASK, "q_start_deg": [100, 124, 98, 130, 146, 174, 57], "goal_m": [30, 0, 0]}]},
      "tasks[0] (t).goal_m = [30, 0, 0] is not reachable"),
@@ -318,7 +318,7 @@ def test_bad_inputs_cost_no_output_through_snakemake(run_dir, tmp_path):
     work, _ = run_dir
     before = _tree_digest(work / "results")
     jobs = _jobs(tmp_path)
-    pick = ("limts", "q_start_deg[0] = 90", "lock.joint = 9", "task.goal_m = [30", "not a finite number",
+    pick = ("limts", "q_start_deg has 3 values", "lock.joint = 9", "task.goal_m = [30", "not a finite number",
             "is text, not a number", "voxels.edge_m: this map needs", "verification.dt_s: verifying",
             "lies outside the map's grid", "follow.ground.line_m = [0, 1e-12", "reconfig.dt_s: the reconfiguration",
             "__use_yte__", "no such file", "not a text", "nested deeper", "is a FIFO", "not valid XML", "no column x_m")

@@ -33,6 +33,8 @@ def out(path):
 print(f"capmap: run {RUN.name!r}: outputs under {OUT}/", file=sys.stderr)
 print(f"capmap: {RUN.failure.describe()}", file=sys.stderr)
 print(f"capmap: {RUN.limits.describe()}", file=sys.stderr)
+for _t in RUN.tasks:  # a further task starts at the IK solution nearest its q_start_deg (the locked joint's value not used)
+    print(f"capmap: task {_t.name}: start configuration [{', '.join(f'{v:.2f}' for v in _t.q_start_deg)}] deg", file=sys.stderr)
 # the report's scenario text (workflow/report/workflow.rst sees only the config): what the checks resolved
 config["resolved"] = {"joint_torque_nm": RUN.limits.torque_text(), "torque_limit_source": RUN.limits.torque_limit_source}
 print(f"capmap: estimate: {RUN.estimate.describe(RUN.voxel_edge_m)}", file=sys.stderr)

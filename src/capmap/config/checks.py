@@ -28,7 +28,7 @@ from capmap.core import ik
 from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free
 from capmap.core.robot import Robot
-from capmap.core.tracking import start_branch
+from capmap.core.tracking import nearest_branch
 from capmap.dualarm.robot import build_dual_arm
 from capmap.dualarm.scene import surface_points
 from capmap.errors import CapmapError, ConfigError
@@ -67,7 +67,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
         raise ConfigError(f"{source}: {exc}") from None
     dirs = cfg.directions.build()
     check_goal(arm, cfg.task, failure, source)
-    check_tasks(cfg.tasks, arm, cfg.task, failure, source)
+    tasks = check_tasks(cfg.tasks, arm, cfg.task, failure, source)
     check_dt(cfg, source)
     if cfg.refine is not None:
         try:
@@ -98,7 +98,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
             raise ConfigError(f"{source}: {exc}") from None
     if cfg.dualarm is not None:
         check_dualarm(cfg, source)
-    return replace(cfg, failure=failure, estimate=estimate, limits=limits_cfg.canonical())
+    return replace(cfg, failure=failure, estimate=estimate, limits=limits_cfg.canonical(), tasks=tasks)
 
 
 def check_dt(cfg: RunConfig, source: str = "config") -> None:
@@ -126,12 +126,15 @@ def check_goal(arm: LockedArm, task: TaskConfig, failure: Failure, source: str =
 
 
 def check_tasks(tasks: tuple[PlanTask, ...], arm: LockedArm, task: TaskConfig, failure: Failure,
-                source: str = "config") -> None:
-    """``tasks``: distinct names; every start configuration a branch at its start (the locked joint
-    at the lock angle), every goal reachable, at the task's orientation."""
+                source: str = "config") -> tuple[PlanTask, ...]:
+    """``tasks``: distinct names, every start and goal reachable at the task's orientation; returns
+    them with each start configuration resolved: the IK solution at its start nearest q_start_deg over
+    the joints that still move (the locked joint's value is not used, so a lock edit alone keeps a
+    task valid), every joint in deg with the locked one at the lock angle."""
     names = [t.name for t in tasks]
     if len(set(names)) < len(names):
         raise ConfigError(f"{source}: tasks: names must differ ({names})")
+    out = []
     for i, t in enumerate(tasks):
         key = f"tasks[{i}] ({t.name})"
         if np.linalg.norm(np.subtract(t.goal_m, t.start_m)) < 1e-6:
@@ -140,14 +143,18 @@ def check_tasks(tasks: tuple[PlanTask, ...], arm: LockedArm, task: TaskConfig, f
         if len(q) != arm.robot.n_joints:
             raise ConfigError(f"{source}: {key}.q_start_deg has {len(q)} values but {arm.robot.name} has "
                               f"{arm.robot.n_joints} joints")
-        if abs(q[failure.joint - 1] - failure.angle_deg) > 1e-6:
-            raise ConfigError(f"{source}: {key}.q_start_deg[{failure.joint - 1}] = {q[failure.joint - 1]:g} but joint "
-                              f"{failure.joint} is locked at {failure.angle_deg:g} deg")
-        try:
-            start_branch(arm, np.asarray(t.start_m, dtype=float), task.rotation, np.deg2rad(q)[arm.active])
-        except CapmapError as exc:
-            raise ConfigError(f"{source}: {exc.in_terms(start=f'{key}.start_m', q_ini=f'{key}.q_start_deg')}") from None
+        sol = ik.solve(arm, np.asarray(t.start_m, dtype=float)[None], task.rotation)
+        n = int(sol.n_solutions[0])
+        if n == 0:
+            raise ConfigError(f"{source}: {key}.start_m = [{', '.join(f'{v:g}' for v in t.start_m)}] is not reachable "
+                              f"at task.orientation_rpy_deg = {list(task.orientation_rpy_deg)} with joint "
+                              f"{failure.joint} locked at {failure.angle_deg:g} deg")
+        _, q_branch, _ = nearest_branch(sol.q[0, :n], np.deg2rad(q)[arm.active])
+        q_start = np.rad2deg(arm.full_q(q_branch))
+        q_start[failure.joint - 1] = failure.angle_deg  # exactly as given, not through radians
         check_goal(arm, task, failure, source, t.goal_m, f"{key}.goal_m")
+        out.append(replace(t, q_start_deg=tuple(float(v) for v in q_start)))
+    return tuple(out)
 
 
 def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> None:
