@@ -70,11 +70,13 @@ rule voxels:
 
 
 rule refine:
-    """Shard k of n of the reachable voxels: each voxel's minimum refined until it converges."""
+    """Shard k of n of the reachable voxels: each voxel's minimum refined until it converges, all branches and
+    each configuration."""
     input:
         voxels=out("voxels/sampled.parquet"),
     output:
-        out("voxels/refined_{k}_of_{n}.parquet"),
+        voxels=out("voxels/refined_{k}_of_{n}.parquet"),
+        configurations=out("voxels/configurations_{k}_of_{n}.parquet"),
     params:
         slice=params("refine", "refine"),
     log:
@@ -89,12 +91,17 @@ rule refine:
 
 
 rule voxel_map:
-    """The voxel map every later stage reads: the sampled voxels with their refined values."""
+    """The voxel map every later stage reads: the sampled voxels with their refined values; the map per
+    configuration."""
     input:
         sampled=out("voxels/sampled.parquet"),
         refined=expand(out("voxels/refined_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS) if REFINE else [],
+        configurations=expand(out("voxels/configurations_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS)
+        if REFINE
+        else [],
     output:
-        out("voxels/voxels.parquet"),
+        voxels=out("voxels/voxels.parquet"),
+        configurations=out("voxels/configurations.parquet"),
     params:
         slice=params("refine", "voxel_map"),
     log:

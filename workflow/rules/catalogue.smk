@@ -4,7 +4,9 @@ DATASETS = [
     *expand(out("capacity/shard_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS),
     out("voxels/sampled.parquet"),
     *(expand(out("voxels/refined_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS) if REFINE else []),
+    *(expand(out("voxels/configurations_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS) if REFINE else []),
     out("voxels/voxels.parquet"),
+    out("voxels/configurations.parquet"),
     out("voxels/points.parquet"),
     *expand(out("plan/payload_{payload}kg/waypoints.parquet"), payload=PAYLOADS),
     out("plan/gain_tasks.parquet"),
@@ -25,6 +27,9 @@ STALE = stale_outputs(OUT, {
     "follow/*": [f"follow/{c}" for c in (*FOLLOW_CASES, "summary.csv", "summary.md")] if FOLLOW_CASES else [],
     "capacity/shard_*_of_*.parquet": [f"capacity/shard_{k}_of_{SHARDS}.parquet" for k in range(SHARDS)],
     "voxels/refined_*_of_*.parquet": [f"voxels/refined_{k}_of_{SHARDS}.parquet" for k in range(SHARDS)] if REFINE else [],
+    "voxels/configurations_*_of_*.parquet": [f"voxels/configurations_{k}_of_{SHARDS}.parquet" for k in range(SHARDS)]
+    if REFINE
+    else [],
     "reconfig": ["reconfig"] if RECONFIG_METHODS else [],
     "reconfig/*.parquet": [f"reconfig/{m}.parquet" for m in RECONFIG_METHODS],
     "dualarm": ["dualarm"] if DUALARM else [],

@@ -2,4 +2,5 @@ from capmap.io.logs import call
 from capmap.stages.refine import stage_voxel_map
 
 call(stage_voxel_map, sampled=snakemake.input.sampled, refined=list(snakemake.input.refined),
-     out=snakemake.output[0], slice_json=snakemake.params.slice, log=snakemake.log[0])
+     configurations=list(snakemake.input.configurations), out=snakemake.output.voxels,
+     out_configurations=snakemake.output.configurations, slice_json=snakemake.params.slice, log=snakemake.log[0])

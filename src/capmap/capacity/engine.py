@@ -19,6 +19,7 @@ import numpy as np
 from capmap.capacity.directions import Directions
 from capmap.capacity.sweep import min_over_directions, min_per_pair
 from capmap.core.coefficients import Coefficients
+from capmap.core.configuration import Configurations
 from capmap.core.dynamics import ArmDynamics, output_names
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
@@ -148,6 +149,11 @@ class PointCapacity:
     n_states: np.ndarray
     names: tuple[str, ...]
     axis_capacity_kg: np.ndarray | None = None  # (N, P): per antipodal pair of ``axes`` (NaN if unreachable)
+    # with configuration labels: the same per configuration, (N, C) / (N, C, P), NaN where the point has no
+    # IK solution of that configuration; config_binding (N, C) -1 there
+    config_capacity_kg: np.ndarray | None = None
+    config_axis_capacity_kg: np.ndarray | None = None
+    config_binding: np.ndarray | None = None
 
 
 def argmin_per_group(values: np.ndarray, groups: np.ndarray) -> np.ndarray:
@@ -167,13 +173,18 @@ def motion_features(u: np.ndarray, motion: Motion) -> np.ndarray:
 
 
 def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray, directions: Directions,
-                   motion: Motion, limits: AffineLimits, axes: Directions | None = None) -> PointCapacity:
+                   motion: Motion, limits: AffineLimits, axes: Directions | None = None,
+                   configurations: Configurations | None = None) -> PointCapacity:
     """Capacity of N points from their IK configuration sets.
 
     q_sets: (N, K, n_active) rad, NaN-padded beyond n_solutions (N,) per point; ``limits`` on
     ``dyn.arm``'s outputs (:meth:`LoadLimits.for_arm`). With ``axes`` (directions in antipodal
     pairs, e.g. :func:`~capmap.capacity.directions.grid_axes`), also the capacity along each
     pair's line (moving along u or -u), min over the configuration set: axis_capacity_kg (N, P).
+    With ``configurations`` (the chain's labels, :mod:`capmap.core.configuration`), the same
+    minima per configuration label (C labels): config_capacity_kg (N, C), config_binding (N, C)
+    and, with ``axes``, config_axis_capacity_kg (N, C, P); the all-branch values are their minima
+    over C.
     """
     N, K = q_sets.shape[:2]
     names = limits.names + (SINGULAR,)
@@ -205,5 +216,24 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
         branch[p] = brs[sel]
         direction[p] = worst_dir[sel]
         binding[p] = b_cfg[sel]
+    per_config = {}
+    if configurations is not None:
+        C = len(configurations.names)
+        lab = configurations.labels(q_sets[pts, brs]) if len(pts) else np.zeros(0, dtype=int)
+        cc = np.full((N, C), np.nan)
+        cb = np.full((N, C), -1)
+        if len(pts):
+            group = pts * C + lab  # an aspect can hold several solutions of a point: their minimum
+            sel = argmin_per_group(c_cfg, group)
+            cc.reshape(-1)[group[sel]] = c_cfg[sel]
+            cb.reshape(-1)[group[sel]] = b_cfg[sel]
+        per_config = {"config_capacity_kg": cc, "config_binding": cb}
+        if axes is not None:
+            ca = np.full((N, C, len(axes.pairs)), np.inf)
+            if len(pts):
+                np.minimum.at(ca, (pts, lab), per_axis)
+            ca[~np.isfinite(cc)] = np.nan
+            per_config["config_axis_capacity_kg"] = ca
     return PointCapacity(capacity_kg=cap, binding=binding, branch=branch, direction=direction,
-                         n_states=np.asarray(n_solutions) * len(directions), names=names, axis_capacity_kg=axis_cap)
+                         n_states=np.asarray(n_solutions) * len(directions), names=names, axis_capacity_kg=axis_cap,
+                         **per_config)

@@ -75,12 +75,17 @@ class RefineSettings:
 class Evaluation:
     """Point results: capacity_kg (N,) kg (NaN where unreachable), axis_capacity_kg (N, A) kg,
     binding (N,) int: the binding limit's index (-1 where unreachable); n_branches (N,) int: IK
-    branches at the point (0 where unreachable)."""
+    branches at the point (0 where unreachable). Per configuration label (optional, C labels):
+    config_capacity_kg (N, C), config_axis_capacity_kg (N, C, A), config_binding (N, C), NaN / -1
+    where the point has no IK solution of that configuration."""
 
     capacity_kg: np.ndarray
     axis_capacity_kg: np.ndarray
     binding: np.ndarray
     n_branches: np.ndarray
+    config_capacity_kg: np.ndarray | None = None
+    config_axis_capacity_kg: np.ndarray | None = None
+    config_binding: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -88,7 +93,9 @@ class VoxelMinima:
     """Per refined voxel (V,): capacity_kg, axis_capacity_kg (V, A), n_points evaluated inside,
     n_reachable of them, last_change (relative drop of the minimum in the last round), converged,
     worst_m (V, 3) the point attaining the minimum and binding (V,) its binding limit; rounds and
-    points evaluated in all."""
+    points evaluated in all. Per configuration label (optional, C labels; NaN / -1 where no point of
+    that configuration was seen): config_capacity_kg (V, C), config_axis_capacity_kg (V, C, A),
+    config_worst_m (V, C, 3), config_binding (V, C), config_n_points (V, C) the points holding it."""
 
     voxel: np.ndarray
     capacity_kg: np.ndarray
@@ -101,41 +108,90 @@ class VoxelMinima:
     binding: np.ndarray
     rounds: int
     n_evaluated: int
+    config_capacity_kg: np.ndarray | None = None
+    config_axis_capacity_kg: np.ndarray | None = None
+    config_worst_m: np.ndarray | None = None
+    config_binding: np.ndarray | None = None
+    config_n_points: np.ndarray | None = None
+
+    @classmethod
+    def with_configurations(cls, n_configurations: int, **fields) -> "VoxelMinima":
+        """The all-branch fields given, every configuration's not yet seen."""
+        V, A = fields["axis_capacity_kg"].shape
+        C = n_configurations
+        return cls(**fields, config_capacity_kg=np.full((V, C), np.nan),
+                   config_axis_capacity_kg=np.full((V, C, A), np.nan), config_worst_m=np.full((V, C, 3), np.nan),
+                   config_binding=np.full((V, C), -1), config_n_points=np.zeros((V, C), dtype=int))
 
 
 def _near(cap: np.ndarray, s: RefineSettings) -> np.ndarray:
+    """(V, G) values -> (V,): some value within near_band of a payload."""
     if not s.payloads_kg:
         return np.zeros(len(cap), dtype=bool)
     p = np.asarray(s.payloads_kg, dtype=float)
-    return np.any(np.abs(cap[:, None] - p) <= s.near_band * p, axis=1)
+    return np.any(np.abs(cap[..., None] - p) <= s.near_band * p, axis=(1, 2))
+
+
+def _groups(ev: Evaluation, C: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Point results as groups: all branches (group 0), then each configuration: capacity (N, G)
+    and binding (N, G) and axis capacities (N, G, A), +inf where a group has no solution."""
+    c, a, b = ev.capacity_kg[:, None], ev.axis_capacity_kg[:, None, :], ev.binding[:, None]
+    if C:
+        c = np.concatenate([c, ev.config_capacity_kg], axis=1)
+        a = np.concatenate([a, ev.config_axis_capacity_kg], axis=1)
+        b = np.concatenate([b, ev.config_binding], axis=1)
+    return np.where(np.isfinite(c), c, np.inf), b, np.where(np.isfinite(a), a, np.inf)
 
 
 def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Evaluation], settings: RefineSettings,
            rng: np.random.Generator, progress: Callable[[int, int, int], None] | None = None) -> VoxelMinima:
     """Refine the voxels of ``start`` (their minima from the points already evaluated; a voxel
     without a reachable point keeps NaN and is not refined). ``evaluate(points (N, 3) m)`` gives
-    the point results; ``progress(round, active voxels, points this round)`` is called per round."""
+    the point results; ``progress(round, active voxels, points this round)`` is called per round.
+
+    With configuration fields in ``start`` (:meth:`VoxelMinima.with_configurations`; ``evaluate``
+    then gives them too), every configuration's minimum and per-axis minima are refined as the
+    all-branch ones are (groups: all branches, then each configuration), from the same points: a
+    voxel has converged when every group has; a compass around each group's worst point still
+    falling; at a closed singular fold, the per-axis values of every group whose minimum is 0 are 0.
+    A configuration that no point of a voxel holds stays NaN there."""
     s = settings
-    cap = start.capacity_kg.astype(float).copy()
-    axis = start.axis_capacity_kg.astype(float).copy()
+    C = 0 if start.config_capacity_kg is None else start.config_capacity_kg.shape[1]
+    V, A = start.axis_capacity_kg.shape
+    # groups: 0 = all branches, 1.. = configurations; +inf: no point of the group seen yet
+    cap = start.capacity_kg.astype(float)[:, None]
+    axis = start.axis_capacity_kg.astype(float)[:, None, :]
+    worst = start.worst_m.astype(float)[:, None, :]
+    binding = start.binding.astype(int)[:, None]
+    n_grp = start.n_reachable.astype(int)[:, None]
+    if C:
+        cap = np.concatenate([cap, start.config_capacity_kg], axis=1)
+        axis = np.concatenate([axis, start.config_axis_capacity_kg], axis=1)
+        worst = np.concatenate([worst, start.config_worst_m], axis=1)
+        binding = np.concatenate([binding, start.config_binding], axis=1)
+        n_grp = np.concatenate([n_grp, start.config_n_points], axis=1)
+    reach0 = np.isfinite(start.capacity_kg)
+    cap = np.where(np.isfinite(cap) | ~reach0[:, None], cap, np.inf)  # unreachable voxels stay NaN
+    axis = np.where(np.isfinite(axis) | ~reach0[:, None, None], axis, np.inf)
     n_pts = start.n_points.astype(int).copy()
     n_reach = start.n_reachable.astype(int).copy()
-    worst = start.worst_m.astype(float).copy()
-    binding = start.binding.astype(int).copy()
-    change = np.zeros(len(cap))
+    change = np.zeros(V)
 
-    def zero() -> np.ndarray:  # nothing can fall further
-        return (cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=1)
+    def zero() -> np.ndarray:  # nothing can fall further in any group (groups not seen: nothing to fall)
+        z = ((cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=2)) | ~np.isfinite(cap)
+        z[:, 0] &= np.isfinite(cap[:, 0])
+        return np.all(z, axis=1)
 
-    converged = ~np.isfinite(cap) | zero()
-    stopped = np.zeros(len(cap), dtype=bool)  # still falling when the patterns reached their finest step
+    # a voxel whose configurations are not known yet is refined at least once
+    converged = ~reach0 | (zero() & ~np.any(np.isinf(cap[:, 1:]), axis=1))
+    stopped = np.zeros(V, dtype=bool)  # still falling when the patterns reached their finest step
     idx3 = np.stack(np.unravel_index(start.voxel, grid.shape), axis=1)
-    V = len(cap)
     ref_pt, ref_n = np.full((V, 3), np.nan), np.full(V, -1)  # a first point and its branch count
     fold = np.zeros(V, dtype=bool)  # a bracket [a, b] of different branch counts is known
     fa, fb, na = np.zeros((V, 3)), np.zeros((V, 3)), np.zeros(V, dtype=int)
-    axis_worst = np.repeat(worst[:, None, :], axis.shape[1], axis=1)  # (V, A, 3): where each axis minimum is
+    axis_worst = np.repeat(worst[:, :, None, :], A, axis=2)  # (V, G, A, 3): where each axis minimum is
     axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their pattern continues)
+    grp_open = np.ones(cap.shape, dtype=bool)  # group minima still falling
     rounds, evaluated = 0, 0
     while True:
         bisect = np.flatnonzero(fold & ~zero() & (np.linalg.norm(fb - fa, axis=1) > s.fold_tol_m))
@@ -144,25 +200,34 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
             break
         rounds += 1
         # new points: the voxel's corners in the first round; then a pattern around its worst point so
-        # far and a compass around the worst point of each axis still falling; uniform points
-        # doubling the count (capped)
+        # far, a compass around the worst point of each configuration and of each axis minimum still
+        # falling (one per distinct point); uniform points doubling the count (capped)
         if rounds == 1:
             local = np.repeat(active, 8)
             local_pts = grid.lower + (idx3[local] + np.tile(_CORNERS, (len(active), 1))) * grid.edge_m
         else:
             h = grid.edge_m * 0.5 ** rounds
-            has = active[np.isfinite(cap[active])]
-            v, a = np.nonzero(axis_open[active] & np.isfinite(axis[active]))
+            has = active[np.isfinite(cap[active, 0])]
+            v, g = np.nonzero(grp_open[active, 1:] & np.isfinite(cap[active, 1:]))
+            v, g = active[v], g + 1
+            cv, centres = [v], [worst[v, g]]
+            v, g, a = np.nonzero(axis_open[active] & np.isfinite(axis[active]))
             v = active[v]
-            # axes whose minima sit at the same point (often a corner) share one compass
-            _, keep = np.unique(np.column_stack([v, axis_worst[v, a]]), axis=0, return_index=True)
-            v, centre = v[keep], axis_worst[v[keep], a[keep]]
+            cv.append(v)
+            centres.append(axis_worst[v, g, a])
+            cv, centres = np.concatenate(cv), np.concatenate(centres)
+            # minima at the same point (often a corner, or the all-branch worst) share one compass
+            known = np.column_stack([has, worst[has, 0]])
+            rows = np.column_stack([cv, centres])
+            _, keep = np.unique(rows, axis=0, return_index=True)
+            keep = keep[~_rows_in(rows[keep], known)]
+            v, centre = cv[keep], centres[keep]
             local = np.concatenate([np.repeat(has, len(_PATTERN)), np.repeat(v, len(_COMPASS))])
-            local_pts = np.concatenate([_around(worst[has], _PATTERN, h, grid, idx3[has]),
+            local_pts = np.concatenate([_around(worst[has, 0], _PATTERN, h, grid, idx3[has]),
                                         _around(centre, _COMPASS, h, grid, idx3[v])])
         local = np.concatenate([local, bisect])
         local_pts = np.concatenate([local_pts, 0.5 * (fa[bisect] + fb[bisect])])
-        n_local = np.bincount(local, minlength=len(cap))[active]
+        n_local = np.bincount(local, minlength=V)[active]
         new = np.clip(np.minimum(n_pts[active], s.max_points - n_pts[active]) - n_local, 0, None)
         uniform = np.repeat(active, new)
         owner = np.concatenate([local, uniform])
@@ -173,48 +238,72 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
             progress(rounds, len(active), len(pts))
         ev = evaluate(pts)
         evaluated += len(pts)
-        c = np.where(np.isfinite(ev.capacity_kg), ev.capacity_kg, np.inf)
-        best_i = argmin_per_group(c, owner)  # per voxel: the new minimum and where it is
-        best_v = owner[best_i]
-        old = cap[best_v]
-        lower = c[best_i] < old
-        cap[best_v[lower]] = c[best_i][lower]
-        worst[best_v[lower]] = pts[best_i][lower]
-        binding[best_v[lower]] = ev.binding[best_i][lower]
+        c, b, ac = _groups(ev, C)
+        old = cap[active].copy()
         axis_old = axis[active].copy()
-        ac = np.where(np.isfinite(ev.axis_capacity_kg), ev.axis_capacity_kg, np.inf)
-        for a in range(axis.shape[1]):  # per axis: the new minimum and where it is
-            bi = argmin_per_group(ac[:, a], owner)
-            bv = owner[bi]
-            better = ac[bi, a] < axis[bv, a]
-            axis[bv[better], a] = ac[bi[better], a]
-            axis_worst[bv[better], a] = pts[bi[better]]
-        axis_drop = _rel_drop(axis_old, axis[active])  # (active, A)
+        for gi in range(1 + C):  # per group: the new minimum and where it is
+            best_i = argmin_per_group(c[:, gi], owner)
+            best_v = owner[best_i]
+            lower = c[best_i, gi] < cap[best_v, gi]
+            cap[best_v[lower], gi] = c[best_i[lower], gi]
+            worst[best_v[lower], gi] = pts[best_i[lower]]
+            binding[best_v[lower], gi] = b[best_i[lower], gi]
+            np.add.at(n_grp[:, gi], owner, np.isfinite(c[:, gi]).astype(int))
+            for a in range(A):  # per axis: the new minimum and where it is
+                bi = argmin_per_group(ac[:, gi, a], owner)
+                bv = owner[bi]
+                better = ac[bi, gi, a] < axis[bv, gi, a]
+                axis[bv[better], gi, a] = ac[bi[better], gi, a]
+                axis_worst[bv[better], gi, a] = pts[bi[better]]
+        drop = _rel_drop(old, cap[active])  # (active, G)
+        axis_drop = _rel_drop(axis_old, axis[active])  # (active, G, A)
         _track_folds(owner, pts, ev.n_branches, len(local) - len(bisect), bisect, ref_pt, ref_n, fold, fa, fb, na)
         n_pts[active] += new
         np.add.at(n_reach, owner, np.isfinite(ev.capacity_kg).astype(int))
-        change[active] = 0.0
-        change[best_v] = _rel_drop(old, cap[best_v])
-        # every axis has converged too
-        change[active] = np.maximum(change[active], np.nan_to_num(axis_drop.max(axis=1, initial=0.0)))
+        # every group and every axis has converged too
+        grp_drop = np.maximum(drop, np.nan_to_num(axis_drop.max(axis=2, initial=0.0)))
+        change[active] = grp_drop.max(axis=1)
+        grp_open[active] = grp_drop >= s.rel_tol
         axis_open[active] = (axis_drop >= s.rel_tol) & (0.5 ** (rounds + 1) >= s.finest_step)
         enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
         open_fold = fold[active] & (np.linalg.norm(fb[active] - fa[active], axis=1) > s.fold_tol_m)
-        # a closed bracket with capacity 0 is a singular fold: across it every axis falls to 0 as well
-        singular = active[fold[active] & ~open_fold & (cap[active] == 0.0)]
-        axis[singular] = 0.0
+        # a closed bracket with capacity 0 is a singular fold: across it every axis falls to 0 as well,
+        # in every group whose minimum is 0 there
+        singular = active[fold[active] & ~open_fold & (cap[active, 0] == 0.0)]
+        axis[singular] = np.where((cap[singular] == 0.0)[:, :, None], 0.0, axis[singular])
         converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold) | zero()[active]
         if 0.5 ** (rounds + 1) < s.finest_step:  # the patterns have reached their finest step: stop
             stopped[active] = ~open_fold
-    return VoxelMinima(voxel=start.voxel, capacity_kg=cap, axis_capacity_kg=axis, n_points=n_pts,
-                       n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst, binding=binding,
-                       rounds=rounds,
-                       n_evaluated=evaluated)
+    unseen = np.isinf(cap)  # groups no point held: NaN
+    cap[unseen] = np.nan
+    axis[np.isinf(axis)] = np.nan
+    worst[unseen] = np.nan
+    binding[unseen] = -1
+    per_config = {}
+    if C:
+        per_config = dict(config_capacity_kg=cap[:, 1:], config_axis_capacity_kg=axis[:, 1:], config_worst_m=worst[:, 1:],
+                          config_binding=binding[:, 1:], config_n_points=n_grp[:, 1:])
+    return VoxelMinima(voxel=start.voxel, capacity_kg=cap[:, 0], axis_capacity_kg=axis[:, 0], n_points=n_pts,
+                       n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst[:, 0],
+                       binding=binding[:, 0], rounds=rounds, n_evaluated=evaluated, **per_config)
+
+
+def _rows_in(rows: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """(n,) bool: each row of rows (n, k) is one of known (m, k) exactly."""
+    if not len(rows) or not len(known):
+        return np.zeros(len(rows), dtype=bool)
+    both = np.concatenate([known, rows])
+    _, inv = np.unique(both, axis=0, return_inverse=True)
+    return np.isin(inv.reshape(-1)[len(known):], inv.reshape(-1)[:len(known)])
 
 
 def _rel_drop(old: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """(old - new) / old elementwise, 0 where old is not positive (nothing left to fall)."""
-    return np.where(old > 0, (old - new) / np.where(old > 0, old, 1.0), 0.0)
+    """(old - new) / old elementwise, 0 where old is not positive (nothing left to fall); from +inf (not
+    seen before) 1 where new is finite, else 0."""
+    fin = np.isfinite(old)
+    with np.errstate(invalid="ignore"):  # inf - inf where old is not finite: replaced below
+        d = np.where(fin & (old > 0), (old - new) / np.where(fin & (old > 0), old, 1.0), 0.0)
+    return np.where(np.isinf(old), np.where(np.isinf(new), 0.0, 1.0), d)
 
 
 def _around(centres: np.ndarray, pattern: np.ndarray, h: float, grid: Grid, idx3: np.ndarray) -> np.ndarray:

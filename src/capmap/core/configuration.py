@@ -28,10 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik_closed
+from capmap.core import ik, ik_closed
 from capmap.core.kinematics import Chain
 
-__all__ = ["Configurations", "ShoulderElbowWrist", "Aspects", "configurations_of"]
+__all__ = ["Configurations", "ShoulderElbowWrist", "Aspects", "configurations_of", "arm_configurations"]
 
 
 class Configurations(ABC):
@@ -113,3 +113,9 @@ def configurations_of(chain: Chain, method: str, joints: tuple[int, ...] | None 
     if method in ("closed_form", "closed_form_reversed"):
         return ShoulderElbowWrist(chain, reversed=method.endswith("_reversed"), joints=joints)
     return Aspects(chain)
+
+
+def arm_configurations(arm) -> Configurations:
+    """The labels of a locked arm's chain (:class:`capmap.core.reduction.LockedArm`), by the IK method
+    that solves it; a label's joints are the arm's own numbers."""
+    return configurations_of(arm.chain, ik.method_for(arm.chain), arm.active_joint_numbers)

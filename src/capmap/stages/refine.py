@@ -9,22 +9,31 @@ import time
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.engine import SINGULAR
+from capmap.capacity.directions import grid_axes
+from capmap.capacity.engine import SINGULAR, point_capacity
 from capmap.capacity.refine import Evaluation, VoxelMinima, refine
-from capmap.capacity.tables import AXIS_COLUMNS, capacity_table, grid_of
+from capmap.capacity.tables import AXIS_COLUMNS, grid_of
+from capmap.core import ik
+from capmap.core.configuration import arm_configurations
+from capmap.core.dynamics import ArmDynamics
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.stages.arm import arm_task_from
 from capmap.stages.common import stage_config
 
-__all__ = ["REFINED_COLUMNS", "stage_refine", "stage_voxel_map"]
+__all__ = ["REFINED_COLUMNS", "CONFIGURATION_COLUMNS", "stage_refine", "stage_voxel_map"]
 
 REFINED_COLUMNS = ["capacity_kg", "binding", "n_points", "n_reachable", "last_change_rel", "converged",
                    "worst_x_m", "worst_y_m", "worst_z_m", *AXIS_COLUMNS]
+# voxels/configurations.parquet: one row per voxel x configuration that a point of the voxel holds
+CONFIGURATION_COLUMNS = ["i", "j", "k", "x_m", "y_m", "z_m", "configuration", "capacity_kg", "binding", "n_points",
+                         "converged", "worst_x_m", "worst_y_m", "worst_z_m", *AXIS_COLUMNS]
 
 
-def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int) -> None:
-    """Refine the reachable voxels with flat index % shards == shard; write one row per voxel."""
+def stage_refine(voxels: str, out: str, out_configurations: str, slice_json: str, shard: int, shards: int) -> None:
+    """Refine the reachable voxels with flat index % shards == shard, all branches and each
+    configuration; write one row per voxel (``out``) and one per voxel x configuration met there
+    (``out_configurations``)."""
     cfg = stage_config(slice_json)
     log = stage_logger(__name__, f"refine shard {shard + 1}/{shards}")
     at = arm_task_from(cfg.run)
@@ -43,12 +52,18 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
     flat = grid.flat(vox[["i", "j", "k"]].to_numpy())
     mine = vox[(flat % shards == shard) & (vox.n_reachable > 0).to_numpy()]
 
-    def evaluate(points: np.ndarray) -> Evaluation:
-        df = capacity_table(arm, np.arange(len(points)), points, rotation, motion, limits, dirs, chunk=2000)
-        return Evaluation(df.capacity_kg.to_numpy(), df[AXIS_COLUMNS].to_numpy(), codes(df.binding),
-                          df.n_branches.to_numpy())
+    dyn, axes, labels = ArmDynamics(arm), grid_axes(), arm_configurations(arm)
 
-    start = VoxelMinima(
+    def evaluate(points: np.ndarray) -> Evaluation:
+        parts = []
+        for r in range(0, len(points), 2000):
+            sol = ik.solve(arm, points[r:r + 2000], rotation)
+            pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits, axes, labels)
+            parts.append(Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions,
+                                    pc.config_capacity_kg, pc.config_axis_capacity_kg, pc.config_binding))
+        return Evaluation(*(np.concatenate([getattr(e, f) for e in parts]) for f in Evaluation.__dataclass_fields__))
+
+    start = VoxelMinima.with_configurations(len(labels.names),
         voxel=grid.flat(mine[["i", "j", "k"]].to_numpy()), capacity_kg=mine.capacity_kg.to_numpy(),
         axis_capacity_kg=mine[AXIS_COLUMNS].to_numpy(), n_points=mine.n_points.to_numpy(),
         n_reachable=mine.n_reachable.to_numpy(), last_change=np.zeros(len(mine)),
@@ -63,6 +78,9 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
 
     rng = np.random.default_rng([rf.seed, shard, shards])
     res = refine(grid, start, evaluate, settings, rng, progress)
+    write_configurations(res, grid, labels, names, out_configurations,
+                         datasets.provenance("refine", cfg.doc, shard=shard, shards=shards,
+                                             configurations=list(labels.names), labels=labels.description))
     i, j, k = np.unravel_index(res.voxel, grid.shape)
     df = pd.DataFrame({"i": i, "j": j, "k": k, "capacity_kg": res.capacity_kg,
                        "binding": np.array(names + [""])[res.binding], "n_points": res.n_points,
@@ -79,9 +97,29 @@ def stage_refine(voxels: str, out: str, slice_json: str, shard: int, shards: int
              f"{100 * np.median(drop) if len(drop) else 0:.2f} %) -> {out}")
 
 
-def stage_voxel_map(sampled: str, refined: list[str], out: str, slice_json: str) -> None:
+def write_configurations(res: VoxelMinima, grid, labels, limit_names: list[str], out: str, meta: dict) -> None:
+    """One row per voxel x configuration held by some evaluated point of the voxel."""
+    v, c = np.nonzero(np.isfinite(res.config_capacity_kg))
+    i, j, k = np.unravel_index(res.voxel[v], grid.shape)
+    centre = grid.centres(np.stack([i, j, k], axis=1)) if len(v) else np.zeros((0, 3))
+    w = res.config_worst_m[v, c]
+    df = pd.DataFrame({"i": i, "j": j, "k": k, "x_m": centre[:, 0], "y_m": centre[:, 1], "z_m": centre[:, 2],
+                       "configuration": pd.Categorical.from_codes(c, list(labels.names)),
+                       "capacity_kg": res.config_capacity_kg[v, c],
+                       "binding": np.array(limit_names + [""])[res.config_binding[v, c]],
+                       "n_points": res.config_n_points[v, c], "converged": res.converged[v],
+                       "worst_x_m": w[:, 0], "worst_y_m": w[:, 1], "worst_z_m": w[:, 2]})
+    for a, col in enumerate(AXIS_COLUMNS):
+        df[col] = res.config_axis_capacity_kg[v, c, a]
+    datasets.write(df[CONFIGURATION_COLUMNS], out, meta)
+
+
+def stage_voxel_map(sampled: str, refined: list[str], configurations: list[str], out: str, out_configurations: str,
+                    slice_json: str) -> None:
     """The sampled voxel table with each refined voxel's values (``capacity_sampled_kg`` keeps the
-    sampled minimum); without refinement (``voxels.refine: false``) the sampled table as is."""
+    sampled minimum); without refinement (``voxels.refine: false``) the sampled table as is. The
+    per-configuration shards gathered into ``out_configurations`` (no rows without refinement: the
+    configuration maps are the refinement's)."""
     cfg = stage_config(slice_json)
     vox = datasets.read(sampled)
     grid = grid_of(vox)
@@ -97,6 +135,16 @@ def stage_voxel_map(sampled: str, refined: list[str], out: str, slice_json: str)
         vox["binding"] = vox.binding.astype("category")
     datasets.write(vox, out, datasets.provenance("voxels", cfg.doc, grid=vox.attrs["capmap"]["grid"],
                                                   refined=bool(refined)))
+    parts = [datasets.read(p) for p in configurations]
+    names = parts[0].attrs["capmap"]["configurations"] if parts else []
+    conf = (pd.concat(parts, ignore_index=True) if parts else pd.DataFrame({c: [] for c in CONFIGURATION_COLUMNS}))
+    conf = conf.sort_values(["i", "j", "k", "configuration"], ignore_index=True) if len(conf) else conf
+    if len(conf):
+        conf["configuration"] = pd.Categorical(conf.configuration.astype(str), categories=names)
+        conf["binding"] = conf.binding.astype("category")
+    datasets.write(conf[CONFIGURATION_COLUMNS], out_configurations, datasets.provenance(
+        "voxels", cfg.doc, grid=vox.attrs["capmap"]["grid"], refined=bool(refined), configurations=names,
+        labels=parts[0].attrs["capmap"]["labels"] if parts else ""))
     reach = vox.n_reachable > 0
     drop = (vox.capacity_sampled_kg - vox.capacity_kg)[reach] / vox.capacity_sampled_kg[reach].where(
         vox.capacity_sampled_kg[reach] > 0, 1.0)
