@@ -10,6 +10,12 @@
 - ``python -m capmap arm ROBOT_FILE [--angle-deg A]`` prints, for the robot with each joint locked in
   turn (at A, clipped to the joint's range; default mid-range), the geometry of the remaining
   chain's axes and the IK method it gets, and whether that method finds every branch.
+- ``python -m capmap query point X Y Z [--payload M]`` the capacity at that position (the task
+  orientation) on every IK branch, named by configuration (binding limit, worst direction, joint
+  angles), and the run's voxel values there; ``python -m capmap query line AX AY AZ BX BY BZ
+  [--payload M] [--configuration C]`` verifies that straight line on a configuration (default: the
+  arm's own at the task start). Both read a run's config (``--configfile``, default
+  ``config/config.yaml``), answer without running the pipeline, and print a table (or ``--json``).
 """
 
 from __future__ import annotations
@@ -37,7 +43,20 @@ def main(argv: list[str] | None = None) -> int:
     arm = sub.add_parser("arm", help="the IK classification of a robot with each joint locked in turn")
     arm.add_argument("robot", help="a robot file (config/robots/*.yaml)")
     arm.add_argument("--angle-deg", type=float, default=None, help="the lock angle (default: mid-range)")
+    qry = sub.add_parser("query", help="the capacity at a point, or a straight line verified, without the pipeline")
+    qsub = qry.add_subparsers(dest="what", required=True)
+    qp = qsub.add_parser("point", help="every configuration's capacity at a position (task orientation)")
+    qp.add_argument("xyz", nargs=3, type=float, metavar=("X", "Y", "Z"), help="position, m (base frame)")
+    ql = qsub.add_parser("line", help="verify the straight line A -> B on one configuration")
+    ql.add_argument("ab", nargs=6, type=float, metavar=("AX", "AY", "AZ", "BX", "BY", "BZ"), help="ends, m")
+    ql.add_argument("--configuration", default=None, help="e.g. S+E-W+ (default: the arm's own at the task start)")
+    for q in (qp, ql):
+        q.add_argument("--payload", type=float, default=None, help="payload, kg")
+        q.add_argument("--configfile", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
+        q.add_argument("--json", action="store_true", help="answer as JSON")
     args = ap.parse_args(argv)
+    if args.command == "query":
+        return _query(args)
     if args.command == "check-config":
         return _check_config(args.files)
     if args.command == "arm":
@@ -88,6 +107,23 @@ def _arm(path: str, angle_deg: float | None) -> int:
     print(f"capmap: {robot.name}: {robot.n_joints} joints ({', '.join(robot.joint_names)})")
     for line in lock_classes(robot, angle_deg):
         print(f"  {line}")
+    return 0
+
+
+def _query(args) -> int:
+    from capmap.stages.query import answer_line, answer_point  # the robot libraries load only for a query
+
+    try:
+        if args.payload is not None and not (args.payload >= 0 and args.payload < float("inf")):
+            raise CapmapError(f"--payload {args.payload} must be a finite mass >= 0 kg")
+        if args.what == "point":
+            text = answer_point(args.configfile, args.xyz, args.payload, args.json)
+        else:
+            text = answer_line(args.configfile, args.ab[:3], args.ab[3:], args.payload, args.configuration, args.json)
+    except CapmapError as exc:
+        print(f"capmap: {exc}", file=sys.stderr)
+        return 1
+    print(text)
     return 0
 
 

@@ -112,7 +112,11 @@ def test_configuration_minima_within_one_percent_of_brute_force(scenario_configu
     uniform points of the voxel on that configuration, attained at the stored point (evaluated
     again), and no configuration that brute force meets missing; the all-branch value never above any
     configuration's. Planted: without the compasses around each configuration's worst points, 4
-    configuration and 52 per-axis values overstate on these voxels."""
+    configuration and 52 per-axis values overstate on these voxels. Measured over 8 seeds x 40 voxels
+    (11-18): the all-branch values never above 1 %, the configuration values in one voxel (seed 16:
+    4 of its configurations by 2-7 %, 37 per-axis values; a minimum along a voxel edge that the
+    compass, converging on another local minimum of the same edge, does not reach) - the refinement
+    is a sampling method, its convergence test statistical."""
     arm, evaluate, C = scenario_configurations
     rng = np.random.default_rng(13)
     grid, start = _voxels(arm, evaluate, 40, rng)

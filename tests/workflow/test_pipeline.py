@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import re
 import shutil
 import subprocess
+import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -198,6 +200,37 @@ def test_plan_and_verify_outputs(run_dir):
     for png in ("workspace", "torques", "base_force", "base_moment"):
         assert (res / f"verify/payload_1500kg/{png}.png").stat().st_size > 10_000
     assert "1500 kg, direct" in (res / "verify/summary.md").read_text()
+
+
+def _query(tmp, cfg, *args) -> dict:
+    res = subprocess.run([sys.executable, "-m", "capmap", "query", *args, "--configfile", str(cfg), "--json"], cwd=tmp,
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    return json.loads(res.stdout)
+
+
+def test_query_line_equals_the_verify_stage_and_point_reads_the_map(run_dir):
+    """``query line`` from the task's start to its goal on the arm's own configuration is the verify
+    stage's direct line; ``query point`` reads the run's voxel value where the point lies."""
+    tmp, cfg = run_dir
+    res = tmp / "results" / "tiny"
+    got = _query(tmp, cfg, "line", *map(str, X_INI), *map(str, X_DES), "--payload", "1500")
+    row = pd.read_csv(res / "verify/summary.csv").set_index("path").loc["direct"]
+    for col in ("length_m", "duration_s", "capacity_kg", "peak_load_pct"):
+        assert got[col] == pytest.approx(row[col], rel=1e-12, abs=1e-9), col
+    assert got["feasible"] == bool(row.feasible) and got["binding"] == row.binding
+    assert got["margin_pct"] == pytest.approx(row.min_margin_pct, rel=1e-12, abs=1e-9)
+    ts = pd.read_parquet(res / "verify/payload_1500kg/timeseries.parquet")
+    q0 = ts[ts.path == "direct"].iloc[0]
+    assert all(got[f"q_start_j{j}_deg"] == pytest.approx(q0[f"q_j{j}_deg"], abs=1e-9) for j in range(2, 8))
+    vox = pd.read_parquet(res / "voxels/voxels.parquet")
+    p = X_DES
+    g = vox.attrs["capmap"]["grid"]
+    i, j, k = ((p - np.array(g["lower_m"])) // g["edge_m"]).astype(int)
+    pt = _query(tmp, cfg, "point", *map(str, p))
+    assert tuple(pt["voxel"]["voxel"]) == (i, j, k)
+    assert pt["voxel"]["map_kg"] == pytest.approx(vox.set_index(["i", "j", "k"]).loc[(i, j, k), "capacity_kg"])
+    assert len(pt["branches"]) >= 1 and all(b["configuration"] for b in pt["branches"])
 
 
 def test_follow_outputs(run_dir):

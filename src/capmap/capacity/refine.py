@@ -298,12 +298,13 @@ def _rows_in(rows: np.ndarray, known: np.ndarray) -> np.ndarray:
 
 
 def _rel_drop(old: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """(old - new) / old elementwise, 0 where old is not positive (nothing left to fall); from +inf (not
-    seen before) 1 where new is finite, else 0."""
+    """(old - new) / old elementwise, 0 where old is not positive or new is 0 (nothing left to fall);
+    from +inf (not seen before) 1 where new is finite and positive, else 0."""
     fin = np.isfinite(old)
     with np.errstate(invalid="ignore"):  # inf - inf where old is not finite: replaced below
         d = np.where(fin & (old > 0), (old - new) / np.where(fin & (old > 0), old, 1.0), 0.0)
-    return np.where(np.isinf(old), np.where(np.isinf(new), 0.0, 1.0), d)
+    d = np.where(np.isinf(old), np.where(np.isinf(new), 0.0, 1.0), d)
+    return np.where(new == 0.0, 0.0, d)
 
 
 def _around(centres: np.ndarray, pattern: np.ndarray, h: float, grid: Grid, idx3: np.ndarray) -> np.ndarray:

@@ -1,0 +1,134 @@
+"""Questions answered directly, without the pipeline: what can the arm carry at this point, on each of
+its configurations, and along this straight line on one configuration.
+
+:func:`point_query` solves every IK branch at the point (the task orientation), labels each by its
+configuration (:mod:`capmap.core.configuration`) and gives each branch's exact capacity over the
+run's motion directions (the capacity engine, one branch at a time: the worst direction, the binding
+limit). :func:`line_query` starts on the configuration asked (default: the one of a reference
+configuration, the arm's own), verifies the straight line as the verify stage verifies a path
+(:func:`capmap.capacity.verification.verify_path` and :func:`~capmap.capacity.verification.judge`)
+and returns its verdict.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from capmap.capacity.directions import Directions
+from capmap.capacity.engine import Motion, point_capacity
+from capmap.capacity.verification import PathResult, PathVerdict, judge, verify_path
+from capmap.core import ik
+from capmap.core.configuration import Configurations
+from capmap.core.dynamics import ArmDynamics
+from capmap.core.limits import AffineLimits
+from capmap.errors import CapmapError
+
+__all__ = ["ArmQuestion", "PointAnswer", "point_query", "LineAnswer", "line_query"]
+
+
+@dataclass(frozen=True)
+class ArmQuestion:
+    """What every question is asked of: the locked arm's dynamics, the task's end-effector ``rotation``
+    (3, 3), ``motion``, the load ``limits`` on the arm's outputs and its configuration ``labels``."""
+
+    dyn: ArmDynamics
+    rotation: np.ndarray
+    motion: Motion
+    limits: AffineLimits
+    labels: Configurations
+
+
+@dataclass(frozen=True)
+class PointAnswer:
+    """Every IK branch at ``point_m`` (3,) m, K of them, sorted by configuration: configuration (K,)
+    names, q_rad (K, n_active) joint angles, capacity_kg (K,), binding (K,) the limit that stops a
+    heavier payload (``singular``: an exactly singular Jacobian), worst_u (K, 3) the motion direction
+    of the minimum (unit vector, base frame)."""
+
+    point_m: np.ndarray
+    configuration: tuple[str, ...]
+    q_rad: np.ndarray
+    capacity_kg: np.ndarray
+    binding: tuple[str, ...]
+    worst_u: np.ndarray
+
+
+def point_query(arm_q: ArmQuestion, directions: Directions, point_m) -> PointAnswer:
+    """The capacity of every IK branch at ``point_m`` (3,) m over ``directions`` (the run's set).
+    Raises :class:`CapmapError` (key ``point``) where no branch reaches it at the task orientation."""
+    p = np.asarray(point_m, dtype=float).reshape(3)
+    if not np.all(np.isfinite(p)):
+        raise CapmapError(f"{{point}} = {p.tolist()} is not a finite position", point="the point")
+    q, lab = _branches(arm_q, p)
+    K = len(q)
+    pc = point_capacity(arm_q.dyn, q[:, None, :], np.ones(K, dtype=int), directions, arm_q.motion, arm_q.limits)
+    order = np.lexsort((pc.capacity_kg, lab))
+    d = np.where(pc.direction >= 0, pc.direction, 0)
+    return PointAnswer(point_m=p, configuration=tuple(arm_q.labels.names[i] for i in lab[order]), q_rad=q[order],
+                       capacity_kg=pc.capacity_kg[order], binding=tuple(pc.names[b] for b in pc.binding[order]),
+                       worst_u=directions.u[d[order]])
+
+
+@dataclass(frozen=True)
+class LineAnswer:
+    """A straight line verified on one configuration: its name, the start configuration q_start_rad
+    (n_active,), the verified path and its verdict carrying the payload."""
+
+    configuration: str
+    q_start_rad: np.ndarray
+    result: PathResult
+    verdict: PathVerdict
+
+
+def line_query(arm_q: ArmQuestion, a_m, b_m, payload_kg: float, dt_s: float, configuration: str | None = None,
+               q_reference: np.ndarray | None = None) -> LineAnswer:
+    """Verify the straight line a_m -> b_m (3,) m carrying payload_kg, samples dt_s apart, starting on
+    ``configuration`` (a name of ``arm_q.labels``; default: that of q_reference (n_active,) rad) at
+    a_m: the branch of that configuration nearest q_reference (the first if none). Raises
+    :class:`CapmapError` (keys ``configuration``, ``start``) for an unknown configuration or one that
+    does not reach a_m."""
+    names = arm_q.labels.names
+    if configuration is None:
+        if q_reference is None:
+            raise CapmapError("{configuration}: give a configuration or a reference configuration",
+                              configuration="the configuration")
+        want = int(arm_q.labels.labels(np.asarray(q_reference, dtype=float)[None])[0])
+    elif configuration in names:
+        want = names.index(configuration)
+    else:
+        raise CapmapError(f"{{configuration}} {configuration!r} is not one of this arm's: {', '.join(names)}",
+                          configuration="the configuration")
+    a, b = (np.asarray(x, dtype=float).reshape(3) for x in (a_m, b_m))
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))) or np.allclose(a, b):
+        raise CapmapError(f"{{start}}: the line [{', '.join(f'{v:g}' for v in a)}] -> "
+                          f"[{', '.join(f'{v:g}' for v in b)}] m needs two distinct finite ends", start="the line")
+    q, lab = _branches(arm_q, a)
+    if not np.any(lab == want):
+        raise CapmapError(f"{{configuration}} {names[want]} does not reach the line's start "
+                          f"[{', '.join(f'{v:g}' for v in a)}] m (there: {', '.join(names[i] for i in np.unique(lab))})",
+                          configuration="the configuration")
+    q = q[lab == want]
+    k = 0 if q_reference is None else int(np.argmin(np.abs(_wrap(q - q_reference)).max(axis=1)))
+    q0 = q[k]
+    res = verify_path(arm_q.dyn, np.stack([a, b]), arm_q.rotation, q0, arm_q.motion, dt_s, arm_q.limits)
+    _, verdict = judge(res, arm_q.dyn.arm, arm_q.limits, payload_kg)
+    return LineAnswer(configuration=names[want], q_start_rad=q0, result=res, verdict=verdict)
+
+
+def _branches(arm_q: ArmQuestion, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every IK branch at p (3,) m: q (K, n_active) rad and its configuration labels (K,); raises
+    (key ``point``) where there is none."""
+    arm = arm_q.dyn.arm
+    sol = ik.solve(arm, p[None], arm_q.rotation)
+    K = int(sol.n_solutions[0])
+    if K == 0:
+        raise CapmapError(f"{{point}} [{', '.join(f'{v:g}' for v in p)}] m is not reachable at the task orientation "
+                          f"(no IK solution with joint {arm.locked_joint} locked)", point="the point")
+    q = sol.q[0, :K]
+    return q, arm_q.labels.labels(q)
+
+
+def _wrap(x: np.ndarray) -> np.ndarray:
+    return (x + np.pi) % (2 * np.pi) - np.pi

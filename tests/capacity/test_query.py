@@ -1,0 +1,92 @@
+"""The questions answered directly (capmap.capacity.query) against independent computations: the IK
+branches of a random-restart solver, and each branch's capacity from Pinocchio's Jacobian and
+classical acceleration (the joint motion), Craig's recursive Newton-Euler (the loads) and an LP (the
+largest payload), over the same directions."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+
+from capmap.capacity.directions import sphere
+from capmap.capacity.engine import LoadLimits, Motion
+from capmap.capacity.query import ArmQuestion, line_query, point_query
+from capmap.config.robot_file import load
+from capmap.core.configuration import arm_configurations
+from capmap.core.dynamics import ArmDynamics
+from capmap.core.reduction import lock
+from capmap.errors import CapmapError
+from tests.reference.ik_oracle import DHArm, solve_all
+from tests.reference.lp import lp_capacity
+from tests.reference.newton_euler import newton_euler
+from tests.scenario import SSRMS_YAML, TASK_R, X_DES, X_INI
+
+MOTION = Motion(0.15, 0.03)
+DIRS = sphere(24)
+
+
+@pytest.fixture(scope="module")
+def question():
+    robot = load(SSRMS_YAML)
+    arm = lock(robot, 1, np.deg2rad(100))
+    limits = LoadLimits.uniform(7, 700, 200, 500).for_arm(arm)
+    return robot, ArmQuestion(ArmDynamics(arm), TASK_R, MOTION, limits, arm_configurations(arm))
+
+
+def _reference_capacity(robot, arm, q_active: np.ndarray, limit: np.ndarray) -> float:
+    """min over DIRS of the LP capacity of the state moving along u at v_max, a_max: joint rates from
+    Pinocchio's frame Jacobian and classical acceleration (LOCAL_WORLD_ALIGNED), loads by Newton-Euler."""
+    model = arm.reduced_model
+    data = model.createData()
+    f = arm.reduced_ee_frame_id
+    J = pin.computeFrameJacobian(model, data, q_active, f, pin.LOCAL_WORLD_ALIGNED)
+    best = np.inf
+    for u in DIRS.u:
+        qd = np.linalg.solve(J, np.r_[MOTION.v_max_mps * u, 0, 0, 0])
+        pin.forwardKinematics(model, data, q_active, qd, np.zeros(6))
+        bias = pin.getFrameClassicalAcceleration(model, data, f, pin.LOCAL_WORLD_ALIGNED).vector
+        qdd = np.linalg.solve(J, np.r_[MOTION.a_max_mps2 * u, 0, 0, 0] - bias)
+        full = [np.insert(x, arm.locked_joint - 1, v) for x, v in ((q_active, arm.locked_angle_rad), (qd, 0), (qdd, 0))]
+        t0, _, f0, m0 = newton_euler(*full, robot.gravity, 0.0, robot.base_com)
+        t1, _, f1, m1 = newton_euler(*full, robot.gravity, 1.0, robot.base_com)
+        keep = np.arange(7) != arm.locked_joint - 1
+        y0 = np.concatenate([t0[keep], f0, m0])
+        best = min(best, lp_capacity(y0, np.concatenate([t1[keep], f1, m1]) - y0, limit))
+    return best
+
+
+@pytest.mark.parametrize("point", [X_INI, X_DES, np.array([1.5, 3.0, 3.0])])
+def test_point_query_equals_an_independent_computation_on_every_configuration(question, point):
+    robot, q = question
+    arm = q.dyn.arm
+    ans = point_query(q, DIRS, point)
+    # the branches: those of a random-restart solver on the DH arm, no more, no fewer
+    oracle = solve_all(DHArm(yaml.safe_load(SSRMS_YAML.read_text()), 1, 100.0),
+                       _pose(point)[None], 64, np.random.default_rng(5))[0]
+    assert len(ans.configuration) == len(oracle) >= 4
+    assert len(set(ans.configuration)) == len(ans.configuration)  # closed-form chain: one branch per configuration
+    wrap = np.mod(ans.q_rad[:, None, :] - oracle[None] + np.pi, 2 * np.pi) - np.pi
+    assert np.all(np.abs(wrap).max(axis=2).min(axis=1) < 1e-6)
+    for k in range(len(ans.configuration)):
+        expect = _reference_capacity(robot, arm, ans.q_rad[k], q.limits.limit)
+        assert ans.capacity_kg[k] == pytest.approx(expect, rel=1e-7, abs=1e-6), ans.configuration[k]
+    assert len(set(np.round(ans.capacity_kg, 3))) > 1  # the configurations differ (else this shows little)
+
+
+def _pose(p):
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = TASK_R, p
+    return T
+
+
+def test_line_query_on_a_configuration_and_bad_questions(question):
+    _, q = question
+    ans = line_query(q, X_INI, X_DES, 1500.0, 0.5, "S+E-W+")
+    assert ans.configuration == "S+E-W+" and q.labels.names[q.labels.labels(ans.q_start_rad[None])[0]] == "S+E-W+"
+    assert ans.verdict.length_m == pytest.approx(np.linalg.norm(X_DES - X_INI), rel=1e-12)
+    with pytest.raises(CapmapError, match="not one of this arm's"):
+        line_query(q, X_INI, X_DES, 1500.0, 0.5, "elbow-up")
+    with pytest.raises(CapmapError, match="not reachable"):
+        point_query(q, DIRS, [100.0, 0, 0])
+    with pytest.raises(CapmapError, match="distinct finite"):
+        line_query(q, X_INI, X_INI, 1500.0, 0.5, "S+E-W+")
