@@ -48,7 +48,7 @@ def scenario_configurations():
         sol = ik.solve(arm, p, TASK_R)
         pc = point_capacity(dyn, sol.q, sol.n_solutions, DIRS, Motion(0.15, 0.03), limits, AXES, labels)
         return Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions, pc.config_capacity_kg,
-                          pc.config_axis_capacity_kg, pc.config_binding)
+                          pc.config_axis_capacity_kg, pc.config_binding, pc.config_branches)
 
     return arm, evaluate, len(labels.names)
 

@@ -54,18 +54,25 @@ def test_slider_levels_start_at_zero_reach_the_top_and_hold_the_payloads():
 
 
 def test_the_3d_page_is_offline_and_holds_every_voxel_and_path():
+    """Two maps (the arm's configuration first, the bound second): each map's voxels in the page's data,
+    the first shown at the first payload, a button per map, the paths, start and goal."""
     rng = np.random.default_rng(0)
     xyz = rng.uniform(-5, 5, (300, 3))
     cap = rng.uniform(0, 5000, 300)
+    bound = np.minimum(cap, rng.uniform(0, 5000, 300))[:250]
     path = PlannedPath("planned path, 1500 kg (3.00 m)", np.array([[0, 0, 0], [1, 0, 0], [1, 2, 0.0]]))
-    page = capacity_3d_html(xyz, cap, 0.75, np.zeros(3), np.array([1, 2, 0.0]), [path], (1500.0,), "test map")
+    page = capacity_3d_html([("configuration S+E+W+", xyz, cap), ("any configuration", xyz[:250], bound)], 0.75,
+                            np.zeros(3), np.array([1, 2, 0.0]), [path], (1500.0,), "test map")
     assert not re.search(r"<script[^>]+src=", page)  # plotly.js inlined, nothing fetched at view time
-    assert "Plotly.restyle" in page and "plotly_sliderchange" in page
-    data = json.loads(re.search(r"const V = (\{.*?\});\n", page).group(1))
-    np.testing.assert_allclose(np.c_[data["x"], data["y"], data["z"]], xyz, atol=1e-4)
-    np.testing.assert_allclose(data["c"], cap, atol=0.01)
-    assert 1500.0 in data["levels"]
+    assert "Plotly.restyle" in page and "plotly_sliderchange" in page and "plotly_buttonclicked" in page
+    data = json.loads(re.search(r"const M = (\[.*?\]), L = ", page).group(1))
+    levels = json.loads(re.search(r", L = (\[.*?\]);\n", page).group(1))
+    for m, (x, c) in zip(data, ((xyz, cap), (xyz[:250], bound))):
+        np.testing.assert_allclose(np.c_[m["x"], m["y"], m["z"]], x, atol=1e-4)
+        np.testing.assert_allclose(m["c"], c, atol=0.01)
+    assert 1500.0 in levels
     fig = json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
     shown = next(t for t in fig if t.get("name") == "voxels carrying the payload")
     assert len(shown["x"]) == int((cap >= 1500).sum()) and min(shown["marker"]["color"]) >= 1500
     assert any(t.get("name") == path.label for t in fig) and {"start", "goal", "direct line"} <= {t.get("name") for t in fig}
+    assert re.search(r'"label":\s*"configuration S\+E\+W\+"', page) and re.search(r'"label":\s*"any configuration"', page)

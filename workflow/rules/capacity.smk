@@ -116,7 +116,9 @@ rule summary:
     """Capacity summary table and workspace figure (in the report)."""
     input:
         voxels=out("voxels/voxels.parquet"),
+        configurations=out("voxels/configurations.parquet"),
         points=out("voxels/points.parquet"),
+        waypoints=expand(out("plan/payload_{payload}kg/waypoints.parquet"), payload=PAYLOADS),
     output:
         csv=out("summary/capacity_summary.csv"),
         md=out("summary/capacity_summary.md"),
@@ -135,6 +137,7 @@ rule capacity_3d:
     """Interactive 3D view of the map (self-contained HTML): voxels by capacity, payload slider, paths."""
     input:
         voxels=out("voxels/voxels.parquet"),
+        configurations=out("voxels/configurations.parquet"),
         waypoints=expand(out("plan/payload_{payload}kg/waypoints.parquet"), payload=PAYLOADS),
     output:
         report(out("summary/capacity_3d.html"), category="Capacity map", caption="../report/capacity_3d.rst"),
@@ -191,6 +194,7 @@ rule verify_plots:
     """Capacity workspace with both paths; torques, base force and moment against their limits."""
     input:
         voxels=out("voxels/voxels.parquet"),
+        configurations=out("voxels/configurations.parquet"),
         timeseries=out("verify/payload_{payload}kg/timeseries.parquet"),
     output:
         workspace=report(out("verify/payload_{payload}kg/workspace.png"), category="Verification",
@@ -296,6 +300,7 @@ rule verify_task_plots:
     """Workspace with both paths; loads against their limits (one further task)."""
     input:
         voxels=out("voxels/voxels.parquet"),
+        configurations=out("voxels/configurations.parquet"),
         timeseries=out("tasks/{task}/timeseries.parquet"),
     output:
         workspace=report(out("tasks/{task}/workspace.png"), category="Verification", subcategory="task {task}",

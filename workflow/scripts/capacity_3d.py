@@ -1,5 +1,6 @@
 from capmap.io.logs import call
 from capmap.stages.capacity_figures import stage_capacity_3d
 
-call(stage_capacity_3d, voxels=snakemake.input.voxels, waypoints=list(snakemake.input.waypoints),
-     out_html=snakemake.output[0], slice_json=snakemake.params.slice, log=snakemake.log[0])
+call(stage_capacity_3d, voxels=snakemake.input.voxels, configurations=snakemake.input.configurations,
+     waypoints=list(snakemake.input.waypoints), out_html=snakemake.output[0], slice_json=snakemake.params.slice,
+     log=snakemake.log[0])

@@ -154,6 +154,7 @@ class PointCapacity:
     config_capacity_kg: np.ndarray | None = None
     config_axis_capacity_kg: np.ndarray | None = None
     config_binding: np.ndarray | None = None
+    config_branches: np.ndarray | None = None  # (N, C) int: the point's IK solutions of each configuration
 
 
 def argmin_per_group(values: np.ndarray, groups: np.ndarray) -> np.ndarray:
@@ -227,7 +228,9 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
             sel = argmin_per_group(c_cfg, group)
             cc.reshape(-1)[group[sel]] = c_cfg[sel]
             cb.reshape(-1)[group[sel]] = b_cfg[sel]
-        per_config = {"config_capacity_kg": cc, "config_binding": cb}
+        nb = np.zeros((N, C), dtype=int)
+        np.add.at(nb, (pts, lab), 1)
+        per_config = {"config_capacity_kg": cc, "config_binding": cb, "config_branches": nb}
         if axes is not None:
             ca = np.full((N, C, len(axes.pairs)), np.inf)
             if len(pts):

@@ -77,7 +77,8 @@ class Evaluation:
     binding (N,) int: the binding limit's index (-1 where unreachable); n_branches (N,) int: IK
     branches at the point (0 where unreachable). Per configuration label (optional, C labels):
     config_capacity_kg (N, C), config_axis_capacity_kg (N, C, A), config_binding (N, C), NaN / -1
-    where the point has no IK solution of that configuration."""
+    where the point has no IK solution of that configuration; config_branches (N, C) int the point's
+    solutions of each configuration."""
 
     capacity_kg: np.ndarray
     axis_capacity_kg: np.ndarray
@@ -86,6 +87,7 @@ class Evaluation:
     config_capacity_kg: np.ndarray | None = None
     config_axis_capacity_kg: np.ndarray | None = None
     config_binding: np.ndarray | None = None
+    config_branches: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -186,9 +188,8 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     converged = ~reach0 | (zero() & ~np.any(np.isinf(cap[:, 1:]), axis=1))
     stopped = np.zeros(V, dtype=bool)  # still falling when the patterns reached their finest step
     idx3 = np.stack(np.unravel_index(start.voxel, grid.shape), axis=1)
-    ref_pt, ref_n = np.full((V, 3), np.nan), np.full(V, -1)  # a first point and its branch count
-    fold = np.zeros(V, dtype=bool)  # a bracket [a, b] of different branch counts is known
-    fa, fb, na = np.zeros((V, 3)), np.zeros((V, 3)), np.zeros(V, dtype=int)
+    fs = _Folds.empty(V, C)  # per voxel: a bracket [a, b] of different branch counts, once one is seen
+    fold, fa, fb = fs.fold, fs.fa, fs.fb
     axis_worst = np.repeat(worst[:, :, None, :], A, axis=2)  # (V, G, A, 3): where each axis minimum is
     axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their pattern continues)
     grp_open = np.ones(cap.shape, dtype=bool)  # group minima still falling
@@ -257,20 +258,37 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
                 axis_worst[bv[better], gi, a] = pts[bi[better]]
         drop = _rel_drop(old, cap[active])  # (active, G)
         axis_drop = _rel_drop(axis_old, axis[active])  # (active, G, A)
-        _track_folds(owner, pts, ev.n_branches, len(local) - len(bisect), bisect, ref_pt, ref_n, fold, fa, fb, na)
+        cnt = ev.config_branches if C else np.zeros((len(pts), 0), dtype=int)
+        fs.track(owner, pts, ev.n_branches, cnt, len(local) - len(bisect), bisect)
         n_pts[active] += new
         np.add.at(n_reach, owner, np.isfinite(ev.capacity_kg).astype(int))
+        open_fold = fold[active] & (np.linalg.norm(fb[active] - fa[active], axis=1) > s.fold_tol_m)
+        # a closed bracket with capacity 0 is a singular fold: across it every axis falls to 0 as well; the
+        # configurations whose solutions it ends (different counts at its two ends, within fold_tol_m of it)
+        # fall to 0 there, their worst point the bracket's end on their side
+        singular = active[fold[active] & ~open_fold & (cap[active, 0] == 0.0)]
+        ends = np.zeros((len(singular), 1 + C), dtype=bool)
+        ends[:, 1:] = fs.ca[singular] != fs.cb[singular]
+        on_b = fs.cb[singular] > fs.ca[singular]
+        for g in range(1, 1 + C):
+            e = ends[:, g]
+            worst[singular[e], g] = np.where(on_b[e, g - 1][:, None], fb[singular[e]], fa[singular[e]])
+            binding[singular[e], g] = binding[singular[e], 0]
+        cap[singular] = np.where(ends, 0.0, cap[singular])
+        axis[singular] = np.where((cap[singular] == 0.0)[:, :, None], 0.0, axis[singular])
+        # the configurations an open fold ends (different solution counts at its two ends) wait for the
+        # bisection: their minimum lies at the fold, where the bracket closes; no pattern for them
+        pending = np.zeros((len(active), 1 + C), dtype=bool)
+        pending[:, 1:] = open_fold[:, None] & (fs.ca[active] != fs.cb[active])
+        # a group whose value and axes are all 0 has nothing left to fall
+        done = (cap[active] == 0.0) & np.all(np.nan_to_num(axis[active], nan=0.0) == 0.0, axis=2)
         # every group and every axis has converged too
-        grp_drop = np.maximum(drop, np.nan_to_num(axis_drop.max(axis=2, initial=0.0)))
+        quiet = pending | done
+        grp_drop = np.where(quiet, 0.0, np.maximum(drop, np.nan_to_num(axis_drop.max(axis=2, initial=0.0))))
         change[active] = grp_drop.max(axis=1)
         grp_open[active] = grp_drop >= s.rel_tol
-        axis_open[active] = (axis_drop >= s.rel_tol) & (0.5 ** (rounds + 1) >= s.finest_step)
+        axis_open[active] = (axis_drop >= s.rel_tol) & ~quiet[:, :, None] & (0.5 ** (rounds + 1) >= s.finest_step)
         enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
-        open_fold = fold[active] & (np.linalg.norm(fb[active] - fa[active], axis=1) > s.fold_tol_m)
-        # a closed bracket with capacity 0 is a singular fold: across it every axis falls to 0 as well,
-        # in every group whose minimum is 0 there
-        singular = active[fold[active] & ~open_fold & (cap[active, 0] == 0.0)]
-        axis[singular] = np.where((cap[singular] == 0.0)[:, :, None], 0.0, axis[singular])
         converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold) | zero()[active]
         if 0.5 ** (rounds + 1) < s.finest_step:  # the patterns have reached their finest step: stop
             stopped[active] = ~open_fold
@@ -314,25 +332,49 @@ def _around(centres: np.ndarray, pattern: np.ndarray, h: float, grid: Grid, idx3
     return np.clip(centres[:, None, :] + h * pattern, lo, lo + grid.edge_m).reshape(-1, 3)
 
 
-def _track_folds(owner, pts, n_br, n_first_local, bisect, ref_pt, ref_n, fold, fa, fb, na) -> None:
-    """Update the fold brackets in place: a midpoint (the points ``n_first_local`` onwards of the
-    local ones, one per voxel of ``bisect``) replaces the end whose branch count it shares; a
-    voxel without a bracket gets one from any point whose count differs from its first point's."""
-    mids = np.arange(n_first_local, n_first_local + len(bisect))
-    for i, v in zip(mids, bisect):
-        if n_br[i] == na[v]:
-            fa[v] = pts[i]
-        else:
-            fb[v] = pts[i]
-    seen = ref_n >= 0
-    first = np.unique(owner, return_index=True)
-    new_v = first[0][~seen[first[0]]]
-    ref_pt[new_v] = pts[first[1][~seen[first[0]]]]
-    ref_n[new_v] = n_br[first[1][~seen[first[0]]]]
-    differ = np.flatnonzero((n_br != ref_n[owner]) & ~fold[owner])
-    if len(differ):
-        v, i = np.unique(owner[differ], return_index=True)
-        j = differ[i]
-        fold[v] = True
-        fa[v], na[v] = ref_pt[v], ref_n[v]
-        fb[v] = pts[j]
+@dataclass
+class _Folds:
+    """Fold brackets per voxel (V,): ``fold`` whether one is known, its ends fa, fb (V, 3) m, the branch
+    count at fa (na) and each configuration's solution counts at both ends ca, cb (V, C); a first
+    point of each voxel (ref_*) to compare later points with."""
+
+    fold: np.ndarray
+    fa: np.ndarray
+    fb: np.ndarray
+    na: np.ndarray
+    ca: np.ndarray
+    cb: np.ndarray
+    ref_pt: np.ndarray
+    ref_n: np.ndarray
+    ref_c: np.ndarray
+
+    @classmethod
+    def empty(cls, V: int, C: int) -> "_Folds":
+        return cls(np.zeros(V, dtype=bool), np.zeros((V, 3)), np.zeros((V, 3)), np.zeros(V, dtype=int),
+                   np.zeros((V, C), dtype=int), np.zeros((V, C), dtype=int), np.full((V, 3), np.nan), np.full(V, -1),
+                   np.zeros((V, C), dtype=int))
+
+    def track(self, owner, pts, n_br, cnt, n_first_local, bisect) -> None:
+        """Update in place: a midpoint (the points ``n_first_local`` onwards of the local ones, one per
+        voxel of ``bisect``) replaces the end whose branch count it shares; a voxel without a bracket
+        gets one from any point whose count differs from its first point's. ``cnt`` (N, C) the points'
+        solutions per configuration."""
+        mids = np.arange(n_first_local, n_first_local + len(bisect))
+        for i, v in zip(mids, bisect):
+            if n_br[i] == self.na[v]:
+                self.fa[v], self.ca[v] = pts[i], cnt[i]
+            else:
+                self.fb[v], self.cb[v] = pts[i], cnt[i]
+        seen = self.ref_n >= 0
+        vs, first = np.unique(owner, return_index=True)
+        new = ~seen[vs]
+        self.ref_pt[vs[new]] = pts[first[new]]
+        self.ref_n[vs[new]] = n_br[first[new]]
+        self.ref_c[vs[new]] = cnt[first[new]]
+        differ = np.flatnonzero((n_br != self.ref_n[owner]) & ~self.fold[owner])
+        if len(differ):
+            v, i = np.unique(owner[differ], return_index=True)
+            j = differ[i]
+            self.fold[v] = True
+            self.fa[v], self.na[v], self.ca[v] = self.ref_pt[v], self.ref_n[v], self.ref_c[v]
+            self.fb[v], self.cb[v] = pts[j], cnt[j]

@@ -20,7 +20,8 @@ from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
 from capmap.core.robot import Robot
 
-__all__ = ["AXIS_COLUMNS", "model_table", "sample_table", "capacity_table", "voxel_table", "grid_meta", "grid_of"]
+__all__ = ["AXIS_COLUMNS", "model_table", "sample_table", "capacity_table", "voxel_table", "grid_meta", "grid_of",
+           "configuration_voxels"]
 
 AXIS_COLUMNS = [f"capacity_along_{label}_kg" for label in AXIS_LABELS]  # moves along the 13 grid axes
 
@@ -149,3 +150,30 @@ def grid_of(vox: pd.DataFrame) -> Grid:
     """The voxel grid recorded in a voxels dataset's provenance."""
     g = vox.attrs["capmap"]["grid"]
     return Grid(lower=np.asarray(g["lower_m"], dtype=float), shape=tuple(g["shape"]), edge_m=float(g["edge_m"]))
+
+
+def configuration_voxels(vox: pd.DataFrame, conf: pd.DataFrame, name: str) -> pd.DataFrame | None:
+    """The voxel map of one configuration ``name``, in the voxel map's layout: ``vox`` (the all-branch
+    map, every voxel of the grid) with capacity_kg, binding, the worst point, the per-axis values and
+    n_reachable (the evaluated points holding the configuration) of that configuration from ``conf``
+    (voxels/configurations.parquet); a voxel it does not reach: NaN, n_reachable 0. ``bound_kg``: the
+    all-branch value. None when ``conf`` has no rows (no refinement: no configuration maps)."""
+    if not len(conf):
+        return None
+    mine = conf[conf.configuration.astype(str) == name]
+    out = vox.copy()
+    out["bound_kg"] = vox.capacity_kg.where(vox.n_reachable > 0)
+    grid = grid_of(vox)
+    rows = grid.flat(mine[["i", "j", "k"]].to_numpy())
+    for col in ("capacity_kg", "worst_x_m", "worst_y_m", "worst_z_m", *AXIS_COLUMNS):
+        values = np.full(len(out), np.nan)
+        values[rows] = mine[col].to_numpy()
+        out[col] = values
+    n = np.zeros(len(out), dtype=int)
+    n[rows] = mine.n_points.to_numpy()
+    out["n_reachable"] = n
+    binding = np.full(len(out), "", dtype=object)
+    binding[rows] = mine.binding.astype(str).to_numpy()
+    out["binding"] = pd.Categorical(binding)
+    out.attrs = {**vox.attrs}
+    return out

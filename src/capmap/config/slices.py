@@ -70,7 +70,8 @@ STAGES: dict[str, Stage] = {
     "capacity": Stage(_TASK_MOTION + ("limits", "directions"), ("sample",)),
     "voxels": Stage(("voxel_edge_m",), ("capacity",)),
     "refine": Stage(_refine, ("voxels",)),
-    "view": Stage(("failure.start_m", "task.goal_m", "task.payload_kg"), ("refine",)),  # the map's figures
+    # the map's figures: of the arm's configuration at the start, with the planned paths
+    "view": Stage(("failure.start_m", "failure.q_start_deg", "task.goal_m", "task.payload_kg"), ("refine",)),
     "plan": Stage(_plan, ("refine",)),
     "verify": Stage(("job", "verification.dt_s"), ("plan",)),
     "gain": Stage(("task.payload_kg", "planning.gain_tasks", "verification.dt_s"), ("refine",)),

@@ -29,61 +29,101 @@ def _layer_of(vox: pd.DataFrame, z_m: float) -> int:
     return int(np.clip(np.floor((z_m - grid["lower_m"][2]) / grid["edge_m"]), 0, grid["shape"][2] - 1))
 
 
-def capacity_map(vox: pd.DataFrame, view, out_png: str | Path) -> None:
-    """The map for people: the share of reachable voxels carrying each payload, and three horizontal
-    voxel layers (the start's, the goal's and the fullest) coloured by capacity on one full-range
-    scale, the task payloads as contour lines, start and goal marked. ``view``: a
-    :class:`capmap.stages.capacity_figures.MapView` (start_m, goal_m, payloads_kg)."""
-    reach = vox[vox.n_reachable > 0]
+def _layer_panel(ax, vox: pd.DataFrame, k: int, view, vmax: float, what: str, paths=()):
+    """One horizontal voxel layer ``k`` of a map coloured by capacity (0 kg voxels crossed in red),
+    the task payloads as contours, start and goal, the planned paths (x-y, m) drawn over it."""
+    pay_colors = ["white", "tab:red", "magenta", "orange"]
+    img, extent, z = _layer(vox, k)
+    im = ax.imshow(img, origin="lower", cmap="viridis", vmin=0.0, vmax=vmax, extent=extent, interpolation="nearest")
+    drawn = []
+    lo, hi = np.nanmin(img, initial=np.inf), np.nanmax(img, initial=-np.inf)
+    for n, m in enumerate(view.payloads_kg):
+        if lo < m <= hi:
+            ax.contour(np.where(np.isnan(img), -1.0, img), levels=[m], colors=pay_colors[n % 4], linewidths=1.3,
+                       extent=extent, origin="lower")
+            drawn.append(f"{m:g} kg ({pay_colors[n % 4]})")
+        else:
+            drawn.append(f"{m:g} kg: {'no voxel carries it' if hi < m else 'every voxel carries it'}")
+    sl = vox[(vox.k == k) & (vox.capacity_kg == 0)]
+    if len(sl):
+        ax.plot(sl.x_m, sl.y_m, "x", color="tab:red", ms=4, mew=1, label="0 kg")
+    for name, xy, style in paths:
+        ax.plot(xy[:, 0], xy[:, 1], lw=1.4, label=name, **style)
+    for pos, name, mk, col in ((view.start_m, "start", "o", "tab:green"), (view.goal_m, "goal", "*", "tab:orange")):
+        inside = _layer_of(vox, pos[2]) == k
+        ax.plot(pos[0], pos[1], mk, ms=11, mfc=col if inside else "none", mec=col, mew=2,
+                label=f"{name}{'' if inside else ' (projected)'}")
+    ax.set(xlabel="x [m]", ylabel="y [m]", title=f"{what}, layer z = {z:.2f} m\ncontours: " + "; ".join(drawn))
+    ax.xaxis.set_major_locator(plt.MaxNLocator(6))
+    ax.legend(fontsize=7, loc="lower left", framealpha=0.9)
+    return im
+
+
+def capacity_map(vox: pd.DataFrame, view, out_png: str | Path, op: pd.DataFrame | None = None,
+                 configuration: str = "", paths=()) -> None:
+    """The map for people. With ``op`` (the map of the arm's ``configuration``,
+    :func:`capmap.capacity.tables.configuration_voxels`): the share of reachable voxels carrying each
+    payload on that configuration and for any configuration (the all-branch bound ``vox``), the
+    start's, goal's and fullest voxel layers of the arm's configuration, and the start's and goal's
+    layers of the bound; without it, the bound's. Coloured by capacity on one scale, 0 kg voxels
+    crossed in red (a singular surface of the map's configurations crosses them), the task payloads
+    as contour lines, start, goal and ``paths`` ((label, (n, 3) m, plot style) each) drawn.
+    ``view``: a :class:`capmap.stages.capacity_figures.MapView` (start_m, goal_m, payloads_kg)."""
+    main = vox if op is None else op
+    reach = main[main.n_reachable > 0]
+    bound = vox[vox.n_reachable > 0]
     grid = vox.attrs["capmap"]["grid"]
-    fig, axes = plt.subplots(2, 2, figsize=(12, 10.5), layout="constrained")
+    fig, axes = plt.subplots(2, 3, figsize=(17, 10.5), layout="constrained")
     cap = np.sort(reach.capacity_kg.to_numpy())
-    vmax = float(cap[-1]) if len(cap) and cap[-1] > 0 else 1.0
+    cap_b = np.sort(bound.capacity_kg.to_numpy())
+    vmax = float(max(cap[-1] if len(cap) else 0.0, cap_b[-1] if len(cap_b) else 0.0)) or 1.0
     mmax = 1.05 * max(vmax, *view.payloads_kg)
     ax = axes[0, 0]
-    ax.step(cap, 1.0 - np.arange(len(cap)) / max(len(cap), 1), where="post", color="tab:blue")
-    pay_colors = ["white", "tab:red", "magenta", "orange"]
+    name = f"configuration {configuration} (the arm's)" if op is not None else "any configuration (every IK branch)"
+    ax.step(cap, 1.0 - np.arange(len(cap)) / max(len(cap), 1), where="post", color="tab:blue", label=name)
+    if op is not None:
+        ax.step(cap_b, 1.0 - np.arange(len(cap_b)) / max(len(cap_b), 1), where="post", color="0.4", ls="--",
+                label="any configuration: the bound (least over every IK branch)")
     for n, m in enumerate(view.payloads_kg):
         share = float(np.mean(cap >= m)) if len(cap) else 0.0
-        ax.axvline(m, color="k", ls="--", lw=1)
+        ax.axvline(m, color="k", ls=":", lw=1)
         right = m > 0.7 * mmax
         ax.annotate(f"{m:g} kg: {100 * share:.0f}% of voxels", (m, share), xytext=(-6 if right else 6, 6 + 14 * n),
                     textcoords="offset points", fontsize=9, ha="right" if right else "left")
-    ax.set(xlabel="payload M [kg]", ylabel="share of reachable voxels carrying M", ylim=(0, 1.02), xlim=(0, mmax),
-           title=f"{len(reach):,} reachable voxels (edge {grid['edge_m']:g} m)\ndashed: task payloads")
+    ax.set(xlabel="payload M [kg]", ylabel="share of its reachable voxels carrying M", ylim=(0, 1.02), xlim=(0, mmax),
+           title=f"{len(reach):,} voxels reachable on {configuration or 'any configuration'} (edge {grid['edge_m']:g} m)"
+                 "\ndotted: task payloads (share: the arm's configuration)")
+    ax.legend(fontsize=8, loc="upper right")
     ax.grid(alpha=0.3)
-    layers = [("start's", _layer_of(vox, view.start_m[2])), ("goal's", _layer_of(vox, view.goal_m[2]))]
+    what = f"{configuration} (the arm's)" if op is not None else "any configuration"
+    panels = [(axes[0, 1], main, _layer_of(vox, view.start_m[2]), f"{what}: start's"),
+              (axes[0, 2], main, _layer_of(vox, view.goal_m[2]), f"{what}: goal's")]
     if len(reach):
-        layers.append(("fullest", int(reach.k.value_counts().idxmax())))
+        panels.append((axes[1, 0], main, int(reach.k.value_counts().idxmax()), f"{what}: fullest"))
+    if op is not None:
+        panels += [(axes[1, 1], vox, _layer_of(vox, view.start_m[2]), "any configuration (bound): start's"),
+                   (axes[1, 2], vox, _layer_of(vox, view.goal_m[2]), "any configuration (bound): goal's")]
+    used = {id(p[0]) for p in panels} | {id(axes[0, 0])}
     im = None
-    for ax, (what, k) in zip([axes[0, 1], axes[1, 0], axes[1, 1]], layers):
-        img, extent, z = _layer(vox, k)
-        im = ax.imshow(img, origin="lower", cmap="viridis", vmin=0.0, vmax=vmax, extent=extent, interpolation="nearest")
-        drawn = []
-        for n, m in enumerate(view.payloads_kg):
-            lo, hi = np.nanmin(img, initial=np.inf), np.nanmax(img, initial=-np.inf)
-            if lo < m <= hi:
-                ax.contour(np.where(np.isnan(img), -1.0, img), levels=[m], colors=pay_colors[n % 4], linewidths=1.3,
-                           extent=extent, origin="lower")
-                drawn.append(f"{m:g} kg ({pay_colors[n % 4]})")
-            else:
-                drawn.append(f"{m:g} kg: {'no voxel carries it' if hi < m else 'every voxel carries it'}")
-        for pos, name, mk, col in ((view.start_m, "start", "o", "tab:green"), (view.goal_m, "goal", "*", "tab:orange")):
-            inside = _layer_of(vox, pos[2]) == k
-            ax.plot(pos[0], pos[1], mk, ms=11, mfc=col if inside else "none", mec=col, mew=2,
-                    label=f"{name}{'' if inside else ' (other layer, projected)'}")
-        ax.set(xlabel="x [m]", ylabel="y [m]",
-               title=f"{what} voxel layer, z = {z:.3f} m\ncontours: " + "; ".join(drawn))
-        ax.xaxis.set_major_locator(plt.MaxNLocator(6))
-        ax.legend(fontsize=8, loc="lower left", framealpha=0.9)
+    for ax, m_, k, title in panels:
+        im = _layer_panel(ax, m_, k, view, vmax, title, paths)
+    for ax in axes.ravel():
+        if id(ax) not in used:
+            ax.axis("off")
     if im is not None:
         cb = fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.6,
-                          label="voxel capacity [kg] (white: unreachable; black lines: task payloads)")
+                          label="voxel capacity [kg] (white: not reached; red x: 0 kg; black lines: task payloads)")
         for m in view.payloads_kg:
             if m <= vmax:
                 cb.ax.axhline(m, color="k", lw=1.5)
-    fig.suptitle("Dynamic load-carrying capacity of each voxel: the least over its points, every IK branch and "
-                 "motion direction", fontsize=12)
+    head = (f"on the arm's configuration {configuration} (its start's: it keeps it while it crosses no singular surface); "
+            "below right: the bound for any configuration" if op is not None else
+            "on every IK branch (no configuration maps without voxels.refine)")
+    fig.suptitle("Dynamic load-carrying capacity of each voxel (the least over its points and every motion direction)\n"
+                 + head, fontsize=12)
+    if len(paths) > 1:
+        fig.text(0.005, 0.002, "Planned paths are verified along their own directions (verify/summary.csv): a path can "
+                 "carry its payload across voxels whose least over every direction is below it.", fontsize=9)
     save(fig, out_png)
 
 
@@ -92,41 +132,57 @@ PATH_STYLE = {"direct": {"color": "tab:red", "ls": "--", "label": "direct line"}
 
 
 def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_png: str | Path,
-                    no_path: str = "") -> None:
+                    no_path: str = "", op: pd.DataFrame | None = None, configuration: str = "") -> None:
     """Voxels near the paths coloured by capacity (grey: below the payload), the direct line and
-    the planned path in 3D; and the x-y voxel layer of the goal. ``no_path``: why there is no planned
-    path (shown in both panels), '' when there is one."""
-    reach = vox[vox.n_reachable > 0]
+    the planned path in 3D; and the x-y voxel layer of the goal. The map drawn is ``op``, that of the
+    arm's ``configuration`` (the paths' start's), when given, else the all-branch bound ``vox``. A
+    voxel's value is its least over every motion direction, so a path can carry the payload across
+    voxels below it: the legend says so with the path's own weakest state. ``no_path``: why there is
+    no planned path (shown in both panels), '' when there is one."""
+    main = vox if op is None else op
+    which = f"configuration {configuration}" if op is not None else "every IK branch"
+    reach = main[main.n_reachable > 0]
     dx = vox.attrs["capmap"]["grid"]["edge_m"]
     lo = ts[["x_m", "y_m", "z_m"]].min().to_numpy() - 1.5 * dx
     hi = ts[["x_m", "y_m", "z_m"]].max().to_numpy() + 1.5 * dx
     xyz = reach[["x_m", "y_m", "z_m"]].to_numpy()
     near = reach[np.all((xyz >= lo) & (xyz <= hi), axis=1)]
     vmax = float(max(np.nanmax(reach.capacity_kg), payload_kg)) if len(reach) else 1.0
-    fig = plt.figure(figsize=(13, 5.8))
+    fig = plt.figure(figsize=(14, 6.4))
     ax = fig.add_subplot(1, 2, 1, projection="3d")
     strong = near[near.capacity_kg >= payload_kg]
     weak = near[near.capacity_kg < payload_kg]
     sc = ax.scatter(strong.x_m, strong.y_m, strong.z_m, c=strong.capacity_kg, s=8, cmap="viridis", vmin=0, vmax=vmax,
-                    alpha=0.25, depthshade=False)
-    ax.scatter(weak.x_m, weak.y_m, weak.z_m, c="0.5", s=10, marker="x", alpha=0.5,
-               label=f"voxel < {payload_kg:g} kg (least over all IK branches)")
+                    alpha=0.25, depthshade=False, label=f"voxel >= {payload_kg:g} kg")
+    sc_w = ax.scatter(weak.x_m, weak.y_m, weak.z_m, c=weak.capacity_kg, s=12, marker="x", cmap="viridis", vmin=0,
+                      vmax=vmax, alpha=0.5, depthshade=False, label=f"x: voxel < {payload_kg:g} kg")
+    sc = sc if len(strong) else sc_w
+    carried = []
     for name, g in ts.groupby("path", observed=True):
-        ax.plot(g.x_m, g.y_m, g.z_m, lw=2.5, zorder=10, **PATH_STYLE.get(name, {}))
+        weakest = np.nanmin(g.state_capacity_kg.to_numpy(), initial=np.inf) if g.state_capacity_kg.notna().any() else 0
+        style = dict(PATH_STYLE.get(name, {}))
+        style["label"] = f"{style.get('label', name)}: its states carry >= {weakest:.0f} kg"
+        ax.plot(g.x_m, g.y_m, g.z_m, lw=2.5, zorder=10, **style)
+        if weakest >= payload_kg:
+            carried.append(f"{PATH_STYLE.get(name, {}).get('label', name)} ({weakest:.0f} kg)")
     first = ts.iloc[0]
     last = ts[ts.path == ts.path.iloc[0]].iloc[-1]
     ax.scatter([first.x_m], [first.y_m], [first.z_m], c="tab:green", s=60, marker="o", label="start")
     ax.scatter([last.x_m], [last.y_m], [last.z_m], c="tab:orange", s=80, marker="*", label="goal")
-    fig.colorbar(sc, ax=ax, shrink=0.7, pad=0.12, label="voxel capacity [kg]")
+    fig.colorbar(sc, ax=ax, shrink=0.7, pad=0.12, label=f"voxel capacity [kg], {which}")
     ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]),
-           title=f"Voxels near the paths, payload {payload_kg:g} kg" + (f"\nno planned path: {_short(no_path)}"
-                                                                          if no_path else ""))
+           title=f"voxels near the paths ({which}), {payload_kg:g} kg" + (
+               f"\nno planned path: {_short(no_path)}" if no_path else ""))
+    if carried and len(weak):
+        fig.text(0.01, 0.01, f"Why a verified path crosses voxels below {payload_kg:g} kg: a voxel's value is its least over "
+                 f"its points and every motion direction; a path is verified along its own direction, and the states of "
+                 f"the {' and the '.join(carried)} carry the payload.", fontsize=8.5, wrap=True)
     for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
         axis.set_major_locator(plt.MaxNLocator(4))
     ax.set_box_aspect(hi - lo)
-    ax.legend(loc="upper left", fontsize=7)
+    ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
     ax2 = fig.add_subplot(1, 2, 2)
-    img, extent, z = _layer(vox, _layer_of(vox, last.z_m))
+    img, extent, z = _layer(main, _layer_of(main, last.z_m))
     im = ax2.imshow(img, origin="lower", cmap="viridis", vmin=0, vmax=vmax, extent=extent, interpolation="nearest")
     has_edge = np.nanmin(img, initial=np.inf) < payload_kg <= np.nanmax(img, initial=-np.inf)
     if has_edge:
@@ -136,12 +192,12 @@ def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_
         ax2.plot(g.x_m, g.y_m, lw=1.5, **PATH_STYLE.get(name, {}))
     ax2.plot(last.x_m, last.y_m, "*", color="tab:orange", ms=12, label="goal")
     ax2.plot(first.x_m, first.y_m, "o", mfc="none", mec="tab:green", mew=2, ms=9, label="start (projected)")
-    cb = fig.colorbar(im, ax=ax2, label="voxel capacity [kg] (white: unreachable)")
+    cb = fig.colorbar(im, ax=ax2, label=f"voxel capacity [kg], {which} (white: not reached)")
     cb.ax.axhline(payload_kg, color="k", lw=1.5)
     edge = (f"white line: boundary of {payload_kg:g} kg" if has_edge else
             f"no voxel of this layer carries {payload_kg:g} kg" if np.nanmax(img, initial=0) < payload_kg else
             f"every voxel of this layer carries {payload_kg:g} kg")
-    ax2.set(xlabel="x [m]", ylabel="y [m]", title=f"goal's voxel layer z = {z:.3f} m; {edge}")
+    ax2.set(xlabel="x [m]", ylabel="y [m]", title=f"goal's voxel layer z = {z:.2f} m, {which}\n{edge}")
     ax2.legend(fontsize=8, loc="lower left")
     if no_path:
         ax2.text(0.5, 0.97, f"no planned path: {_short(no_path)}", transform=ax2.transAxes, ha="center", va="top",

@@ -30,19 +30,22 @@ def slider_levels(capacity_kg: np.ndarray, payloads_kg: tuple[float, ...], n: in
     return np.unique(np.r_[np.arange(0.0, top + step, step), payloads_kg])
 
 
-def capacity_3d_html(centres_m: np.ndarray, capacity_kg: np.ndarray, edge_m: float, start_m: np.ndarray,
+def capacity_3d_html(maps: list[tuple[str, np.ndarray, np.ndarray]], edge_m: float, start_m: np.ndarray,
                      goal_m: np.ndarray, paths: list[PlannedPath], payloads_kg: tuple[float, ...],
                      title: str) -> str:
-    """The page. ``centres_m`` (V, 3) and ``capacity_kg`` (V,) of the reachable voxels (capacity of
-    the voxel: the least over its points, IK branches and motion directions); ``edge_m`` the voxel
-    edge; ``start_m``, ``goal_m`` (3,); the slider starts at the first payload."""
+    """The page. ``maps``: (name, centres_m (V, 3), capacity_kg (V,)) of the reachable voxels of each
+    map (capacity of the voxel: the least over its points and motion directions, on the map's IK
+    branches), the first shown, buttons switch between them; ``edge_m`` the voxel edge; ``start_m``,
+    ``goal_m`` (3,); the slider starts at the first payload."""
     import plotly.graph_objects as go
 
-    c = np.asarray(capacity_kg, float)
-    xyz = np.asarray(centres_m, float)
-    levels = slider_levels(c, payloads_kg)
+    _, xyz, c = maps[0]
+    c = np.asarray(c, float)
+    xyz = np.asarray(xyz, float)
+    every = np.concatenate([np.asarray(m[2], float) for m in maps])
+    levels = slider_levels(every, payloads_kg)
     first = float(payloads_kg[0]) if payloads_kg else 0.0
-    cmax = float(np.nanmax(c)) if c.size else 1.0
+    cmax = float(np.nanmax(every)) if every.size else 1.0
     keep = c >= first
     fig = go.Figure()
     fig.add_trace(go.Scatter3d(
@@ -72,27 +75,33 @@ def capacity_3d_html(centres_m: np.ndarray, capacity_kg: np.ndarray, edge_m: flo
                                    marker=dict(size=8, color=colour, symbol="diamond")))
     steps = [dict(method="skip", label=f"{v:g}", args=[None]) for v in levels]
     active = int(np.searchsorted(levels, first))
+    buttons = [dict(method="skip", label=name, args=[None]) for name, _, _ in maps]
     fig.update_layout(
-        title=dict(text=f"{title}<br><sub>voxel edge {edge_m:g} m; the slider hides the voxels below a payload "
-                        f"(shown: capacity >= payload)</sub>"),
+        title=dict(text=f"{title}<br><sub>shown: {maps[0][0]} (buttons: the other maps); voxel edge {edge_m:g} m; the "
+                        f"slider hides the voxels below a payload (shown: capacity >= payload)</sub>"),
         scene=dict(xaxis_title="x [m]", yaxis_title="y [m]", zaxis_title="z [m]", aspectmode="data"),
         sliders=[dict(active=active, steps=steps, currentvalue=dict(prefix="payload [kg] >= "), pad=dict(t=30))],
-        legend=dict(x=0.0, y=1.0), margin=dict(l=0, r=0, t=80, b=0), height=800)
-    data = json.dumps({"x": xyz[:, 0].round(4).tolist(), "y": xyz[:, 1].round(4).tolist(),
-                       "z": xyz[:, 2].round(4).tolist(), "c": c.round(2).tolist(), "levels": levels.tolist()})
-    # on a slider step: voxels >= the level in trace 0, the others in trace 1 (from the full arrays)
-    script = ("const V = " + data + ";\n"
+        updatemenus=[dict(type="buttons", direction="right", buttons=buttons, active=0, x=0.0, y=1.06,
+                          xanchor="left", yanchor="bottom", showactive=True)] if len(maps) > 1 else [],
+        legend=dict(x=0.0, y=0.95), margin=dict(l=0, r=0, t=110, b=0), height=800)
+    data = json.dumps([{"x": np.asarray(m[1])[:, 0].round(4).tolist(), "y": np.asarray(m[1])[:, 1].round(4).tolist(),
+                        "z": np.asarray(m[1])[:, 2].round(4).tolist(), "c": np.asarray(m[2], float).round(2).tolist()}
+                       for m in maps])
+    # on a slider step or a map button: the shown map's voxels >= the level in trace 0, the others in trace 1
+    script = ("const M = " + data + ", L = " + json.dumps(levels.tolist()) + ";\n"
               "const gd = document.getElementById('{plot_id}');\n"
-              "gd.on('plotly_sliderchange', function (ev) {\n"
-              "  const m = V.levels[ev.step._index];\n"
-              "  const a = {x: [], y: [], z: [], c: [], t: []}, b = {x: [], y: [], z: [], t: []};\n"
+              "let level = L[" + str(active) + "], shown = 0;\n"
+              "function draw() {\n"
+              "  const V = M[shown], a = {x: [], y: [], z: [], c: [], t: []}, b = {x: [], y: [], z: [], t: []};\n"
               "  for (let i = 0; i < V.c.length; i++) {\n"
-              "    const s = V.c[i] >= m ? a : b;\n"
+              "    const s = V.c[i] >= level ? a : b;\n"
               "    s.x.push(V.x[i]); s.y.push(V.y[i]); s.z.push(V.z[i]); s.t.push(V.c[i].toFixed(0) + ' kg');\n"
               "    if (s === a) { a.c.push(V.c[i]); }\n"
               "  }\n"
               "  Plotly.restyle(gd, {x: [a.x, b.x], y: [a.y, b.y], z: [a.z, b.z], text: [a.t, b.t]}, [0, 1]);\n"
               "  Plotly.restyle(gd, {'marker.color': [a.c]}, [0]);\n"
-              "});\n")
+              "}\n"
+              "gd.on('plotly_sliderchange', function (ev) { level = L[ev.step._index]; draw(); });\n"
+              "gd.on('plotly_buttonclicked', function (ev) { shown = ev.active; draw(); });\n")
     return fig.to_html(include_plotlyjs=True, full_html=True, post_script=script, div_id="capmap-3d",
                        config={"displaylogo": False})

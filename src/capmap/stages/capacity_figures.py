@@ -9,11 +9,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
 from capmap.plots.capacity import capacity_map
 from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
+from capmap.stages.arm import configuration_name
 from capmap.stages.common import stage_config
 
 __all__ = ["stage_summary", "stage_capacity_3d", "MapView"]
@@ -21,21 +23,40 @@ __all__ = ["stage_summary", "stage_capacity_3d", "MapView"]
 
 @dataclass(frozen=True)
 class MapView:
-    """What the map's figures mark: the task's start and goal (3,) [m] and its payloads [kg]."""
+    """What the map's figures mark: the task's start and goal (3,) [m] and its payloads [kg]; the
+    arm's configuration at the start (e.g. ``S+E-W+``)."""
 
     start_m: np.ndarray
     goal_m: np.ndarray
     payloads_kg: tuple[float, ...]
+    configuration: str = ""
 
     @classmethod
     def from_slice(cls, slice_json: str) -> MapView:
         run = stage_config(slice_json).run
-        return cls(np.asarray(run.failure.start_m, float), np.asarray(run.task.goal_m, float), run.task.payload_kg)
+        return cls(np.asarray(run.failure.start_m, float), np.asarray(run.task.goal_m, float), run.task.payload_kg,
+                   configuration_name(run, run.failure.q_start_deg))
 
 
-def stage_summary(voxels: str, points: str, out_csv: str, out_md: str, out_png: str, slice_json: str) -> None:
-    """Capacity summary table (CSV + Markdown) and a capacity-coloured workspace figure."""
+def _planned(waypoints: list[str]) -> tuple[list[tuple[float, float, np.ndarray]], list[str]]:
+    """Each payload's planned path: (payload kg, cost m, waypoints (n, 3) m); the payloads without one."""
+    paths, missing = [], []
+    for wp in map(datasets.read, waypoints):
+        meta = wp.attrs["capmap"]
+        if meta["status"] == "ok":
+            paths.append((meta["payload_kg"], meta["cost_m"], wp[["x_m", "y_m", "z_m"]].to_numpy()))
+        else:
+            missing.append(f"{meta['payload_kg']:g} kg")
+    return paths, missing
+
+
+def stage_summary(voxels: str, configurations: str, points: str, waypoints: list[str], out_csv: str, out_md: str,
+                  out_png: str, slice_json: str) -> None:
+    """Capacity summary table (CSV + Markdown) and the map figure (the arm's configuration and the
+    bound for any, the planned paths drawn)."""
     vox, pts = datasets.read(voxels), datasets.read(points)
+    view = MapView.from_slice(slice_json)
+    op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
     reach_v = vox[vox.n_reachable > 0]
     reach_p = pts[pts.reachable]
     q = (reach_v.capacity_kg.quantile([0.0, 0.05, 0.5, 0.95, 1.0]) if len(reach_v)
@@ -51,32 +72,42 @@ def stage_summary(voxels: str, points: str, out_csv: str, out_md: str, out_png: 
     ]
     for name, count in reach_p.binding.astype(str).value_counts().items():
         rows.append((f"points bound by {name}", int(count)))
+    if op is not None:
+        r = op[op.n_reachable > 0]
+        rows += [(f"voxels reached on the arm's configuration {view.configuration}", len(r)),
+                 (f"voxel capacity median on {view.configuration} [kg]", round(float(r.capacity_kg.median()), 1)
+                  if len(r) else np.nan),
+                 (f"voxels of 0 kg on {view.configuration} (a singular surface crosses them)",
+                  int((r.capacity_kg == 0).sum())),
+                 ("voxels of 0 kg for any configuration", int((reach_v.capacity_kg == 0).sum()))]
     write_quantities(rows, out_csv, out_md)
-    capacity_map(vox, MapView.from_slice(slice_json), out_png)
+    planned, _ = _planned(waypoints)
+    paths = [("direct line", np.stack([view.start_m, view.goal_m]), {"color": "tab:red", "ls": "--"})]
+    paths += [(f"planned, {m:g} kg", p, {"color": c, "ls": "-"})
+              for (m, _, p), c in zip(planned, ["black", "tab:pink", "tab:brown", "tab:gray"])]
+    capacity_map(vox, view, out_png, op, view.configuration, paths)
     stage_logger(__name__, "summary").info(f"{len(reach_v)} reachable voxels, median capacity {q.iloc[2]:.1f} kg "
                                            f"-> {out_csv}, {out_png}")
 
 
-def stage_capacity_3d(voxels: str, waypoints: list[str], out_html: str, slice_json: str) -> None:
-    """The interactive 3D view (self-contained HTML): reachable voxels by capacity, a payload slider,
-    the direct line, each payload's planned path (or its absence, in the title), start and goal."""
+def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], out_html: str, slice_json: str) -> None:
+    """The interactive 3D view (self-contained HTML): reachable voxels by capacity on the arm's
+    configuration (a button shows the bound for any configuration), a payload slider, the direct line,
+    each payload's planned path (or its absence, in the title), start and goal."""
     vox = datasets.read(voxels)
     view = MapView.from_slice(slice_json)
-    reach = vox[vox.n_reachable > 0]
-    paths, missing = [], []
-    for wp in map(datasets.read, waypoints):
-        meta = wp.attrs["capmap"]
-        if meta["status"] == "ok":
-            paths.append(PlannedPath(f"planned path, {meta['payload_kg']:g} kg ({meta['cost_m']:.2f} m)",
-                                     wp[["x_m", "y_m", "z_m"]].to_numpy()))
-        else:
-            missing.append(f"{meta['payload_kg']:g} kg")
+    op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
+    planned, missing = _planned(waypoints)
+    paths = [PlannedPath(f"planned path, {m:g} kg ({cost:.2f} m)", p) for m, cost, p in planned]
     edge = vox.attrs["capmap"]["grid"]["edge_m"]
     title = "Capacity map: reachable voxels by dynamic load-carrying capacity" + (
         f"; no path for {', '.join(missing)}" if missing else "")
-    html = capacity_3d_html(reach[["x_m", "y_m", "z_m"]].to_numpy(), reach.capacity_kg.to_numpy(), edge,
-                            view.start_m, view.goal_m, paths, view.payloads_kg, title)
+    maps = [] if op is None else [(f"configuration {view.configuration} (the arm's)", op[op.n_reachable > 0])]
+    maps.append(("any configuration (the bound: every IK branch)", vox[vox.n_reachable > 0]))
+    html = capacity_3d_html([(name, m[["x_m", "y_m", "z_m"]].to_numpy(), m.capacity_kg.to_numpy()) for name, m in maps],
+                            edge, view.start_m, view.goal_m, paths, view.payloads_kg, title)
     Path(out_html).parent.mkdir(parents=True, exist_ok=True)
     Path(out_html).write_text(html)
-    stage_logger(__name__, "capacity 3d").info(f"{len(reach)} voxels, {len(paths)} planned paths -> {out_html} "
+    shown = ", ".join(f"{n}: {len(m)} voxels" for n, m in maps)
+    stage_logger(__name__, "capacity 3d").info(f"{shown}, {len(paths)} planned paths -> {out_html} "
                                                f"({len(html) / 1e6:.1f} MB, offline)")

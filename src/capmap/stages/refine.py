@@ -60,7 +60,7 @@ def stage_refine(voxels: str, out: str, out_configurations: str, slice_json: str
             sol = ik.solve(arm, points[r:r + 2000], rotation)
             pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits, axes, labels)
             parts.append(Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions,
-                                    pc.config_capacity_kg, pc.config_axis_capacity_kg, pc.config_binding))
+                                    pc.config_capacity_kg, pc.config_axis_capacity_kg, pc.config_binding, pc.config_branches))
         return Evaluation(*(np.concatenate([getattr(e, f) for e in parts]) for f in Evaluation.__dataclass_fields__))
 
     start = VoxelMinima.with_configurations(len(labels.names),
