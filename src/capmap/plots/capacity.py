@@ -119,11 +119,10 @@ def capacity_map(vox: pd.DataFrame, view, out_png: str | Path, op: pd.DataFrame 
     head = (f"on the arm's configuration {configuration} (its start's: it keeps it while it crosses no singular surface); "
             "below right: the bound for any configuration" if op is not None else
             "on every IK branch (no configuration maps without voxels.refine)")
+    note = ("\nplanned paths are verified along their own directions (verify/summary.csv): a path can carry its payload "
+            "across voxels whose least over every direction is below it" if len(paths) > 1 else "")
     fig.suptitle("Dynamic load-carrying capacity of each voxel (the least over its points and every motion direction)\n"
-                 + head, fontsize=12)
-    if len(paths) > 1:
-        fig.text(0.005, 0.002, "Planned paths are verified along their own directions (verify/summary.csv): a path can "
-                 "carry its payload across voxels whose least over every direction is below it.", fontsize=9)
+                 + head + note, fontsize=12)
     save(fig, out_png)
 
 
@@ -153,9 +152,9 @@ def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_
     strong = near[near.capacity_kg >= payload_kg]
     weak = near[near.capacity_kg < payload_kg]
     sc = ax.scatter(strong.x_m, strong.y_m, strong.z_m, c=strong.capacity_kg, s=8, cmap="viridis", vmin=0, vmax=vmax,
-                    alpha=0.25, depthshade=False, label=f"voxel >= {payload_kg:g} kg")
+                    alpha=0.25, depthshade=False, label=f"voxel >= {payload_kg:g} kg" if len(strong) else None)
     sc_w = ax.scatter(weak.x_m, weak.y_m, weak.z_m, c=weak.capacity_kg, s=12, marker="x", cmap="viridis", vmin=0,
-                      vmax=vmax, alpha=0.5, depthshade=False, label=f"x: voxel < {payload_kg:g} kg")
+                      vmax=vmax, alpha=0.5, depthshade=False, label=f"x: voxel < {payload_kg:g} kg" if len(weak) else None)
     sc = sc if len(strong) else sc_w
     carried = []
     for name, g in ts.groupby("path", observed=True):
