@@ -23,7 +23,8 @@ ALLOWED = {
     "config": {"core", "capacity", "following", "reconfig", "dualarm", "io", "errors"},
     "plots": set(),
     "stages": {"core", "capacity", "following", "reconfig", "dualarm", "config", "io", "plots", "errors"},
-    "__main__": {"config", "io", "errors"},  # the command line (python -m capmap check, check-config)
+    # the command line (python -m capmap check, check-config, arm; query: a stage, as a workflow script calls one)
+    "__main__": {"config", "io", "stages", "errors"},
     "_lazy": set(),  # lazy package exports (PEP 562): any package may use it
 }
 for _part_name in ALLOWED:

@@ -29,6 +29,7 @@ from capmap.config.robot_file import load, lock_classes
 from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.errors import CapmapError
 from capmap.io.datasets import verify_catalogue
+from capmap.stages.query import answer_line, answer_point
 
 __all__ = ["main"]
 
@@ -111,8 +112,6 @@ def _arm(path: str, angle_deg: float | None) -> int:
 
 
 def _query(args) -> int:
-    from capmap.stages.query import answer_line, answer_point  # the robot libraries load only for a query
-
     try:
         if args.payload is not None and not (args.payload >= 0 and args.payload < float("inf")):
             raise CapmapError(f"--payload {args.payload} must be a finite mass >= 0 kg")

@@ -62,10 +62,10 @@ def test_voxel_capacity_is_min_of_points_inside(run_dir):
 def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
     cat = pd.read_parquet(tmp / "results/tiny/catalogue.parquet")
-    assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "sampled", "voxels", "waypoints",
-                             "gain_tasks", "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud",
+    assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "sampled", "voxels", "configurations",
+                             "waypoints", "gain_tasks", "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud",
                              "environment", "robot_capsules", "trajectory", "fine", "outer"}  # two 'points', three 'timeseries'
-    assert len(cat) == 23
+    assert len(cat) == 24
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256

@@ -12,6 +12,9 @@
 - :mod:`~capmap.capacity.tables`       the family's tables and column schemas (model, points, capacities, voxels)
 - :mod:`~capmap.capacity.gain`         the plan-gain experiment (isotropic vs direction-aware moves, verified)
 - :mod:`~capmap.capacity.atlas`        one coarse map per (locked joint, angle) and its summary rows
+- :mod:`~capmap.capacity.refine`       voxel minima refined until they converge, all branches and each configuration
+- :mod:`~capmap.capacity.folds`        the refinement's fold brackets (singular surfaces crossing a voxel)
+- :mod:`~capmap.capacity.query`        questions answered directly: a point on every configuration, a line on one
 """
 
 from capmap._lazy import lazy_exports
@@ -30,6 +33,10 @@ _EXPORTS = {
     'tables': 'tables',
     'gain': 'gain',
     'atlas': 'atlas',
+    'refine': 'refine',
+    'query': 'query',
+    'point_query': 'query',
+    'line_query': 'query',
     'LoadLimits': 'engine',
     'Motion': 'engine',
     'point_capacity': 'engine',
@@ -42,6 +49,10 @@ _EXPORTS = {
 
 __all__ = [
     "Grid",
+    "line_query",
+    "point_query",
+    "query",
+    "refine",
     "LoadLimits",
     "Motion",
     "directions",

@@ -21,7 +21,10 @@ counts, one point per round, until the bracket is shorter than ``fold_tol_m``, a
 unconverged until then. When the closed bracket holds a point of capacity 0, the fold is a
 singular surface: moving along any grid axis that crosses it needs unbounded joint rates
 (those of the direction normal to it), so every per-axis value of the voxel is set to 0 too (a
-grid axis tangent to the fold everywhere in the voxel is the exception this rounds down).
+grid axis tangent to the fold everywhere in the voxel is the exception this rounds down). With
+configuration maps (:meth:`VoxelMinima.with_configurations`) every configuration is refined beside the
+all-branch value from the same points; the configurations a fold ends (the two whose solutions merge
+on it) fall to 0 with it, the others keep their own values.
 
 A voxel whose minimum and per-axis minima are all 0 cannot fall further and has converged. The per-axis capacities (moves along
 the 13 axes of the grid) are minimised over the same points. The evaluation of points is
@@ -37,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.engine import argmin_per_group
+from capmap.capacity.folds import FoldBrackets
 from capmap.capacity.voxels import Grid
 from capmap.errors import CapmapError
 
@@ -155,7 +159,11 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     then gives them too), every configuration's minimum and per-axis minima are refined as the
     all-branch ones are (groups: all branches, then each configuration), from the same points: a
     voxel has converged when every group has; a compass around each group's worst point still
-    falling; at a closed singular fold, the per-axis values of every group whose minimum is 0 are 0.
+    falling. A fold ends some configurations (their solution counts differ at the bracket's two ends:
+    the two that merge on the singular surface): while the bracket is open they wait (no pattern, not
+    counted against convergence), and when it closes on a singular fold (all-branch capacity 0) their
+    minimum and per-axis values are 0 (the infimum at the surface), their worst point the bracket's end
+    on their side, within ``fold_tol_m`` of it. A group whose value and axes are all 0 has converged.
     A configuration that no point of a voxel holds stays NaN there."""
     s = settings
     C = 0 if start.config_capacity_kg is None else start.config_capacity_kg.shape[1]
@@ -188,7 +196,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     converged = ~reach0 | (zero() & ~np.any(np.isinf(cap[:, 1:]), axis=1))
     stopped = np.zeros(V, dtype=bool)  # still falling when the patterns reached their finest step
     idx3 = np.stack(np.unravel_index(start.voxel, grid.shape), axis=1)
-    fs = _Folds.empty(V, C)  # per voxel: a bracket [a, b] of different branch counts, once one is seen
+    fs = FoldBrackets.empty(V, C)  # per voxel: a bracket [a, b] of different branch counts, once one is seen
     fold, fa, fb = fs.fold, fs.fa, fs.fb
     axis_worst = np.repeat(worst[:, :, None, :], A, axis=2)  # (V, G, A, 3): where each axis minimum is
     axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their pattern continues)
@@ -330,51 +338,3 @@ def _around(centres: np.ndarray, pattern: np.ndarray, h: float, grid: Grid, idx3
     clipped to its voxel idx3 (n, 3)."""
     lo = (grid.lower + idx3 * grid.edge_m)[:, None, :]
     return np.clip(centres[:, None, :] + h * pattern, lo, lo + grid.edge_m).reshape(-1, 3)
-
-
-@dataclass
-class _Folds:
-    """Fold brackets per voxel (V,): ``fold`` whether one is known, its ends fa, fb (V, 3) m, the branch
-    count at fa (na) and each configuration's solution counts at both ends ca, cb (V, C); a first
-    point of each voxel (ref_*) to compare later points with."""
-
-    fold: np.ndarray
-    fa: np.ndarray
-    fb: np.ndarray
-    na: np.ndarray
-    ca: np.ndarray
-    cb: np.ndarray
-    ref_pt: np.ndarray
-    ref_n: np.ndarray
-    ref_c: np.ndarray
-
-    @classmethod
-    def empty(cls, V: int, C: int) -> "_Folds":
-        return cls(np.zeros(V, dtype=bool), np.zeros((V, 3)), np.zeros((V, 3)), np.zeros(V, dtype=int),
-                   np.zeros((V, C), dtype=int), np.zeros((V, C), dtype=int), np.full((V, 3), np.nan), np.full(V, -1),
-                   np.zeros((V, C), dtype=int))
-
-    def track(self, owner, pts, n_br, cnt, n_first_local, bisect) -> None:
-        """Update in place: a midpoint (the points ``n_first_local`` onwards of the local ones, one per
-        voxel of ``bisect``) replaces the end whose branch count it shares; a voxel without a bracket
-        gets one from any point whose count differs from its first point's. ``cnt`` (N, C) the points'
-        solutions per configuration."""
-        mids = np.arange(n_first_local, n_first_local + len(bisect))
-        for i, v in zip(mids, bisect):
-            if n_br[i] == self.na[v]:
-                self.fa[v], self.ca[v] = pts[i], cnt[i]
-            else:
-                self.fb[v], self.cb[v] = pts[i], cnt[i]
-        seen = self.ref_n >= 0
-        vs, first = np.unique(owner, return_index=True)
-        new = ~seen[vs]
-        self.ref_pt[vs[new]] = pts[first[new]]
-        self.ref_n[vs[new]] = n_br[first[new]]
-        self.ref_c[vs[new]] = cnt[first[new]]
-        differ = np.flatnonzero((n_br != self.ref_n[owner]) & ~self.fold[owner])
-        if len(differ):
-            v, i = np.unique(owner[differ], return_index=True)
-            j = differ[i]
-            self.fold[v] = True
-            self.fa[v], self.na[v], self.ca[v] = self.ref_pt[v], self.ref_n[v], self.ref_c[v]
-            self.fb[v], self.cb[v] = pts[j], cnt[j]
