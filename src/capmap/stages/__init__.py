@@ -5,7 +5,9 @@ writes Parquet with provenance, and logs its progress.
 - :mod:`~capmap.stages.capacity`   model, sample, capacity (sharded), voxels, summary
 - :mod:`~capmap.stages.verify`     plan, verify, verify_plots (one job per payload)
 - :mod:`~capmap.stages.following`  follow, follow_plots (one job per case)
+- :mod:`~capmap.stages.refine`     refine (sharded: all branches and each configuration), voxel_map
 - :mod:`~capmap.stages.report`     catalogue, concatenated summaries
+- :mod:`~capmap.stages.query`      ``python -m capmap query``: a point on every configuration, a line on one
 """
 
-__all__ = ["capacity", "common", "following", "report", "verify"]
+__all__ = ["capacity", "common", "following", "query", "refine", "report", "verify"]
