@@ -366,14 +366,15 @@ def test_refined_voxels_never_exceed_their_sampled_minima(tmp_path):
     axis = r[[c for c in vox.columns if c.startswith("capacity_along_")]].to_numpy()
     assert axis.shape[1] == 13 and np.all(axis >= 0)
     # the map per configuration: every configuration's value at least the all-branch bound, which is the
-    # smallest of them wherever a refined point attains it; worst points inside their voxels
+    # smallest of them; worst points inside their voxels
     conf = pd.read_parquet(tmp_path / "results/tiny/voxels/configurations.parquet")
     assert set(conf.configuration.astype(str)) <= {f"S{s}E{e}W{w}" for s in "+-" for e in "+-" for w in "+-"}
     both = conf.merge(r[["i", "j", "k", "capacity_kg"]], on=["i", "j", "k"], suffixes=("", "_all"))
     assert len(both) == len(conf) and conf.groupby(["i", "j", "k"]).size().max() > 1
     assert (both.capacity_kg >= both.capacity_kg_all - 1e-9).all()
     lowest = both.groupby(["i", "j", "k"]).agg(low=("capacity_kg", "min"), all=("capacity_kg_all", "first"))
-    assert (np.isclose(lowest.low, lowest["all"], rtol=1e-12, atol=1e-9)).mean() > 0.5
+    # the configurations' points include the one of the all-branch value (the start's worst is evaluated again)
+    assert np.all(lowest.low <= lowest["all"] * (1 + 1e-9) + 1e-9)
     lo = np.array(g["lower_m"]) + conf[["i", "j", "k"]].to_numpy() * g["edge_m"]
     w = conf[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
     assert np.all((w >= lo - 1e-9) & (w <= lo + g["edge_m"] + 1e-9))

@@ -55,7 +55,8 @@ _PATTERN = np.concatenate([_COMPASS, _CORNERS * 2 - 1])
 @dataclass(frozen=True)
 class RefineSettings:
     """rel_tol: convergence (relative change of the minimum in the last doubling); min_points,
-    max_points: points per voxel at least / at most; payloads_kg with near_band and
+    max_points: points per voxel at least / where the uniform doubling stops (a voxel can hold more:
+    the patterns around its worst points and the fold's bisection add to it); payloads_kg with near_band and
     near_min_points: voxels whose value is within near_band of a payload get at least that many."""
 
     rel_tol: float = 0.005
@@ -164,6 +165,8 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     counted against convergence), and when it closes on a singular fold (all-branch capacity 0) their
     minimum and per-axis values are 0 (the infimum at the surface), their worst point the bracket's end
     on their side, within ``fold_tol_m`` of it. A group whose value and axes are all 0 has converged.
+    The start's worst point is evaluated again in the first round, so that the configurations' minima
+    hold the point of the all-branch one (the lowest of them is then at most the all-branch value).
     A configuration that no point of a voxel holds stays NaN there."""
     s = settings
     C = 0 if start.config_capacity_kg is None else start.config_capacity_kg.shape[1]
@@ -211,9 +214,11 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         # new points: the voxel's corners in the first round; then a pattern around its worst point so
         # far, a compass around the worst point of each configuration and of each axis minimum still
         # falling (one per distinct point); uniform points doubling the count (capped)
-        if rounds == 1:
+        if rounds == 1:  # with configurations, the start's worst point again: its value on each of them
             local = np.repeat(active, 8)
             local_pts = grid.lower + (idx3[local] + np.tile(_CORNERS, (len(active), 1))) * grid.edge_m
+            again = active[np.all(np.isfinite(start.worst_m[active]), axis=1)] if C else active[:0]
+            local, local_pts = np.concatenate([local, again]), np.concatenate([local_pts, start.worst_m[again]])
         else:
             h = grid.edge_m * 0.5 ** rounds
             has = active[np.isfinite(cap[active, 0])]

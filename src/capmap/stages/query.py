@@ -19,6 +19,7 @@ from capmap.config.run import RunConfig, run_document
 from capmap.config.slices import stage_slice
 from capmap.core.configuration import arm_configurations
 from capmap.core.dynamics import ArmDynamics
+from capmap.errors import CapmapError
 from capmap.io import datasets
 from capmap.stages.arm import arm_task_from
 
@@ -41,9 +42,12 @@ def _run_voxels(run: RunConfig, results: Path, point: np.ndarray) -> dict:
     path, conf_path = base / "voxels.parquet", base / "configurations.parquet"
     if not path.is_file():
         return {"note": f"no voxel map at {path} (run: snakemake --cores 2 capacity_map)"}
-    vox = datasets.read(path)
+    try:
+        vox = datasets.read(path)
+        have = {k: v for k, v in vox.attrs["capmap"]["config"].items() if k != "code"}
+    except (CapmapError, KeyError, TypeError, AttributeError) as exc:
+        return {"note": f"{path} is not a voxel map capmap wrote ({exc}); rerun: snakemake --cores 2 capacity_map"}
     want = {k: v for k, v in stage_slice(run, "refine").items() if k != "code"}
-    have = {k: v for k, v in vox.attrs["capmap"]["config"].items() if k != "code"}
     if datasets.canonical(want) != datasets.canonical(have):
         return {"note": f"{path} is of another config than this one (rerun: snakemake --cores 2 capacity_map)"}
     grid = grid_of(vox)
@@ -51,11 +55,12 @@ def _run_voxels(run: RunConfig, results: Path, point: np.ndarray) -> dict:
     if np.any(idx < 0):
         return {"note": "outside the run's voxel grid"}
     row = vox.iloc[int(grid.flat(idx[None])[0])]
-    out = {"voxel": [int(v) for v in idx], "map_kg": float(row.capacity_kg), "configurations": {}}
+    bound = float(row.capacity_kg) if row.n_reachable > 0 and np.isfinite(row.capacity_kg) else None  # JSON: null
+    out = {"voxel": [int(v) for v in idx], "map_kg": bound, "configurations": {}}
     if conf_path.is_file():
         conf = datasets.read(conf_path)
         mine = conf[(conf.i == idx[0]) & (conf.j == idx[1]) & (conf.k == idx[2])]
-        out["configurations"] = {str(c): float(v) for c, v in zip(mine.configuration, mine.capacity_kg)}
+        out["configurations"] = {str(c): float(v) for c, v in zip(mine.configuration, mine.capacity_kg) if np.isfinite(v)}
     return out
 
 
@@ -85,8 +90,9 @@ def answer_point(configfile: str, point, payload_kg: float | None, as_json: bool
     if "note" in vox:
         tail = f"run's voxel map: {vox['note']}"
     else:
-        tail = (f"run's voxel {tuple(vox['voxel'])}: {vox['map_kg']:.1f} kg for any configuration (the all-branch "
-                f"bound); voxel_capacity_kg: each configuration's minimum over the voxel")
+        bound = "no sampled point reached" if vox["map_kg"] is None else f"{vox['map_kg']:.1f} kg for any configuration"
+        tail = (f"run's voxel {tuple(vox['voxel'])}: {bound} (the all-branch bound); voxel_capacity_kg: each "
+                f"configuration's minimum over the voxel")
     return "\n".join([head, df.to_string(index=False, float_format=lambda v: f"{v:.4g}"), tail])
 
 
@@ -105,8 +111,9 @@ def answer_line(configfile: str, a, b, payload_kg: float | None, configuration: 
            "limits_exceeded_at_payload": v.limits_exceeded_at_payload or "none", "tracking": v.tracking,
            "joint_range": v.joint_range, "feasible": v.feasible,
            **{f"q_start_j{j}_deg": float(np.rad2deg(x)) for j, x in zip(arm.active_joint_numbers, ans.q_start_rad)}}
-    if as_json:
-        return json.dumps({"a_m": list(map(float, a)), "b_m": list(map(float, b)), "run": run.name, **row}, indent=1)
+    if as_json:  # NaN (e.g. the margin over a 0 kg payload) as null
+        clean = {k: None if isinstance(v, float) and not np.isfinite(v) else v for k, v in row.items()}
+        return json.dumps({"a_m": list(map(float, a)), "b_m": list(map(float, b)), "run": run.name, **clean}, indent=1)
     w = max(map(len, row))
     lines = [f"capmap: run {run.name!r}, {run.failure.describe()}",
              f"line [{', '.join(f'{x:g}' for x in a)}] -> [{', '.join(f'{x:g}' for x in b)}] m carrying {payload:g} kg "
