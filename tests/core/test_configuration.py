@@ -10,7 +10,7 @@ import pytest
 
 from capmap.config.robot_file import load
 from capmap.core import ik, ik_closed
-from capmap.core.configuration import Aspects, ShoulderElbowWrist, configurations_of
+from capmap.core.configuration import Aspects, ShoulderElbowWrist, arm_configurations
 from capmap.core.reduction import free, lock
 from capmap.core.tracking import track
 
@@ -33,10 +33,6 @@ def _det_pinocchio(arm, q: np.ndarray) -> np.ndarray:
                      for qi in q])
 
 
-def _labeller(arm):
-    return configurations_of(arm.chain, ik.method_for(arm.chain), arm.active_joint_numbers)
-
-
 @pytest.mark.parametrize("robot,joint,angle", CASES)
 def test_det_j_is_the_product_of_the_flags(robot, joint, angle):
     """Every singular surface is a sign change of exactly one flag: det J (Pinocchio) / prod(flags)
@@ -45,7 +41,7 @@ def test_det_j_is_the_product_of_the_flags(robot, joint, angle):
     For aspects the one flag is det J itself (the chain's own Jacobian)."""
     arm = _arm(robot, joint, angle)
     q = np.random.default_rng(joint).uniform(-np.pi, np.pi, (2000, 6))
-    ratio = _det_pinocchio(arm, q) / np.prod(_labeller(arm).flags(q), axis=1)
+    ratio = _det_pinocchio(arm, q) / np.prod(arm_configurations(arm).flags(q), axis=1)
     assert np.all(np.sign(ratio) == np.sign(ratio[0]))
     assert np.ptp(np.abs(ratio)) <= 1e-6 * np.abs(ratio).max()
 
@@ -56,7 +52,7 @@ def test_flags_are_the_closed_forms_branch_choices(robot, joint, angle):
     2's equations: the labels of its (polished) raw branches are those choices, read from the
     angles alone."""
     arm = _arm(robot, joint, angle)
-    labeller = _labeller(arm)
+    labeller = arm_configurations(arm)
     rev = labeller.reversed
     chain = arm.chain.reversed() if rev else arm.chain
     T = chain.fk(np.random.default_rng(7).uniform(-np.pi, np.pi, (300, 6)))
@@ -98,7 +94,7 @@ def test_labels_change_exactly_where_a_motion_crosses_a_singular_surface(robot, 
     """Straight joint-space motions, finely sampled: between two samples the label changes iff det J
     (Pinocchio) changes sign, and then (closed form) exactly one flag flips."""
     arm = _arm(robot, joint, angle)
-    labeller = _labeller(arm)
+    labeller = arm_configurations(arm)
     rng = np.random.default_rng(100 + joint)
     crossings = 0
     for _ in range(12):
@@ -111,7 +107,7 @@ def test_labels_constant_along_a_tracked_cartesian_motion():
     """The default scenario's straight line (SSRMS, joint 1 locked at 100 deg), tracked on each IK branch
     at the start: up to where the tracker loses its branch, det J keeps its sign and so does the label."""
     arm = _arm(SSRMS, 1, 100)
-    labeller = _labeller(arm)
+    labeller = arm_configurations(arm)
     R = pin.rpy.rpyToMatrix(*np.deg2rad([90.0, 0.0, 90.0]))
     start, goal = np.array([0.3790, 4.8432, 1.8878]), np.array([2.6250, 1.8750, 4.8750])
     line = start + np.linspace(0.0, 1.0, 800)[:, None] * (goal - start)
@@ -133,6 +129,6 @@ def test_labels_constant_along_a_tracked_cartesian_motion():
 
 def test_general_chains_get_aspects():
     arm = _arm(SSRMS, 4, 130)
-    labeller = _labeller(arm)
+    labeller = arm_configurations(arm)
     assert isinstance(labeller, Aspects) and labeller.names == ("A-", "A+")
-    assert isinstance(_labeller(_arm(SSRMS, 1, 100)), ShoulderElbowWrist)
+    assert isinstance(arm_configurations(_arm(SSRMS, 1, 100)), ShoulderElbowWrist)

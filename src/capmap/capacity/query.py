@@ -23,6 +23,7 @@ from capmap.core import ik
 from capmap.core.configuration import Configurations
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.limits import AffineLimits
+from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError
 
 __all__ = ["ArmQuestion", "PointAnswer", "point_query", "LineAnswer", "line_query"]
@@ -110,8 +111,7 @@ def line_query(arm_q: ArmQuestion, a_m, b_m, payload_kg: float, dt_s: float, con
                           f"[{', '.join(f'{v:g}' for v in a)}] m (there: {', '.join(names[i] for i in np.unique(lab))})",
                           configuration="the configuration")
     q = q[lab == want]
-    k = 0 if q_reference is None else int(np.argmin(np.abs(_wrap(q - q_reference)).max(axis=1)))
-    q0 = q[k]
+    q0 = q[0 if q_reference is None else nearest_branch(q, np.asarray(q_reference, dtype=float))[0]]
     res = verify_path(arm_q.dyn, np.stack([a, b]), arm_q.rotation, q0, arm_q.motion, dt_s, arm_q.limits)
     _, verdict = judge(res, arm_q.dyn.arm, arm_q.limits, payload_kg)
     return LineAnswer(configuration=names[want], q_start_rad=q0, result=res, verdict=verdict)
@@ -128,7 +128,3 @@ def _branches(arm_q: ArmQuestion, p: np.ndarray) -> tuple[np.ndarray, np.ndarray
                           f"(no IK solution with joint {arm.locked_joint} locked)", point="the point")
     q = sol.q[0, :K]
     return q, arm_q.labels.labels(q)
-
-
-def _wrap(x: np.ndarray) -> np.ndarray:
-    return (x + np.pi) % (2 * np.pi) - np.pi

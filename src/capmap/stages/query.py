@@ -5,7 +5,6 @@ workflow checks it and, when they are of that config, the run's voxel maps."""
 from __future__ import annotations
 
 import json
-import logging
 from pathlib import Path
 
 import numpy as np
@@ -24,9 +23,6 @@ from capmap.io import datasets
 from capmap.stages.arm import arm_task_from
 
 __all__ = ["load_question", "answer_point", "answer_line"]
-
-log = logging.getLogger(__name__)
-
 
 def load_question(configfile: str) -> tuple[RunConfig, ArmQuestion]:
     """The checked run config of ``configfile`` and the arm it asks about."""
