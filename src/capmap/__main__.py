@@ -1,7 +1,7 @@
 """Command line.
 
 - ``python -m capmap check [results/<run> ...]`` verifies every catalogued dataset of the runs (the
-  main catalogue's and the atlas'; default: every run under ``results/``) against its sha256 and row
+  main catalogue's, the atlas' and the baseline's; default: every run under ``results/``) against its sha256 and row
   count; exit status 1 and one line per problem when any is missing, damaged or changed, when a
   named run folder does not exist, or when a run has no catalogue.
 - ``python -m capmap check-config [FILE ...]`` reads and checks config files with capmap's own
@@ -70,7 +70,8 @@ def main(argv: list[str] | None = None) -> int:
     for r in bare:
         print(f"capmap: {r}: no catalogue.parquet (the run has not finished: snakemake --cores 2 all"
               f"{'' if r.name == 'default' else ' --configfile <its config>'})", file=sys.stderr)
-    catalogues = [c for r in runs for c in (r / "catalogue.parquet", r / "atlas" / "catalogue.parquet") if c.is_file()]
+    catalogues = [c for r in runs for c in (r / "catalogue.parquet", r / "atlas" / "catalogue.parquet",
+                                            r / "baseline" / "catalogue.parquet") if c.is_file()]
     if absent or bare or not catalogues:
         if not catalogues and not absent and not bare:
             print("capmap: no run under results/ (run snakemake first)", file=sys.stderr)
@@ -127,8 +128,8 @@ def _query(args) -> int:
 
 
 def _run_folder(catalogue: Path) -> Path:
-    """results/<run> of a catalogue (results/<run>/catalogue.parquet or results/<run>/atlas/...)."""
-    return catalogue.parent.parent if catalogue.parent.name == "atlas" else catalogue.parent
+    """results/<run> of a catalogue (results/<run>/catalogue.parquet or results/<run>/{atlas,baseline}/...)."""
+    return catalogue.parent.parent if catalogue.parent.name in ("atlas", "baseline") else catalogue.parent
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ def scenario():
     dyn = ArmDynamics(arm)
     limits = LoadLimits.uniform(7, 700, 200, 500).for_arm(arm)
 
-    def evaluate(p):
+    def evaluate(p, *_):
         sol = ik.solve(arm, p, TASK_R)
         pc = point_capacity(dyn, sol.q, sol.n_solutions, DIRS, Motion(0.15, 0.03), limits, AXES)
         return Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions)
@@ -44,7 +44,7 @@ def scenario_configurations():
     limits = LoadLimits.uniform(7, 700, 200, 500).for_arm(arm)
     labels = arm_configurations(arm)
 
-    def evaluate(p):
+    def evaluate(p, *_):
         sol = ik.solve(arm, p, TASK_R)
         pc = point_capacity(dyn, sol.q, sol.n_solutions, DIRS, Motion(0.15, 0.03), limits, AXES, labels)
         return Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions, pc.config_capacity_kg,

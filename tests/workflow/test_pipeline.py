@@ -378,3 +378,36 @@ def test_refined_voxels_never_exceed_their_sampled_minima(tmp_path):
     lo = np.array(g["lower_m"]) + conf[["i", "j", "k"]].to_numpy() * g["edge_m"]
     w = conf[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
     assert np.all((w >= lo - 1e-9) & (w <= lo + g["edge_m"] + 1e-9))
+
+
+def test_baseline_target_the_healthy_arm_and_the_loss(tmp_path):
+    """`snakemake baseline` on the tiny config with refinement on: the healthy map covers every voxel the
+    failed arm reaches, is at least the failed map wherever the failed arm reached every point it tried in
+    the voxel (there both are minima over the same region), the loss is healthy - failed, the convergence
+    table is consistent (finer steps only add angles), and a change of the step reruns only the baseline."""
+    cfg = config_file(tmp_path, **{"voxels.refine": {"min_points": 8, "max_points": 16, "near_min_points": 16},
+                                   "baseline": {"step_deg": 30, "check_voxels": 6}})
+    res = subprocess.run(["snakemake", "baseline", "-s", str(ROOT / "Snakefile"), "-d", str(tmp_path), "--cores", "2",
+                          "--configfile", str(cfg)], capture_output=True, text=True, timeout=900)
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = tmp_path / "results/tiny/baseline"
+    bl = pd.read_parquet(out / "voxels.parquet")
+    vox = pd.read_parquet(tmp_path / "results/tiny/voxels/voxels.parquet")
+    failed = vox[vox.n_reachable > 0].merge(bl, on=["i", "j", "k"], suffixes=("_failed", ""))
+    assert len(failed) == int((vox.n_reachable > 0).sum()) and failed.healthy_capacity_kg.notna().all()
+    full = failed[failed.n_reachable == failed.n_points_failed]
+    assert len(full) > 3
+    tol = 0.01  # the maps' refinement: each within ~1 % of its brute force (tests/capacity/test_refine.py)
+    assert np.all(full.healthy_capacity_kg >= full.capacity_kg_failed * (1 - tol) - 1e-6)
+    np.testing.assert_allclose(bl.loss_kg, bl.healthy_capacity_kg - bl.capacity_kg.fillna(0.0), rtol=1e-12)
+    assert bl.healthy_capacity_kg.notna().sum() >= len(failed)
+    conv = pd.read_parquet(out / "convergence.parquet")
+    assert len(conv) == 6 and np.all(conv.healthy_half_step_kg >= conv.healthy_capacity_kg - 1e-9)
+    assert np.all(conv.healthy_quarter_step_kg >= conv.healthy_half_step_kg - 1e-9)
+    assert (out / "loss.png").stat().st_size > 20_000 and len(pd.read_parquet(out / "catalogue.parquet")) == 2 + 2
+    summary = pd.read_csv(out / "summary.csv").set_index("quantity").value
+    assert float(summary["cost [core-s]"]) > 0
+    cfg2 = config_file(tmp_path, **{"voxels.refine": {"min_points": 8, "max_points": 16, "near_min_points": 16},
+                                    "baseline": {"step_deg": 20, "check_voxels": 6}})
+    assert planned_jobs_of(tmp_path, cfg2, "baseline") == {"baseline_shard": 2, "baseline_map": 1, "baseline_figure": 1,
+                                                           "baseline_catalogue": 1, "baseline": 1}

@@ -35,6 +35,7 @@ STALE = stale_outputs(OUT, {
     "dualarm": ["dualarm"] if DUALARM else [],
     "atlas": ["atlas"] if ATLAS_CASES else [],
     "atlas/joint*_angle*": [d[len(OUT) + 1:] for d in ATLAS_DIRS],
+    "baseline/healthy_*_of_*.parquet": [f"baseline/healthy_{k}_of_{SHARDS}.parquet" for k in range(SHARDS)],
 })
 if STALE:
     print(f"capmap: note: {len(STALE)} output(s) under {OUT}/ are not of this config (kept, not in its catalogue "

@@ -38,7 +38,8 @@ for _t in RUN.tasks:  # a further task starts at the IK solution nearest its q_s
 # the report's scenario text (workflow/report/workflow.rst sees only the config): what the checks resolved
 config["resolved"] = {"joint_torque_nm": RUN.limits.torque_text(), "torque_limit_source": RUN.limits.torque_limit_source}
 print(f"capmap: estimate: {RUN.estimate.describe(RUN.voxel_edge_m)}", file=sys.stderr)
-for _path in missing_catalogued(out("catalogue.parquet")) + missing_catalogued(out("atlas/catalogue.parquet")):
+for _path in [p for c in ("catalogue.parquet", "atlas/catalogue.parquet", "baseline/catalogue.parquet")
+              for p in missing_catalogued(out(c))]:
     # Snakemake would not rebuild it by itself (its consumers are up to date): say so, with the command
     print(f"capmap: warning: {_path} is in the catalogue but missing; rebuild it and what depends on it with: "
           f"snakemake --cores 2 all{CONFIG_ARGS} --forcerun {_path}", file=sys.stderr)

@@ -153,8 +153,11 @@ def _groups(ev: Evaluation, C: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
 def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Evaluation], settings: RefineSettings,
            rng: np.random.Generator, progress: Callable[[int, int, int], None] | None = None) -> VoxelMinima:
     """Refine the voxels of ``start`` (their minima from the points already evaluated; a voxel
-    without a reachable point keeps NaN and is not refined). ``evaluate(points (N, 3) m)`` gives
-    the point results; ``progress(round, active voxels, points this round)`` is called per round.
+    without a reachable point keeps NaN and is not refined). ``evaluate(points (N, 3) m, ceiling (N,) kg,
+    owner (N,))`` gives the point results; ``ceiling`` is each point's voxel's all-branch minimum so far,
+    ``owner`` its voxel: only the least capacity_kg of each voxel's points (below the ceiling) must be
+    exact, any other may be a value at or above it (the per-axis and per-configuration values must be
+    exact); ``progress(round, active voxels, points)`` is called per round.
 
     With configuration fields in ``start`` (:meth:`VoxelMinima.with_configurations`; ``evaluate``
     then gives them too), every configuration's minimum and per-axis minima are refined as the
@@ -250,7 +253,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         new = new + n_local
         if progress:
             progress(rounds, len(active), len(pts))
-        ev = evaluate(pts)
+        ev = evaluate(pts, cap[owner, 0], owner)
         evaluated += len(pts)
         c, b, ac = _groups(ev, C)
         old = cap[active].copy()

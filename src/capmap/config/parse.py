@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from capmap.config.atlas import AtlasConfig
+from capmap.config.baseline import BaselineConfig
 from capmap.config.capacity import (
     DirectionsConfig,
     LimitsConfig,
@@ -59,6 +60,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         reconfig=ReconfigConfig.from_doc(doc["reconfig"]) if "reconfig" in doc else None,
         dualarm=dualarm,
         atlas=atlas,
+        baseline=BaselineConfig.from_doc(doc.get("baseline")),
         name=run_name(doc, source),
     )
 

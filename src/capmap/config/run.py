@@ -17,6 +17,7 @@ from capmap.errors import ConfigError
 
 if TYPE_CHECKING:  # resolved lazily at run time through SECTION_TYPES
     from capmap.config.atlas import AtlasConfig
+    from capmap.config.baseline import BaselineConfig
     from capmap.config.capacity import (
         DirectionsConfig,
         LimitsConfig,
@@ -39,7 +40,8 @@ DEFAULT_CONFIG = "config/config.yaml"  # the config when no --configfile is give
 SECTION_TYPES = {  # a section type's name -> the module defining it (imported when a slice holds it)
     **dict.fromkeys(("DirectionsConfig", "LimitsConfig", "LockConfig", "PlanningConfig", "RefineConfig", "SamplingConfig",
                      "TaskConfig", "VerificationConfig"), "capmap.config.capacity"),
-    "AtlasConfig": "capmap.config.atlas", "DualArmConfig": "capmap.config.dualarm", "Estimate": "capmap.config.estimate",
+    "AtlasConfig": "capmap.config.atlas", "BaselineConfig": "capmap.config.baseline",
+    "DualArmConfig": "capmap.config.dualarm", "Estimate": "capmap.config.estimate",
     "Failure": "capmap.config.failure", "FollowConfig": "capmap.config.following", "ReconfigConfig": "capmap.config.reconfig",
 }
 
@@ -68,6 +70,7 @@ class RunConfig:
     reconfig: ReconfigConfig | None = None
     dualarm: DualArmConfig | None = None
     atlas: AtlasConfig | None = None
+    baseline: BaselineConfig | None = None  # parse_config always sets it (absent section: its defaults)
     failure: Failure | None = None
     estimate: Estimate | None = None
     name: str = "default"

@@ -63,6 +63,12 @@ _RECONFIG = ("robot", "capture", "unlock", "configuration_deg", "theta_deg", "d_
              "joint_rate_limit_deg_s", "min_time_scale")
 _TASK_MOTION = ("task.orientation_rpy_deg", "task.v_max_mps", "task.a_max_mps2")
 
+
+def _baseline_shard(cfg: RunConfig) -> tuple[str, ...]:  # the healthy arm on the failed map's lattice
+    return ("robot", "failure.joint", "failure.angle_deg", "sampling", "voxel_edge_m", "limits", "directions",
+            "baseline.step_deg", "baseline.screen_directions") + _TASK_MOTION + _refine(cfg)
+
+
 STAGES: dict[str, Stage] = {
     # family 1: capacity map -> plan -> verify
     "model": Stage(("robot",)),
@@ -79,6 +85,9 @@ STAGES: dict[str, Stage] = {
                         "failure.start_m")  # the start (given or FK(q_ini)) does not depend on the lock
                        + _TASK_MOTION + tuple(f"task.{k}" for k in ("payload_kg", "goal_m", "q_ini_deg"))),
     "atlas": Stage(("atlas",), ("atlas_map",)),
+    # the healthy arm and the failure's cost (reads the failed map: its worst points, its values)
+    "baseline_shard": Stage(_baseline_shard, ("refine",)),
+    "baseline": Stage(("baseline.check_voxels",), ("baseline_shard", "view")),
     # family 2: following (space: the verified path of its payload, not the verification's sampling)
     "follow_space": Stage(("job", "follow.period_s", "follow.space"), ("plan",)),
     "follow_ground": Stage(("follow.period_s", "follow.ground")),

@@ -65,16 +65,20 @@ class BatchDynamics:
         self.locked_q = float(arm.locked_angle_rad)
         self.n_out = len(arm.active) + 6
 
-    def coefficients(self, q_active: np.ndarray) -> Coefficients:
+    def coefficients(self, q_active: np.ndarray, held_rad: np.ndarray | None = None) -> Coefficients:
         """The :class:`~capmap.core.coefficients.Coefficients` of configurations q_active (B, n_active) rad
         (a single (n_active,) is a batch of one): c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6),
-        S (B, n_out, 3), singular (B,)."""
+        S (B, n_out, 3), singular (B,). ``held_rad`` (B,): the locked joint held at these angles instead
+        of the arm's (one batch over several lock angles of the same joint: the model arrays do not depend
+        on it)."""
         q_active = np.ascontiguousarray(np.atleast_2d(q_active), dtype=float)
         B = len(q_active)
         q = np.empty((B, self.n))
         q[:, self.active] = q_active
         if self.locked >= 0:
-            q[:, self.locked] = self.locked_q
+            q[:, self.locked] = self.locked_q if held_rad is None else held_rad
+        elif held_rad is not None:
+            raise ValueError("held_rad needs an arm with a locked joint")
         c0 = np.zeros((B, self.n_out))
         L = np.zeros((B, self.n_out, 3))
         Q = np.zeros((B, self.n_out, 6))

@@ -13,12 +13,13 @@ from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
+from capmap.plots.baseline import baseline_figure
 from capmap.plots.capacity import capacity_map
 from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
 from capmap.stages.arm import configuration_name
 from capmap.stages.common import stage_config
 
-__all__ = ["stage_summary", "stage_capacity_3d", "MapView"]
+__all__ = ["stage_summary", "stage_capacity_3d", "stage_baseline_figure", "MapView"]
 
 
 @dataclass(frozen=True)
@@ -111,3 +112,14 @@ def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], ou
     shown = ", ".join(f"{n}: {len(m)} voxels" for n, m in maps)
     stage_logger(__name__, "capacity 3d").info(f"{shown}, {len(paths)} planned paths -> {out_html} "
                                                f"({len(html) / 1e6:.1f} MB, offline)")
+
+
+def stage_baseline_figure(voxels: str, convergence: str, out_png: str, slice_json: str) -> None:
+    """The baseline's figure (:func:`capmap.plots.baseline.baseline_figure`)."""
+    df, conv = datasets.read(voxels), datasets.read(convergence)
+    view = MapView.from_slice(slice_json)
+    run = stage_config(slice_json).run
+    meta = df.attrs["capmap"]
+    baseline_figure(df, conv, view.start_m, view.payloads_kg, meta["configuration"], run.failure.joint,
+                    run.failure.angle_deg, conv.attrs["capmap"]["step_deg"], meta["grid"]["edge_m"], out_png)
+    stage_logger(__name__, "baseline figure").info(f"-> {out_png}")

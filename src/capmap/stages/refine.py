@@ -54,7 +54,7 @@ def stage_refine(voxels: str, out: str, out_configurations: str, slice_json: str
 
     dyn, axes, labels = ArmDynamics(arm), grid_axes(), arm_configurations(arm)
 
-    def evaluate(points: np.ndarray) -> Evaluation:
+    def evaluate(points: np.ndarray, *_) -> Evaluation:  # every value exact (the ceiling and owner not used)
         parts = []
         for r in range(0, len(points), 2000):
             sol = ik.solve(arm, points[r:r + 2000], rotation)
