@@ -16,8 +16,7 @@ from capmap.core.configuration import arm_configurations
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
-from tests.reference.lp import lp_capacity
-from tests.reference.newton_euler import newton_euler
+from tests.reference.posture_capacity import posture_capacity
 from tests.scenario import SSRMS_YAML, TASK_R, X_DES, X_INI
 
 MOTION = Motion(0.15, 0.03)
@@ -25,8 +24,9 @@ LIMITS = LoadLimits.uniform(7, 700, 200, 500)
 
 
 def _subset(dirs: Directions, n: int) -> Directions:
-    k = screening_subset(dirs, n)
-    return Directions(dirs.u[k], dirs.alpha_deg[k], dirs.beta_deg[k], "subset")
+    screen = screening_subset(dirs, n)
+    assert all(any(np.array_equal(v, w) for w in dirs.u) for v in screen.u)  # a subset: its minimum bounds the set's
+    return screen
 
 
 @pytest.fixture(scope="module")
@@ -57,27 +57,12 @@ def test_angles_hold_the_failed_angle_one_turn_or_the_range():
 
 
 def _reference(robot, arm, q_active: np.ndarray, dirs: Directions, limit: np.ndarray) -> float:
-    """min over dirs of the LP capacity of the posture moving along u: joint rates from Pinocchio's frame
-    Jacobian and classical acceleration, loads by Craig's recursive Newton-Euler."""
-    model = arm.reduced_model
-    data = model.createData()
-    f = arm.reduced_ee_frame_id
-    J = pin.computeFrameJacobian(model, data, q_active, f, pin.LOCAL_WORLD_ALIGNED)
+    """The independent posture capacity (tests.reference.posture_capacity) over dirs; 0 at a singular posture."""
+    J = pin.computeFrameJacobian(arm.reduced_model, arm.reduced_model.createData(), q_active, arm.reduced_ee_frame_id,
+                                 pin.LOCAL_WORLD_ALIGNED)
     if abs(np.linalg.det(J)) < 1e-9:
         return 0.0
-    best = np.inf
-    for u in dirs.u:
-        qd = np.linalg.solve(J, np.r_[MOTION.v_max_mps * u, 0, 0, 0])
-        pin.forwardKinematics(model, data, q_active, qd, np.zeros(6))
-        bias = pin.getFrameClassicalAcceleration(model, data, f, pin.LOCAL_WORLD_ALIGNED).vector
-        qdd = np.linalg.solve(J, np.r_[MOTION.a_max_mps2 * u, 0, 0, 0] - bias)
-        full = [np.insert(x, arm.locked_joint - 1, v) for x, v in ((q_active, arm.locked_angle_rad), (qd, 0), (qdd, 0))]
-        t0, _, f0, m0 = newton_euler(*full, robot.gravity, 0.0, robot.base_com)
-        t1, _, f1, m1 = newton_euler(*full, robot.gravity, 1.0, robot.base_com)
-        keep = np.arange(7) != arm.locked_joint - 1
-        y0 = np.concatenate([t0[keep], f0, m0])
-        best = min(best, lp_capacity(y0, np.concatenate([t1[keep], f1, m1]) - y0, limit))
-    return best
+    return posture_capacity(robot, arm, q_active, dirs.u, MOTION.v_max_mps, MOTION.a_max_mps2, limit)
 
 
 @pytest.mark.parametrize("joint, point", [(1, X_INI), (1, X_DES), (4, np.array([1.5, 3.0, 3.0]))])

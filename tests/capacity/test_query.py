@@ -4,7 +4,6 @@ classical acceleration (the joint motion), Craig's recursive Newton-Euler (the l
 largest payload), over the same directions."""
 
 import numpy as np
-import pinocchio as pin
 import pytest
 import yaml
 
@@ -17,8 +16,7 @@ from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
 from tests.reference.ik_oracle import DHArm, solve_all
-from tests.reference.lp import lp_capacity
-from tests.reference.newton_euler import newton_euler
+from tests.reference.posture_capacity import posture_capacity
 from tests.scenario import SSRMS_YAML, TASK_R, X_DES, X_INI
 
 MOTION = Motion(0.15, 0.03)
@@ -34,25 +32,8 @@ def question():
 
 
 def _reference_capacity(robot, arm, q_active: np.ndarray, limit: np.ndarray) -> float:
-    """min over DIRS of the LP capacity of the state moving along u at v_max, a_max: joint rates from
-    Pinocchio's frame Jacobian and classical acceleration (LOCAL_WORLD_ALIGNED), loads by Newton-Euler."""
-    model = arm.reduced_model
-    data = model.createData()
-    f = arm.reduced_ee_frame_id
-    J = pin.computeFrameJacobian(model, data, q_active, f, pin.LOCAL_WORLD_ALIGNED)
-    best = np.inf
-    for u in DIRS.u:
-        qd = np.linalg.solve(J, np.r_[MOTION.v_max_mps * u, 0, 0, 0])
-        pin.forwardKinematics(model, data, q_active, qd, np.zeros(6))
-        bias = pin.getFrameClassicalAcceleration(model, data, f, pin.LOCAL_WORLD_ALIGNED).vector
-        qdd = np.linalg.solve(J, np.r_[MOTION.a_max_mps2 * u, 0, 0, 0] - bias)
-        full = [np.insert(x, arm.locked_joint - 1, v) for x, v in ((q_active, arm.locked_angle_rad), (qd, 0), (qdd, 0))]
-        t0, _, f0, m0 = newton_euler(*full, robot.gravity, 0.0, robot.base_com)
-        t1, _, f1, m1 = newton_euler(*full, robot.gravity, 1.0, robot.base_com)
-        keep = np.arange(7) != arm.locked_joint - 1
-        y0 = np.concatenate([t0[keep], f0, m0])
-        best = min(best, lp_capacity(y0, np.concatenate([t1[keep], f1, m1]) - y0, limit))
-    return best
+    """min over DIRS of the independent posture capacity (tests.reference.posture_capacity)."""
+    return posture_capacity(robot, arm, q_active, DIRS.u, MOTION.v_max_mps, MOTION.a_max_mps2, limit)
 
 
 @pytest.mark.parametrize("point", [X_INI, X_DES, np.array([1.5, 3.0, 3.0])])

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.directions import Directions
-from capmap.capacity.engine import Motion, motion_features
+from capmap.capacity.engine import Motion, argmin_per_group, motion_features
 from capmap.capacity.sweep import min_over_directions
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
@@ -69,8 +69,8 @@ def self_motion_angles(lower_deg: float, upper_deg: float, through_deg: float, s
     return a[np.concatenate([[True], np.diff(a) > 1e-9])]
 
 
-def screening_subset(directions: Directions, n: int) -> np.ndarray:
-    """Indices (<= n,) of directions spread over the set (farthest-point order from the first): the
+def screening_subset(directions: Directions, n: int) -> Directions:
+    """At most n of the directions, spread over the set (farthest-point order from the first): the
     screening set, a subset so that its minimum bounds the full set's from above."""
     u = directions.u
     n = min(int(n), len(u))
@@ -80,7 +80,8 @@ def screening_subset(directions: Directions, n: int) -> np.ndarray:
         k = int(np.argmax(dist))
         pick.append(k)
         dist = np.minimum(dist, np.linalg.norm(u - u[k], axis=1))
-    return np.array(sorted(pick))
+    k = np.array(sorted(pick))
+    return Directions(u[k], directions.alpha_deg[k], directions.beta_deg[k], f"{directions.kind}[{len(k)}]")
 
 
 @dataclass(frozen=True)
@@ -171,7 +172,9 @@ def healthy_capacity(sm: SelfMotion, points: np.ndarray, rotation: np.ndarray, d
         if pr:
             pr, tr, qr = np.concatenate(pr), np.concatenate(tr), np.concatenate(qr)
             cap, bnd = _capacity(sm, sm.held_rad[tr], qr, directions, motion)
-            k = argmax_rows(cap, pr, N)
+            sel = argmin_per_group(-cap, pr)  # each point's best posture
+            k = np.full(N, -1)
+            k[pr[sel]] = sel
             has = k >= 0
             stop = np.zeros(N, dtype=bool)
             stop[has] = cap[k[has]] >= ceiling[has]
@@ -185,16 +188,6 @@ def healthy_capacity(sm: SelfMotion, points: np.ndarray, rotation: np.ndarray, d
                                 None if groups is None else np.asarray(groups)[rest])
         for f in HealthyCapacity.__dataclass_fields__:
             getattr(out, f)[rest] = getattr(sub, f)
-    return out
-
-
-def argmax_rows(values: np.ndarray, rows: np.ndarray, n: int) -> np.ndarray:
-    """(n,) the index into values (M,) of the largest value of each row in rows (M,) (-1: none)."""
-    order = np.lexsort((-values, rows))
-    first = np.ones(len(order), dtype=bool)
-    first[1:] = rows[order][1:] != rows[order][:-1]
-    out = np.full(n, -1)
-    out[rows[order][first]] = order[first]
     return out
 
 

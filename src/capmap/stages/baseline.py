@@ -12,7 +12,6 @@ import pandas as pd
 
 from capmap.capacity import sampling
 from capmap.capacity.baseline import SelfMotion, healthy_capacity, screening_subset, self_motion_angles
-from capmap.capacity.directions import Directions
 from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.refine import Evaluation, VoxelMinima, refine
 from capmap.capacity.tables import configuration_voxels, grid_of
@@ -77,8 +76,7 @@ def stage_baseline_shard(voxels: str, out: str, slice_json: str, shard: int, sha
     at = arm_task_from(run)
     sm = self_motion_of(at, run, bl.step_deg)
     dirs = run.directions.build()
-    pick = screening_subset(dirs, bl.screen_directions)
-    screen = Directions(dirs.u[pick], dirs.alpha_deg[pick], dirs.beta_deg[pick], f"{dirs.kind}[{len(pick)}]")
+    screen = screening_subset(dirs, bl.screen_directions)
     failed = datasets.read(voxels)
     fg = grid_of(failed)
     fr = failed[(failed.n_reachable > 0) & failed.worst_x_m.notna()]
@@ -155,7 +153,7 @@ def stage_baseline_shard(voxels: str, out: str, slice_json: str, shard: int, sha
     seconds = time.perf_counter() - t0
     datasets.write(df[HEALTHY_COLUMNS], out, datasets.provenance(
         "baseline", cfg.doc, shard=shard, shards=shards, angles_deg=sm.angles_deg.tolist(), seconds=seconds,
-        points_evaluated=done[0], screen_directions=len(pick)))
+        points_evaluated=done[0], screen_directions=len(screen)))
     log.info(f"done: {len(df)} voxels, {done[0]} points evaluated ({done[0] / max(len(df), 1):.1f} per voxel), "
              f"{int((~df.converged).sum()) if settings else len(df)} not converged, {seconds:.1f} s -> {out}")
 
@@ -227,8 +225,7 @@ def _convergence(run, bl, h: pd.DataFrame, rng: np.random.Generator) -> pd.DataF
     the coarser one's angles), so the table bounds the change of the map."""
     at = arm_task_from(run)
     dirs = run.directions.build()
-    pick = screening_subset(dirs, bl.screen_directions)
-    screen = Directions(dirs.u[pick], dirs.alpha_deg[pick], dirs.beta_deg[pick], "screen")
+    screen = screening_subset(dirs, bl.screen_directions)
     rows = h[h.healthy_capacity_kg.notna()]
     rows = rows.iloc[np.sort(rng.choice(len(rows), size=min(bl.check_voxels, len(rows)), replace=False))]
     pts = rows[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
