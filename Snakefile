@@ -44,7 +44,6 @@ CAPACITY_MAP = [
     *expand(out("verify/payload_{payload}kg/{name}.png"), payload=PAYLOADS,
             name=["workspace", "torques", "base_force", "base_moment"]),
     out("verify/summary.csv"),
-    out("plan/gain.csv"),
     *expand(out("tasks/{task}/{name}.png"), task=TASKS, name=["workspace", "torques", "base_force", "base_moment"]),
 ]
 

@@ -12,6 +12,14 @@ from capmap.core.reduction import lock
 from tests.scenario import SSRMS_YAML
 
 
+def pytest_configure(config):
+    """Compile the numba kernels once before the xdist workers start (each would compile them)."""
+    if not hasattr(config, "workerinput"):
+        from capmap.kernels import ensure_warm
+
+        ensure_warm()
+
+
 @pytest.fixture(scope="session")
 def ssrms():
     return load(SSRMS_YAML)

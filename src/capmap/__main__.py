@@ -1,7 +1,7 @@
 """Command line.
 
 - ``python -m capmap check [results/<run> ...]`` verifies every catalogued dataset of the runs (the
-  main catalogue's, the atlas' and the baseline's; default: every run under ``results/``) against its sha256 and row
+  main catalogue's, the atlas', the baseline's and the plan-gain experiment's; default: every run under ``results/``) against its sha256 and row
   count; exit status 1 and one line per problem when any is missing, damaged or changed, when a
   named run folder does not exist, or when a run has no catalogue.
 - ``python -m capmap check-config [FILE ...]`` reads and checks config files with capmap's own
@@ -16,6 +16,9 @@
   [--payload M] [--configuration C]`` verifies that straight line on a configuration (default: the
   arm's own at the task start). Both read a run's config (``--configfile``, default
   ``config/config.yaml``), answer without running the pipeline, and print a table (or ``--json``).
+- ``python -m capmap warm`` compiles the numba kernels into numba's cache once (a few milliseconds
+  when this code's kernels are already compiled): the workflow runs it before its first job, so that
+  parallel jobs load the kernels instead of each compiling them (:mod:`capmap.kernels`).
 """
 
 from __future__ import annotations
@@ -24,12 +27,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from capmap.config.checks import check_run_config
-from capmap.config.robot_file import load, lock_classes
-from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.errors import CapmapError
-from capmap.io.datasets import verify_catalogue
-from capmap.stages.query import answer_line, answer_point
+
+DEFAULT_CONFIG = "config/config.yaml"  # capmap.config.run's (a test checks); each command imports what it needs
 
 __all__ = ["main"]
 
@@ -55,7 +55,10 @@ def main(argv: list[str] | None = None) -> int:
         q.add_argument("--payload", type=float, default=None, help="payload, kg")
         q.add_argument("--configfile", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
         q.add_argument("--json", action="store_true", help="answer as JSON")
+    sub.add_parser("warm", help="compile the numba kernels once, before any job (the workflow runs it)")
     args = ap.parse_args(argv)
+    if args.command == "warm":
+        return _warm()
     if args.command == "query":
         return _query(args)
     if args.command == "check-config":
@@ -71,11 +74,14 @@ def main(argv: list[str] | None = None) -> int:
         print(f"capmap: {r}: no catalogue.parquet (the run has not finished: snakemake --cores 2 all"
               f"{'' if r.name == 'default' else ' --configfile <its config>'})", file=sys.stderr)
     catalogues = [c for r in runs for c in (r / "catalogue.parquet", r / "atlas" / "catalogue.parquet",
-                                            r / "baseline" / "catalogue.parquet") if c.is_file()]
+                                            r / "baseline" / "catalogue.parquet", r / "plan" / "gain_catalogue.parquet")
+                  if c.is_file()]
     if absent or bare or not catalogues:
         if not catalogues and not absent and not bare:
             print("capmap: no run under results/ (run snakemake first)", file=sys.stderr)
         return 1
+    from capmap.io.datasets import verify_catalogue
+
     try:  # catalogued paths are relative to the workflow's folder, two levels above results/<run>/
         problems = [p for c in catalogues for p in verify_catalogue(c, _run_folder(c).parent.parent)]
     except CapmapError as exc:
@@ -90,6 +96,9 @@ def main(argv: list[str] | None = None) -> int:
 
 def _check_config(files: list[str]) -> int:
     """The files merged in order, as ``--configfile A B`` merges them."""
+    from capmap.config.checks import check_run_config
+    from capmap.config.run import run_document
+
     source = ", ".join(files)
     try:
         run = check_run_config(run_document(files), source)
@@ -101,6 +110,8 @@ def _check_config(files: list[str]) -> int:
 
 
 def _arm(path: str, angle_deg: float | None) -> int:
+    from capmap.config.robot_file import load, lock_classes
+
     try:
         robot = load(path)
     except CapmapError as exc:
@@ -113,6 +124,8 @@ def _arm(path: str, angle_deg: float | None) -> int:
 
 
 def _query(args) -> int:
+    from capmap.stages.query import answer_line, answer_point
+
     try:
         if args.payload is not None and not (args.payload >= 0 and args.payload < float("inf")):
             raise CapmapError(f"--payload {args.payload} must be a finite mass >= 0 kg")
@@ -127,9 +140,21 @@ def _query(args) -> int:
     return 0
 
 
+def _warm() -> int:
+    import time
+
+    from capmap.kernels import ensure_warm
+
+    t = time.perf_counter()
+    ran = ensure_warm()
+    print(f"capmap: numba kernels {'compiled' if ran else 'already compiled'} ({time.perf_counter() - t:.1f} s)",
+          file=sys.stderr)
+    return 0
+
+
 def _run_folder(catalogue: Path) -> Path:
-    """results/<run> of a catalogue (results/<run>/catalogue.parquet or results/<run>/{atlas,baseline}/...)."""
-    return catalogue.parent.parent if catalogue.parent.name in ("atlas", "baseline") else catalogue.parent
+    """results/<run> of a catalogue (results/<run>/catalogue.parquet or results/<run>/{atlas,baseline}/..., results/<run>/plan/gain_catalogue.parquet)."""
+    return catalogue.parent.parent if catalogue.parent.name in ("atlas", "baseline", "plan") else catalogue.parent
 
 
 if __name__ == "__main__":

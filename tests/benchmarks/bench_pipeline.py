@@ -1,17 +1,20 @@
-"""Wall time of Snakemake from clean on a config (default: config/config.yaml): the capacity map
-alone (target ``capacity_map``) and the whole workflow (``all``), each in its own temporary copy
-of the workflow so that results/ of the checkout is untouched.
+"""Wall time of Snakemake on the default config, this checkout against a reference commit measured in
+the same run (issue 26's targets): ``all`` from clean, then the what-if a user repeats for every
+failure studied, ``capacity_map`` after a lock-angle change (``lock.angle_deg: 95``, ``tasks: []``).
 
-    python -m tests.benchmarks.bench_pipeline [--config config/config.yaml] [--cores 2]
+    python -m tests.benchmarks.bench_pipeline [--reference 38cfebe] [--cores 2] [--skip-reference]
 
-Prints the wall times, the capacity engine's point count and motion states, and the longest
-jobs (from their logs: every job logs its wall time). Targets: the capacity map from clean in
-under 30 s on 2 cores (issue 14); the whole default run is reported with what dominates it.
+Each run is in its own temporary copy of the workflow (results/ of the checkout untouched); the
+reference's code is a ``git worktree`` of the commit, put first on PYTHONPATH for its jobs. Prints the
+machine, each wall time, the ratio (reference / this) and the longest jobs of this checkout's runs
+(from their logs: every job logs its wall time). Targets: ``all`` from clean <= 90 s, the what-if
+<= 45 s on 2 cores.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 import subprocess
@@ -19,28 +22,28 @@ import tempfile
 import time
 from pathlib import Path
 
-import pandas as pd
+import yaml
 
-from capmap.config.run import run_name
-from capmap.config.validation import load_yaml
 from tests.benchmarks.machine import machine
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _run(target: str, config: Path, cores: int) -> tuple[float, Path, tempfile.TemporaryDirectory]:
-    holder = tempfile.TemporaryDirectory()
-    tmp = Path(holder.name)
+def _copy(code: Path, tmp: Path) -> None:
     for item in ("Snakefile", "workflow", "config", "profiles"):
-        src = ROOT / item
-        (shutil.copytree if src.is_dir() else shutil.copy)(src, tmp / item)
+        src = code / item
+        if src.exists():
+            (shutil.copytree if src.is_dir() else shutil.copy)(src, tmp / item)
+
+
+def _snakemake(tmp: Path, target: str, cores: int, env: dict, extra: list[str] = ()) -> float:
     t = time.perf_counter()
-    res = subprocess.run(["snakemake", target, "--cores", str(cores), "--configfile", str(config)], check=False, cwd=tmp,
-                         capture_output=True, text=True)
+    res = subprocess.run(["snakemake", target, "--cores", str(cores), *extra], cwd=tmp, env=env, capture_output=True,
+                         text=True, check=False)
     wall = time.perf_counter() - t
     if res.returncode != 0:
-        raise SystemExit(res.stderr[-3000:])
-    return wall, tmp, holder
+        raise SystemExit(f"snakemake {target} in {tmp} failed:\n{res.stderr[-3000:]}")
+    return wall
 
 
 def _jobs(run: Path) -> list[tuple[float, str]]:
@@ -52,33 +55,56 @@ def _jobs(run: Path) -> list[tuple[float, str]]:
     return sorted(out, reverse=True)
 
 
+def _measure(code: Path, cores: int, env: dict, label: str) -> dict:
+    """``all`` from clean, then ``capacity_map`` after the lock-angle change, in a copy of ``code``'s workflow."""
+    holder = tempfile.TemporaryDirectory()
+    tmp = Path(holder.name)
+    _copy(code, tmp)
+    env = dict(env, NUMBA_CACHE_DIR=str(tmp / "numba_cache"))  # compiled from cold, like a fresh clone
+    out = {"all": _snakemake(tmp, "all", cores, env)}
+    jobs_all = _jobs(tmp / "results" / "default")
+    cfg = yaml.safe_load((tmp / "config" / "config.yaml").read_text())
+    cfg["lock"]["angle_deg"] = 95
+    cfg["tasks"] = []
+    (tmp / "config" / "config.yaml").write_text(yaml.safe_dump(cfg, sort_keys=False))
+    before = {p: p.stat().st_mtime for p in (tmp / "results" / "default" / "logs").rglob("*.log")}
+    out["what_if"] = _snakemake(tmp, "capacity_map", cores, env)
+    logs = tmp / "results" / "default" / "logs"
+    rerun = [p for p in logs.rglob("*.log") if before.get(p) != p.stat().st_mtime]
+    out["what_if_jobs"] = len(rerun)
+    out["jobs_all"] = jobs_all
+    print(f"{label}: all from clean {out['all']:.1f} s ({len(jobs_all)} jobs, "
+          f"{sum(j[0] for j in jobs_all):.1f} s of job compute); capacity_map after lock.angle_deg 95 "
+          f"{out['what_if']:.1f} s ({len(rerun)} jobs)", flush=True)
+    holder.cleanup()
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--config", default="config/config.yaml")
+    ap.add_argument("--reference", default="38cfebe", help="the commit measured beside this checkout")
     ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--skip-reference", action="store_true")
     args = ap.parse_args()
     print(f"machine: {machine()}")
-    cfg = (ROOT / args.config).resolve()
-    name = run_name(load_yaml(cfg), str(cfg))  # the run's folder, results/<run>/
-    wall, tmp, holder = _run("capacity_map", cfg, args.cores)
-    pts = pd.read_parquet(tmp / "results" / name / "voxels/points.parquet")
-    vox = pd.read_parquet(tmp / "results" / name / "voxels/voxels.parquet")
-    dirs = pts.attrs["capmap"]["config"]["run"]["directions"]
-    jobs = _jobs(tmp / "results" / name)
-    holder.cleanup()
-    print(f"snakemake --cores {args.cores} capacity_map from clean: {wall:.1f} s wall (target < 30 s), "
-          f"{len(jobs)} jobs, {sum(j[0] for j in jobs):.1f} s of job compute")
-    print(f"  points {len(pts):,} ({int(pts.reachable.sum()):,} reachable at the task orientation), "
-          f"motion states {int(pts.n_states.sum()):,}, directions {dirs}")
-    print(f"  voxels {len(vox):,} ({int((vox.n_reachable > 0).sum()):,} reachable, "
-          f"{int((vox.n_points == 0).sum())} without samples)")
-    print(f"  throughput {int(pts.n_states.sum()) / wall:,.0f} states/s end to end")
-    wall, tmp, holder = _run("all", cfg, args.cores)
-    jobs = _jobs(tmp / "results" / name)
-    holder.cleanup()
-    print(f"snakemake --cores {args.cores} all from clean: {wall:.1f} s wall, {len(jobs)} jobs, "
-          f"{sum(j[0] for j in jobs):.1f} s of job compute; longest jobs:")
-    for w, name in jobs[:6]:
+    env = dict(os.environ)
+    this = _measure(ROOT, args.cores, env, "this checkout")
+    ref = None
+    if not args.skip_reference:
+        wt = Path(tempfile.mkdtemp()) / "reference"
+        subprocess.run(["git", "worktree", "add", "--detach", str(wt), args.reference], cwd=ROOT, check=True,
+                       capture_output=True)
+        try:
+            ref_env = dict(env, PYTHONPATH=f"{wt / 'src'}{os.pathsep}{env.get('PYTHONPATH', '')}")
+            ref = _measure(wt, args.cores, ref_env, f"reference {args.reference}")
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(wt)], cwd=ROOT, check=False, capture_output=True)
+    for key, target, label in (("all", 90, "snakemake all from clean"),
+                               ("what_if", 45, "capacity_map after a lock-angle change")):
+        ratio = f"; {ref[key] / this[key]:.2f}x the reference's {ref[key]:.1f} s" if ref else ""
+        print(f"{label}: {this[key]:.1f} s (target <= {target} s){ratio}")
+    print("longest jobs of this checkout's run from clean:")
+    for w, name in this["jobs_all"][:8]:
         print(f"  {w:6.1f} s  {name}")
 
 

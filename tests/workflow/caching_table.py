@@ -38,7 +38,7 @@ ROWS = [
     ("`lock.*`", "lock.angle_deg = 95"),
     ("`sampling.*`", "sampling.seed = 1"),
     ("`limits.*`", "limits.joint_torque_nm = 650"),
-    ("`directions.*`", "directions.step_deg = 15"),
+    ("`directions.*`", "directions.kind = paper_grid; directions.step_deg = 10"),
     ("`task.v_max_mps`, `task.a_max_mps2`, `task.orientation_rpy_deg`", "task.v_max_mps = 0.14"),
     ("`voxels.edge_m`", "voxels.edge_m = 1.0"),
     ("`voxels.refine.*`", "voxels.refine.rel_tol = 0.01"),

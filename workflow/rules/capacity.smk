@@ -253,6 +253,30 @@ rule plan_gain:
         "../scripts/plan_gain.py"
 
 
+rule gain_catalogue:
+    """Catalogue of the plan-gain experiment's dataset."""
+    input:
+        out("plan/gain_tasks.parquet"),
+    output:
+        out("plan/gain_catalogue.parquet"),
+    params:
+        code=code_params("catalogue"),
+    log:
+        out("logs/plan/gain_catalogue.log"),
+    conda:
+        "../envs/capmap.yaml"
+    script:
+        "../scripts/catalogue.py"
+
+
+rule experiments:
+    """Target (not in all): the plan-gain experiment, isotropic against direction-aware moves on this map."""
+    input:
+        out("plan/gain.csv"),
+        out("plan/gain.md"),
+        out("plan/gain_catalogue.parquet"),
+
+
 # Further tasks (config `tasks`): the same plan, verify and plot stages on their own start, goal,
 # payload and start configuration, one job each, under results/<run>/tasks/<name>/.
 

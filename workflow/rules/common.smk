@@ -38,7 +38,8 @@ for _t in RUN.tasks:  # a further task starts at the IK solution nearest its q_s
 # the report's scenario text (workflow/report/workflow.rst sees only the config): what the checks resolved
 config["resolved"] = {"joint_torque_nm": RUN.limits.torque_text(), "torque_limit_source": RUN.limits.torque_limit_source}
 print(f"capmap: estimate: {RUN.estimate.describe(RUN.voxel_edge_m)}", file=sys.stderr)
-for _path in [p for c in ("catalogue.parquet", "atlas/catalogue.parquet", "baseline/catalogue.parquet")
+for _path in [p for c in ("catalogue.parquet", "atlas/catalogue.parquet", "baseline/catalogue.parquet",
+                                                "plan/gain_catalogue.parquet")
               for p in missing_catalogued(out(c))]:
     # Snakemake would not rebuild it by itself (its consumers are up to date): say so, with the command
     print(f"capmap: warning: {_path} is in the catalogue but missing; rebuild it and what depends on it with: "
@@ -95,3 +96,12 @@ def dualarm_files(*keys):
     if da is None:
         return []
     return [getattr(da, k) for k in keys] + ([da.cloud_file] if "scene" in keys and da.cloud_file else [])
+
+
+onstart:
+    # compile the numba kernels once, before the first job, so that parallel jobs load them instead of each
+    # compiling them (capmap.kernels; a few milliseconds when this code's kernels are compiled already)
+    import subprocess
+
+    if subprocess.run([sys.executable, "-m", "capmap", "warm"], check=False).returncode:
+        print("capmap: warning: compiling the kernels before the jobs failed; each job compiles its own", file=sys.stderr)

@@ -36,8 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.directions import Directions
-from capmap.capacity.engine import Motion, argmin_per_group, motion_features
-from capmap.capacity.sweep import min_over_directions
+from capmap.capacity.engine import Motion, argmin_per_group, direction_minimum
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.limits import AffineLimits
@@ -132,10 +131,7 @@ def _capacity(sm: SelfMotion, held_rad: np.ndarray, q: np.ndarray, dirs: Directi
     if not len(q):
         return np.zeros(0), np.zeros(0, dtype=int)
     coef = sm.dyn.batch.coefficients(q, held_rad)
-    cap, _, binding = min_over_directions(coef.stacked(), coef.S, motion_features(dirs.u, motion),
-                                          motion.a_max_mps2 * dirs.u, sm.dyn.gravity, sm.limits.limit, dirs.pairs)
-    cap[coef.singular] = 0.0
-    binding[coef.singular] = len(sm.limits)
+    cap, _, _, binding = direction_minimum(coef, dirs, motion, sm.dyn.gravity, sm.limits)
     return cap, binding
 
 

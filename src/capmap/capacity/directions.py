@@ -16,17 +16,19 @@ import numpy as np
 
 from capmap.errors import CapmapError
 
-__all__ = ["Directions", "paper_grid", "sphere", "antipodal_pairs", "GRID_AXES", "AXIS_LABELS", "grid_axes", "axis_of"]
+__all__ = ["Directions", "paper_grid", "sphere", "exact", "angles_deg", "antipodal_pairs", "GRID_AXES", "AXIS_LABELS", "grid_axes", "axis_of"]
 
 
 @dataclass(frozen=True)
 class Directions:
-    """D unit directions: u (D, 3); alpha_deg, beta_deg (D,) their angles."""
+    """D unit directions: u (D, 3); alpha_deg, beta_deg (D,) their angles. ``exact``: the motion set is the
+    whole sphere, u only the start of its exact minimum (:func:`exact`); a subset of it is not exact."""
 
     u: np.ndarray
     alpha_deg: np.ndarray
     beta_deg: np.ndarray
     kind: str
+    exact: bool = False
 
     def __len__(self) -> int:
         return len(self.u)
@@ -85,6 +87,23 @@ def sphere(n: int) -> Directions:
     return Directions(u=u, alpha_deg=np.rad2deg(alpha), beta_deg=np.rad2deg(beta), kind=f"sphere({n})")
 
 
+def angles_deg(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(alpha, beta) deg of unit directions u (..., 3): u = [sin b cos a, sin b sin a, cos b], a in [0, 360),
+    b in [0, 180]."""
+    beta = np.rad2deg(np.arccos(np.clip(u[..., 2], -1.0, 1.0)))
+    return np.mod(np.rad2deg(np.arctan2(u[..., 1], u[..., 0])), 360.0), beta
+
+
+def exact() -> Directions:
+    """The whole sphere of directions: minima over it are exact (:mod:`capmap.capacity.sphere`); u is the
+    start set of the minimisation (16 directions in antipodal pairs)."""
+    from capmap.capacity.sphere import start_directions
+
+    u = start_directions()
+    alpha, beta = angles_deg(u)
+    return Directions(u=u, alpha_deg=alpha, beta_deg=beta, kind="exact", exact=True)
+
+
 def _axes() -> np.ndarray:
     import itertools
 
@@ -110,8 +129,7 @@ def grid_axes() -> Directions:
     :attr:`Directions.pairs` is [[a, a + 13]] for axis a)."""
     d = np.concatenate([GRID_AXES, -GRID_AXES]).astype(float)
     u = d / np.linalg.norm(d, axis=1, keepdims=True)
-    beta = np.rad2deg(np.arccos(np.clip(u[:, 2], -1, 1)))
-    alpha = np.mod(np.rad2deg(np.arctan2(u[:, 1], u[:, 0])), 360.0)
+    alpha, beta = angles_deg(u)
     return Directions(u=u, alpha_deg=alpha, beta_deg=beta, kind="grid_axes(13)")
 
 

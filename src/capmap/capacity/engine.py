@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.directions import Directions
+from capmap.capacity.sphere import min_over_sphere
 from capmap.capacity.sweep import min_over_directions, min_per_pair
 from capmap.core.coefficients import Coefficients
 from capmap.core.configuration import Configurations
@@ -27,7 +28,7 @@ from capmap.errors import CapmapError
 
 __all__ = ["LoadLimits", "Motion", "Coefficients", "coefficients", "coefficients_pinocchio", "state_affine", "joint_state_affine",
            "state_capacity", "direction_features", "affine_over_directions", "capacity_over_directions",
-           "PointCapacity", "point_capacity", "argmin_per_group", "motion_features", "margin_pct", "SINGULAR"]
+           "PointCapacity", "point_capacity", "direction_minimum", "argmin_per_group", "motion_features", "margin_pct", "SINGULAR"]
 
 SINGULAR = "singular"
 
@@ -134,18 +135,40 @@ def capacity_over_directions(coef: Coefficients, directions: Directions, motion:
     return cap, binding
 
 
+def direction_minimum(coef: Coefficients, directions: Directions, motion: Motion, gravity: np.ndarray,
+                      limits: AffineLimits) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Each configuration's minimum over the motion set: capacity (M,) kg, the worst direction's index
+    into ``directions`` (M,) (-1 where it lies off the set: ``directions.exact``, the whole sphere) and
+    the worst direction (M, 3), binding output (M,) (n_out: singular configuration, capacity 0)."""
+    C, a = coef.stacked(), motion.a_max_mps2
+    if directions.exact:
+        cap, worst_u, binding, _ = min_over_sphere(C, coef.S, a, motion.v_max_mps, gravity, limits.limit,
+                                                   directions.u)
+        worst = np.full(len(cap), -1)
+    else:
+        cap, worst, binding = min_over_directions(C, coef.S, motion_features(directions.u, motion), a * directions.u,
+                                                  gravity, limits.limit, directions.pairs)
+        worst_u = directions.u[worst] if len(worst) else np.zeros((0, 3))
+    cap[coef.singular] = 0.0
+    binding[coef.singular] = len(limits)
+    return cap, worst, worst_u, binding
+
+
 @dataclass(frozen=True)
 class PointCapacity:
     """Per-point results for N points (arrays of length N).
 
     capacity_kg: min over configuration set x motion set (NaN if unreachable);
     binding: index into ``names`` (-1 if unreachable); branch, direction: the worst pair
-    (-1 if unreachable); n_states: configurations x directions evaluated."""
+    (-1 if unreachable; direction -1 also where the minimum lies off the set: an exact set); worst_u
+    (N, 3) the worst direction (NaN if unreachable); n_states: configurations x directions of the set
+    (of an exact set: its start directions)."""
 
     capacity_kg: np.ndarray
     binding: np.ndarray
     branch: np.ndarray
     direction: np.ndarray
+    worst_u: np.ndarray
     n_states: np.ndarray
     names: tuple[str, ...]
     axis_capacity_kg: np.ndarray | None = None  # (N, P): per antipodal pair of ``axes`` (NaN if unreachable)
@@ -193,29 +216,27 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
     binding = np.full(N, -1)
     branch = np.full(N, -1)
     direction = np.full(N, -1)
+    worst_u = np.full((N, 3), np.nan)
     valid = np.arange(K)[None, :] < np.asarray(n_solutions)[:, None]
     pts, brs = np.nonzero(valid)
     axis_cap = None if axes is None else np.full((N, len(axes.pairs)), np.nan)
     if len(pts):
         coef = coefficients(dyn, q_sets[pts, brs])
-        a = motion.a_max_mps2
-        C = coef.stacked()  # (M, n_out, 10)
-        c_cfg, worst_dir, b_cfg = min_over_directions(C, coef.S, motion_features(directions.u, motion), a * directions.u,
-                                                      dyn.gravity, limits.limit, directions.pairs)
+        c_cfg, worst_dir, u_cfg, b_cfg = direction_minimum(coef, directions, motion, dyn.gravity, limits)
         if axes is not None:
-            per_axis, _ = min_per_pair(C, coef.S, motion_features(axes.u, motion), a * axes.u, dyn.gravity, limits.limit,
-                                       axes.pairs)
+            a = motion.a_max_mps2
+            per_axis, _ = min_per_pair(coef.stacked(), coef.S, motion_features(axes.u, motion), a * axes.u, dyn.gravity,
+                                       limits.limit, axes.pairs)
             per_axis[coef.singular] = 0.0
             axis_cap[:] = np.inf
             np.minimum.at(axis_cap, pts, per_axis)
             axis_cap[np.asarray(n_solutions) == 0] = np.nan
-        c_cfg[coef.singular] = 0.0
-        b_cfg[coef.singular] = len(limits)
         sel = argmin_per_group(c_cfg, pts)  # min over each point's configurations
         p = pts[sel]
         cap[p] = c_cfg[sel]
         branch[p] = brs[sel]
         direction[p] = worst_dir[sel]
+        worst_u[p] = u_cfg[sel]
         binding[p] = b_cfg[sel]
     per_config = {}
     if configurations is not None:
@@ -237,6 +258,6 @@ def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray
                 np.minimum.at(ca, (pts, lab), per_axis)
             ca[~np.isfinite(cc)] = np.nan
             per_config["config_axis_capacity_kg"] = ca
-    return PointCapacity(capacity_kg=cap, binding=binding, branch=branch, direction=direction,
+    return PointCapacity(capacity_kg=cap, binding=binding, branch=branch, direction=direction, worst_u=worst_u,
                          n_states=np.asarray(n_solutions) * len(directions), names=names, axis_capacity_kg=axis_cap,
                          **per_config)

@@ -66,10 +66,9 @@ def point_query(arm_q: ArmQuestion, directions: Directions, point_m) -> PointAns
     K = len(q)
     pc = point_capacity(arm_q.dyn, q[:, None, :], np.ones(K, dtype=int), directions, arm_q.motion, arm_q.limits)
     order = np.lexsort((pc.capacity_kg, lab))
-    d = np.where(pc.direction >= 0, pc.direction, 0)
     return PointAnswer(point_m=p, configuration=tuple(arm_q.labels.names[i] for i in lab[order]), q_rad=q[order],
                        capacity_kg=pc.capacity_kg[order], binding=tuple(pc.names[b] for b in pc.binding[order]),
-                       worst_u=directions.u[d[order]])
+                       worst_u=pc.worst_u[order])
 
 
 @dataclass(frozen=True)

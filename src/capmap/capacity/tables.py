@@ -11,7 +11,7 @@ import pandas as pd
 import pinocchio as pin
 
 from capmap.capacity import sampling
-from capmap.capacity.directions import AXIS_LABELS, grid_axes
+from capmap.capacity.directions import AXIS_LABELS, angles_deg, grid_axes
 from capmap.capacity.engine import Motion, point_capacity
 from capmap.capacity.voxels import Grid, voxelise
 from capmap.core import ik
@@ -81,7 +81,9 @@ def capacity_table(arm: LockedArm, ids: np.ndarray, pos: np.ndarray, rotation: n
         pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits, axes)
         states += int(pc.n_states.sum())
         reach = sol.n_solutions > 0
-        d = np.where(pc.direction >= 0, pc.direction, 0)
+        alpha, beta = angles_deg(pc.worst_u)  # off the set (exact): from the direction itself
+        on = pc.direction >= 0
+        d = np.where(on, pc.direction, 0)
         br = np.where(pc.branch >= 0, pc.branch, 0)
         q_worst = np.where(reach[:, None], sol.q[np.arange(len(br)), br], np.nan)
         part = pd.DataFrame({
@@ -89,10 +91,9 @@ def capacity_table(arm: LockedArm, ids: np.ndarray, pos: np.ndarray, rotation: n
             "reachable": reach, "n_branches": sol.n_solutions, "capacity_kg": pc.capacity_kg,
             "binding": np.where(reach, np.array(pc.names + ("",))[pc.binding], ""),
             "worst_branch": pc.branch,
-            "worst_alpha_deg": np.where(reach, dirs.alpha_deg[d], np.nan),
-            "worst_beta_deg": np.where(reach, dirs.beta_deg[d], np.nan),
-            "worst_ux": np.where(reach, dirs.u[d, 0], np.nan), "worst_uy": np.where(reach, dirs.u[d, 1], np.nan),
-            "worst_uz": np.where(reach, dirs.u[d, 2], np.nan),
+            "worst_alpha_deg": np.where(on, dirs.alpha_deg[d], alpha),
+            "worst_beta_deg": np.where(on, dirs.beta_deg[d], beta),
+            "worst_ux": pc.worst_u[:, 0], "worst_uy": pc.worst_u[:, 1], "worst_uz": pc.worst_u[:, 2],
             "n_states": pc.n_states,
         })
         for c, j in enumerate(arm.active_joint_numbers):

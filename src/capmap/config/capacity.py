@@ -196,7 +196,8 @@ class SamplingConfig:
 
 @dataclass(frozen=True)
 class DirectionsConfig:
-    """``directions``: the paper's grid (step_deg) or a near-uniform sphere (n)."""
+    """``directions``: the whole sphere (exact: the minimum over every direction), the paper's grid
+    (step_deg) or a near-uniform sphere (n)."""
 
     kind: str
     step_deg: float | None = None
@@ -208,10 +209,13 @@ class DirectionsConfig:
             raise ConfigError("directions.step_deg is required for kind paper_grid")
         if d["kind"] == "sphere" and "n" not in d:
             raise ConfigError("directions.n is required for kind sphere")
-        extra = {"paper_grid": "n", "sphere": "step_deg"}[d["kind"]]
-        if extra in d:
-            raise ConfigError(f"directions.{extra} does not apply to kind {d['kind']}")
+        extra = {"paper_grid": ("n",), "sphere": ("step_deg",), "exact": ("n", "step_deg")}[d["kind"]]
+        for key in extra:
+            if key in d:
+                raise ConfigError(f"directions.{key} does not apply to kind {d['kind']}")
         out = cls(**d)
+        if out.kind == "exact":
+            return out
         raw = np.ceil(360.0 / out.step_deg) ** 2 if out.kind == "paper_grid" else out.n
         if raw > MAX_DIRECTIONS:
             key = "directions.step_deg" if out.kind == "paper_grid" else "directions.n"
@@ -221,6 +225,8 @@ class DirectionsConfig:
         return out
 
     def build(self) -> Directions:
+        if self.kind == "exact":
+            return directions.exact()
         return directions.paper_grid(self.step_deg) if self.kind == "paper_grid" else directions.sphere(self.n)
 
 
