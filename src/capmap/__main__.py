@@ -1,9 +1,10 @@
 """Command line.
 
 - ``python -m capmap check [results/<run> ...]`` verifies every catalogued dataset of the runs (the
-  main catalogue's, the atlas', the baseline's and the plan-gain experiment's; default: every run under ``results/``) against its sha256 and row
-  count; exit status 1 and one line per problem when any is missing, damaged or changed, when a
-  named run folder does not exist, or when a run has no catalogue.
+  main catalogue's, the atlas', the baseline's and the plan-gain experiment's; default: every run
+  under ``results/``) against its sha256 and row count; exit status 1 and one line per problem
+  when any is missing, damaged or changed, when a named run folder does not exist, or when a run
+  has no catalogue.
 - ``python -m capmap check-config [FILE ...]`` reads and checks config files with capmap's own
   loader (what the workflow checks before any job, without Snakemake reading the file first:
   Snakemake evaluates YTE templates in a ``--configfile``); exit status 1 and one line on a problem.
@@ -16,9 +17,6 @@
   [--payload M] [--configuration C]`` verifies that straight line on a configuration (default: the
   arm's own at the task start). Both read a run's config (``--configfile``, default
   ``config/config.yaml``), answer without running the pipeline, and print a table (or ``--json``).
-- ``python -m capmap warm`` compiles the numba kernels into numba's cache once (a few milliseconds
-  when this code's kernels are already compiled): the workflow runs it before its first job, so that
-  parallel jobs load the kernels instead of each compiling them (:mod:`capmap.kernels`).
 """
 
 from __future__ import annotations
@@ -27,9 +25,12 @@ import argparse
 import sys
 from pathlib import Path
 
+from capmap.config.checks import check_run_config
+from capmap.config.robot_file import load, lock_classes
+from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.errors import CapmapError
-
-DEFAULT_CONFIG = "config/config.yaml"  # capmap.config.run's (a test checks); each command imports what it needs
+from capmap.io.datasets import verify_catalogue
+from capmap.stages.query import answer_line, answer_point
 
 __all__ = ["main"]
 
@@ -55,10 +56,7 @@ def main(argv: list[str] | None = None) -> int:
         q.add_argument("--payload", type=float, default=None, help="payload, kg")
         q.add_argument("--configfile", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
         q.add_argument("--json", action="store_true", help="answer as JSON")
-    sub.add_parser("warm", help="compile the numba kernels once, before any job (the workflow runs it)")
     args = ap.parse_args(argv)
-    if args.command == "warm":
-        return _warm()
     if args.command == "query":
         return _query(args)
     if args.command == "check-config":
@@ -80,8 +78,6 @@ def main(argv: list[str] | None = None) -> int:
         if not catalogues and not absent and not bare:
             print("capmap: no run under results/ (run snakemake first)", file=sys.stderr)
         return 1
-    from capmap.io.datasets import verify_catalogue
-
     try:  # catalogued paths are relative to the workflow's folder, two levels above results/<run>/
         problems = [p for c in catalogues for p in verify_catalogue(c, _run_folder(c).parent.parent)]
     except CapmapError as exc:
@@ -96,9 +92,6 @@ def main(argv: list[str] | None = None) -> int:
 
 def _check_config(files: list[str]) -> int:
     """The files merged in order, as ``--configfile A B`` merges them."""
-    from capmap.config.checks import check_run_config
-    from capmap.config.run import run_document
-
     source = ", ".join(files)
     try:
         run = check_run_config(run_document(files), source)
@@ -110,8 +103,6 @@ def _check_config(files: list[str]) -> int:
 
 
 def _arm(path: str, angle_deg: float | None) -> int:
-    from capmap.config.robot_file import load, lock_classes
-
     try:
         robot = load(path)
     except CapmapError as exc:
@@ -124,8 +115,6 @@ def _arm(path: str, angle_deg: float | None) -> int:
 
 
 def _query(args) -> int:
-    from capmap.stages.query import answer_line, answer_point
-
     try:
         if args.payload is not None and not (args.payload >= 0 and args.payload < float("inf")):
             raise CapmapError(f"--payload {args.payload} must be a finite mass >= 0 kg")
@@ -140,20 +129,9 @@ def _query(args) -> int:
     return 0
 
 
-def _warm() -> int:
-    import time
-
-    from capmap.kernels import ensure_warm
-
-    t = time.perf_counter()
-    ran = ensure_warm()
-    print(f"capmap: numba kernels {'compiled' if ran else 'already compiled'} ({time.perf_counter() - t:.1f} s)",
-          file=sys.stderr)
-    return 0
-
-
 def _run_folder(catalogue: Path) -> Path:
-    """results/<run> of a catalogue (results/<run>/catalogue.parquet or results/<run>/{atlas,baseline}/..., results/<run>/plan/gain_catalogue.parquet)."""
+    """results/<run> of a catalogue (results/<run>/catalogue.parquet, results/<run>/{atlas,baseline}/catalogue.parquet or
+    results/<run>/plan/gain_catalogue.parquet)."""
     return catalogue.parent.parent if catalogue.parent.name in ("atlas", "baseline", "plan") else catalogue.parent
 
 

@@ -3,9 +3,10 @@
 Every kernel is compiled with ``cache=True``; the first process that calls one compiles it and
 writes the cache, the others load it. Parallel jobs started together (the capacity shards) would
 each compile the same kernels; :func:`warm` compiles them once, before any job runs (Snakemake's
-``onstart``: ``python -m capmap warm``, and the README's install command), by running each family's
+``onstart``: ``python -m capmap.kernels``), by running each family's
 compiled paths on a few inputs of the types the stages use. A marker named by a hash of the kernels'
-source files, numba's version and the CPU makes the next call a few milliseconds' check.
+source files, numba's version and the CPU makes the next call a check of a few milliseconds (after
+its imports, about a second).
 """
 
 from __future__ import annotations
@@ -13,9 +14,20 @@ from __future__ import annotations
 import hashlib
 import logging
 import sys
+import time
 from pathlib import Path
 
+import llvmlite.binding as ll
+import numba
 import numpy as np
+
+from capmap.capacity import directions, engine
+from capmap.capacity.sphere import min_over_sphere
+from capmap.config.robot_file import load
+from capmap.core import ik
+from capmap.core.dynamics import ArmDynamics
+from capmap.core.reduction import lock
+from capmap.dualarm import distance
 
 __all__ = ["fingerprint", "warm", "ensure_warm"]
 
@@ -26,9 +38,6 @@ ROBOT = PACKAGE.parents[1] / "config" / "robots" / "ssrms7.yaml"  # a checkout's
 
 def fingerprint() -> str:
     """Hash of what the compiled code depends on: every source file using numba, numba's version, the CPU."""
-    import llvmlite.binding as ll
-    import numba
-
     h = hashlib.sha256(f"{numba.__version__} {sys.version} {ll.get_host_cpu_name()}".encode())
     for f in sorted(PACKAGE.rglob("*.py")):
         text = f.read_bytes()
@@ -39,22 +48,12 @@ def fingerprint() -> str:
 
 def _marker() -> Path:
     """Beside numba's cache: NUMBA_CACHE_DIR when set, else the package's __pycache__ folders."""
-    import numba
-
     where = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else PACKAGE / "__pycache__"
     return where / f"kernels-{fingerprint()}.ok"
 
 
 def warm() -> None:
     """Compile (or load) every cached kernel through the stages' own calls on small inputs."""
-    from capmap.capacity import directions, engine
-    from capmap.capacity.sphere import min_over_sphere
-    from capmap.config.robot_file import load
-    from capmap.core import ik
-    from capmap.core.dynamics import ArmDynamics
-    from capmap.core.reduction import lock
-    from capmap.dualarm import distance
-
     rng = np.random.default_rng(0)
     if ROBOT.is_file():
         robot = load(ROBOT)
@@ -93,3 +92,10 @@ def ensure_warm() -> bool:
     except OSError:  # a read-only install: warm each time (loading the cache is quick)
         pass
     return True
+
+
+if __name__ == "__main__":  # python -m capmap.kernels (the workflow's onstart)
+    t0 = time.perf_counter()
+    ran = ensure_warm()
+    print(f"capmap: numba kernels {'compiled' if ran else 'already compiled'} ({time.perf_counter() - t0:.1f} s)",
+          file=sys.stderr)

@@ -43,10 +43,3 @@ def test_arm_prints_each_lock_classification():
     assert "COLLINEAR" in lines[1] and "may miss branches" in lines[1]
     assert all("general_6r (complete)" in lines[j - 1] for j in (1, 3, 4, 5, 6, 7))
 
-
-def test_cli_default_config_is_the_loaders():
-    """The command line names the default config without importing the config loader (``warm`` stays quick)."""
-    from capmap.__main__ import DEFAULT_CONFIG
-    from capmap.config.run import DEFAULT_CONFIG as LOADERS
-
-    assert DEFAULT_CONFIG == LOADERS

@@ -312,6 +312,7 @@ def test_every_bad_input_is_one_line_naming_it(tmp_path):
     assert not failures, "\n".join(failures)
 
 
+@pytest.mark.slow  # on a finished tiny run: .ci/run runs it (-m slow)
 def test_bad_inputs_cost_no_output_through_snakemake(run_dir, tmp_path):
     """A case of each kind (file, YAML, schema, robot, lock, pose, size, step count, cloud) through
     ``snakemake all`` over a finished run: status 1, one capmap line, every output byte-identical."""

@@ -19,6 +19,8 @@ from capmap.config.run import run_document
 from tests.scenario import ROOT
 from tests.workflow.runs import snakemake
 
+pytestmark = pytest.mark.slow  # a whole tiny pipeline: .ci/run runs these (-m slow)
+
 SMALL = {"sampling": {"mode": "voxel_fill", "n_points": 300, "jitter_per_voxel": 0, "seed": 7},
          "directions": {"kind": "sphere", "n": 12}, "voxels": {"edge_m": 3.0, "refine": False},
          "planning": {"gain_tasks": 2}, "shards": 2}

@@ -17,6 +17,8 @@ import pytest
 from tests.scenario import ROOT, X_DES, X_INI
 from tests.workflow.runs import config_file, planned_jobs, planned_jobs_of, snakemake_run
 
+pytestmark = pytest.mark.slow  # a whole tiny pipeline: .ci/run runs these (-m slow)
+
 
 def test_outputs_and_provenance(run_dir):
     tmp, _ = run_dir
@@ -63,9 +65,9 @@ def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
     cat = pd.read_parquet(tmp / "results/tiny/catalogue.parquet")
     assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "sampled", "voxels", "configurations",
-                             "waypoints", "gain_tasks", "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud",
+                             "waypoints", "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud",
                              "environment", "robot_capsules", "trajectory", "fine", "outer"}  # two 'points', three 'timeseries'
-    assert len(cat) == 24
+    assert len(cat) == 23  # the plan-gain experiment is its own target (experiments), with its own catalogue
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256
@@ -105,7 +107,7 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     # a plan also redraws the 3D map; every summary the report's table pages
     after_payload = {"plan", "capacity_3d", "verify", "verify_plots", "verify_summary", "catalogue", "report_tables", "all"}
     follow = {"follow", "follow_plots", "follow_summary"}
-    gain = {"plan_gain"}  # random tasks over the map, at the task payloads, verified at verification.dt_s
+    gain = set()  # the plan-gain experiment is not in all (target experiments)
     downstream_of_capacity = {"capacity", "voxels", "voxel_map", "summary"} | gain | after_payload | follow
     jobs = run[0]
     assert set(jobs) == downstream_of_capacity and jobs["capacity"] == 2
@@ -411,3 +413,23 @@ def test_baseline_target_the_healthy_arm_and_the_loss(tmp_path):
                                     "baseline": {"step_deg": 20, "check_voxels": 6}})
     assert planned_jobs_of(tmp_path, cfg2, "baseline") == {"baseline_shard": 2, "baseline_map": 1, "baseline_figure": 1,
                                                            "baseline_catalogue": 1, "baseline": 1}
+
+
+def test_experiments_target_is_off_the_default_path(run_dir, tmp_path):
+    """The plan-gain experiment is not part of `all` (the finished tiny run has no gain files); `snakemake
+    experiments` adds it beside the run without rerunning the map, with its own catalogue that
+    `python -m capmap check` verifies."""
+    work, cfg = run_dir
+    copy = tmp_path / "run"
+    shutil.copytree(work, copy, ignore=shutil.ignore_patterns("locks", "incomplete"))
+    assert not (copy / "results/tiny/plan/gain.csv").exists()
+    assert planned_jobs_of(copy, cfg, "experiments") == {"plan_gain": 1, "gain_catalogue": 1, "experiments": 1}
+    res = subprocess.run(["snakemake", "experiments", "-s", str(ROOT / "Snakefile"), "-d", str(copy), "--cores", "2",
+                          "--configfile", str(cfg)], capture_output=True, text=True, timeout=900)
+    assert res.returncode == 0, res.stderr[-3000:]
+    gain = pd.read_csv(copy / "results/tiny/plan/gain.csv")
+    assert len(gain) > 0 and len(pd.read_parquet(copy / "results/tiny/plan/gain_catalogue.parquet")) == 1
+    chk = subprocess.run([sys.executable, "-m", "capmap", "check", "results/tiny"], cwd=copy, capture_output=True,
+                         text=True, timeout=300)
+    assert chk.returncode == 0 and "gain_catalogue.parquet" in chk.stdout, chk.stderr[-2000:]
+    assert planned_jobs(copy, cfg) == {}  # all is still complete: the experiment is beside it

@@ -16,6 +16,7 @@ def test_the_readme_has_python_snippets():
     assert BLOCKS
 
 
+@pytest.mark.slow  # on the shared tiny run: .ci/run runs it (-m slow)
 @pytest.mark.parametrize("code", BLOCKS, ids=[f"block{i + 1}" for i in range(len(BLOCKS))])
 def test_a_readme_snippet_runs_on_a_run_s_outputs(run_dir, tmp_path, monkeypatch, code):
     work, _ = run_dir

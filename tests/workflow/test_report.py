@@ -9,8 +9,11 @@ import re
 import shutil
 
 import pandas as pd
+import pytest
 
 from tests.workflow.runs import snakemake
+
+pytestmark = pytest.mark.slow  # a whole tiny pipeline: .ci/run runs these (-m slow)
 
 
 def test_the_3d_map_holds_the_run_s_reachable_voxels(run_dir):
@@ -50,7 +53,7 @@ def test_outputs_of_a_removed_payload_are_named_and_the_report_shows_only_the_ru
     page = (tmp_path / "report.html").read_text()
     expected = ["What this workflow does", "capmap run", "results/tiny/summary/capacity_3d.html",
                 *(f"results/tiny/report/{name}.html" for name in ("catalogue", "capacity_summary", "verify_summary",
-                                                                 "gain", "follow_summary", "reconfig_summary",
+                                                                 "follow_summary", "reconfig_summary",
                                                                  "dualarm_summary", "csqp_check"))]
     missing = [e for e in expected if e not in page]
     assert not missing, missing  # (a short message: the page is ~19 MB)

@@ -18,6 +18,8 @@ from capmap.stages.capacity import stage_voxels
 from tests.scenario import ROOT
 from tests.workflow.runs import planned_jobs, planned_jobs_of
 
+pytestmark = pytest.mark.slow  # a whole tiny pipeline: .ci/run runs these (-m slow)
+
 
 def _copy_workflow(dst):
     """Snakefile, workflow/, profiles/ and the package source: a second checkout to edit."""

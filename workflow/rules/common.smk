@@ -100,8 +100,8 @@ def dualarm_files(*keys):
 
 onstart:
     # compile the numba kernels once, before the first job, so that parallel jobs load them instead of each
-    # compiling them (capmap.kernels; a few milliseconds when this code's kernels are compiled already)
+    # compiling them (capmap.kernels; about a second, its imports, when this code's kernels are compiled already)
     import subprocess
 
-    if subprocess.run([sys.executable, "-m", "capmap", "warm"], check=False).returncode:
+    if subprocess.run([sys.executable, "-m", "capmap.kernels"], check=False).returncode:
         print("capmap: warning: compiling the kernels before the jobs failed; each job compiles its own", file=sys.stderr)

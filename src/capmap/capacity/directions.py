@@ -14,9 +14,11 @@ from functools import cached_property
 
 import numpy as np
 
+from capmap.capacity.sphere import start_directions
 from capmap.errors import CapmapError
 
-__all__ = ["Directions", "paper_grid", "sphere", "exact", "angles_deg", "antipodal_pairs", "GRID_AXES", "AXIS_LABELS", "grid_axes", "axis_of"]
+__all__ = ["Directions", "paper_grid", "sphere", "exact", "angles_deg", "antipodal_pairs", "GRID_AXES", "AXIS_LABELS",
+           "grid_axes", "axis_of"]
 
 
 @dataclass(frozen=True)
@@ -97,8 +99,6 @@ def angles_deg(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def exact() -> Directions:
     """The whole sphere of directions: minima over it are exact (:mod:`capmap.capacity.sphere`); u is the
     start set of the minimisation (16 directions in antipodal pairs)."""
-    from capmap.capacity.sphere import start_directions
-
     u = start_directions()
     alpha, beta = angles_deg(u)
     return Directions(u=u, alpha_deg=alpha, beta_deg=beta, kind="exact", exact=True)

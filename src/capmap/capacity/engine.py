@@ -28,7 +28,8 @@ from capmap.errors import CapmapError
 
 __all__ = ["LoadLimits", "Motion", "Coefficients", "coefficients", "coefficients_pinocchio", "state_affine", "joint_state_affine",
            "state_capacity", "direction_features", "affine_over_directions", "capacity_over_directions",
-           "PointCapacity", "point_capacity", "direction_minimum", "argmin_per_group", "motion_features", "margin_pct", "SINGULAR"]
+           "PointCapacity", "point_capacity", "direction_minimum", "argmin_per_group", "motion_features", "margin_pct",
+           "SINGULAR"]
 
 SINGULAR = "singular"
 
