@@ -1,6 +1,8 @@
 """Method family 1, the capacity map: what a locked arm can carry, and where; planning and verification.
 
-- :mod:`~capmap.capacity.directions`   motion-direction sets (the paper's grid, near-uniform sphere)
+- :mod:`~capmap.capacity.directions`   motion-direction sets (the whole sphere, the paper's grid, near-uniform sphere)
+- :mod:`~capmap.capacity.sphere`       the exact minimum over the sphere of motion directions (compiled)
+- :mod:`~capmap.capacity.sweep`        the minimum over a direction set (compiled)
 - :mod:`~capmap.capacity.sampling`     Monte Carlo workspace (joint samples, voxel fill)
 - :mod:`~capmap.capacity.engine`       exact dynamic load-carrying capacity of configurations and points
 - :mod:`~capmap.capacity.voxels`       the voxel grid and per-voxel minima
@@ -12,8 +14,10 @@
 - :mod:`~capmap.capacity.tables`       the family's tables and column schemas (model, points, capacities, voxels)
 - :mod:`~capmap.capacity.gain`         the plan-gain experiment (isotropic vs direction-aware moves, verified)
 - :mod:`~capmap.capacity.atlas`        one coarse map per (locked joint, angle) and its summary rows
+- :mod:`~capmap.capacity.baseline`     the healthy arm: the failed joint swept, the best posture per point
 - :mod:`~capmap.capacity.refine`       voxel minima refined until they converge, all branches and each configuration
 - :mod:`~capmap.capacity.folds`        the refinement's fold brackets (singular surfaces crossing a voxel)
+- :mod:`~capmap.capacity.patterns`     the refinement's local-search points (corners, compass, pattern)
 - :mod:`~capmap.capacity.query`        questions answered directly: a point on every configuration, a line on one
 """
 

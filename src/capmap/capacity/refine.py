@@ -1,34 +1,34 @@
 """Voxel values that do not overstate: refine each voxel's minimum until it has converged.
 
-A voxel's capacity is the minimum over the points inside it (the spec's step 7), estimated
-from the points evaluated there. A handful of points overstates it where the capacity falls
-steeply inside the voxel (a singular configuration, a branch that appears at a workspace
-boundary), so every voxel that has a reachable point is refined in rounds:
+A voxel's capacity is the minimum over the points inside it (the spec's step 7), estimated from the
+points evaluated there. A handful of points overstates it where the capacity falls steeply inside the
+voxel (a singular configuration, a branch that appears at a workspace boundary), so every voxel that
+has a reachable point is refined in rounds: the first evaluates the voxel's corners; then, each round,
+a pattern around its worst point (while that minimum still falls) and a compass around the worst point
+of each configuration and each per-axis minimum still falling, their step halving every round (a local
+minimiser from the worst points), and uniform points until the voxel holds ``min_points``
+(``near_min_points`` when its value lies within ``near_band`` of a task payload); no point of a voxel is
+evaluated twice. The voxel has converged when the round lowered its minimum, and each per-axis minimum,
+by less than ``rel_tol`` (relative) and it holds those points; the patterns' step reaching
+``finest_step`` of the edge ends the rounds (the voxel is then reported as not converged).
 
-    each round doubles the points evaluated in the voxel (new uniform points inside it, and a
-    shrinking pattern around its worst point), and the voxel has converged when the round
-    lowered its minimum, and each per-axis minimum, by less than ``rel_tol``
-    (relative), it holds at least ``min_points`` points, and, when its value lies within
-    ``near_band`` (relative) of a task payload, at least ``near_min_points``;
-    ``max_points`` ends the doubling, and so does the patterns' step reaching ``finest_step``
-    of the edge (the voxel is then reported as not converged).
-
-Where two points of a voxel have different numbers of IK branches, a fold of the IK map (a
-singular surface, or the workspace boundary) crosses the voxel; there two branches merge at a
-singular configuration and the capacity falls towards 0 in a thin shell that uniform points
-rarely hit. Such a voxel also bisects the segment between two points of different branch
-counts, one point per round, until the bracket is shorter than ``fold_tol_m``, and stays
-unconverged until then. When the closed bracket holds a point of capacity 0, the fold is a
-singular surface: moving along any grid axis that crosses it needs unbounded joint rates
-(those of the direction normal to it), so every per-axis value of the voxel is set to 0 too (a
+Where two points of a voxel have different numbers of IK branches, a fold of the IK map (a singular
+surface, or the workspace boundary) crosses the voxel; there two branches merge at a singular
+configuration and the capacity falls towards 0 in a thin shell that uniform points rarely hit. Such a
+voxel also bisects the segment between two points of different branch counts, one point per round,
+until the bracket is shorter than ``fold_tol_m``, and stays unconverged until then; the capacity is not
+smooth there, so its uniform points keep doubling (to ``max_points``, a statistical search), and once
+its minima have settled only the bisection goes on. When the closed bracket holds a point of capacity
+0, the fold is a singular surface: moving along any grid axis that crosses it needs unbounded joint
+rates (those of the direction normal to it), so every per-axis value of the voxel is set to 0 too (a
 grid axis tangent to the fold everywhere in the voxel is the exception this rounds down). With
 configuration maps (:meth:`VoxelMinima.with_configurations`) every configuration is refined beside the
 all-branch value from the same points; the configurations a fold ends (the two whose solutions merge
 on it) fall to 0 with it, the others keep their own values.
 
-A voxel whose minimum and per-axis minima are all 0 cannot fall further and has converged. The per-axis capacities (moves along
-the 13 axes of the grid) are minimised over the same points. The evaluation of points is
-passed in as a function, so this module holds only the rounds; randomness comes from the
+A voxel whose minimum and per-axis minima are all 0 cannot fall further and has converged. The per-axis
+capacities (moves along the 13 axes of the grid) are minimised over the same points. The evaluation of
+points is passed in as a function, so this module holds only the rounds; randomness comes from the
 Generator passed in.
 """
 
@@ -41,22 +41,19 @@ import numpy as np
 
 from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.folds import FoldBrackets
+from capmap.capacity.patterns import COMPASS, CORNERS, PATTERN, around, rows_in
 from capmap.capacity.voxels import Grid
 from capmap.errors import CapmapError
 
 __all__ = ["RefineSettings", "Evaluation", "VoxelMinima", "refine"]
 
-_CORNERS = np.array([[i, j, k] for i in (0.0, 1.0) for j in (0.0, 1.0) for k in (0.0, 1.0)])
-# a compass and diagonal pattern (14 points) scaled by a step that halves every round
-_COMPASS = np.concatenate([np.eye(3), -np.eye(3)])
-_PATTERN = np.concatenate([_COMPASS, _CORNERS * 2 - 1])
 
 
 @dataclass(frozen=True)
 class RefineSettings:
-    """rel_tol: convergence (relative change of the minimum in the last doubling); min_points,
-    max_points: points per voxel at least / where the uniform doubling stops (a voxel can hold more:
-    the patterns around its worst points and the fold's bisection add to it); payloads_kg with near_band and
+    """rel_tol: convergence (relative change of the minimum in the last round); min_points: uniform
+    points per voxel at least; max_points: where the uniform doubling of a voxel that a fold crosses
+    stops (patterns and the fold's bisection add to it); payloads_kg with near_band and
     near_min_points: voxels whose value is within near_band of a payload get at least that many."""
 
     rel_tol: float = 0.005
@@ -207,10 +204,13 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     axis_worst = np.repeat(worst[:, :, None, :], A, axis=2)  # (V, G, A, 3): where each axis minimum is
     axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their pattern continues)
     grp_open = np.ones(cap.shape, dtype=bool)  # group minima still falling
+    settled = np.zeros(V, dtype=bool)  # every group quiet but an open fold's bracket: only the bisection goes on
+    seen = np.zeros((0, 4))  # (voxel, point) of every point evaluated: none twice
     rounds, evaluated = 0, 0
     while True:
         bisect = np.flatnonzero(fold & ~zero() & (np.linalg.norm(fb - fa, axis=1) > s.fold_tol_m))
-        active = np.union1d(np.flatnonzero(~converged & ~stopped & (n_pts < s.max_points)), bisect)
+        searching = np.flatnonzero(~converged & ~stopped & ~settled & (n_pts < s.max_points))
+        active = np.union1d(searching, bisect)
         if not len(active):
             break
         rounds += 1
@@ -219,17 +219,17 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         # falling (one per distinct point); uniform points doubling the count (capped)
         if rounds == 1:  # with configurations, the start's worst point again: its value on each of them
             local = np.repeat(active, 8)
-            local_pts = grid.lower + (idx3[local] + np.tile(_CORNERS, (len(active), 1))) * grid.edge_m
+            local_pts = grid.lower + (idx3[local] + np.tile(CORNERS, (len(active), 1))) * grid.edge_m
             again = active[np.all(np.isfinite(start.worst_m[active]), axis=1)] if C else active[:0]
             local, local_pts = np.concatenate([local, again]), np.concatenate([local_pts, start.worst_m[again]])
         else:
             h = grid.edge_m * 0.5 ** rounds
-            has = active[np.isfinite(cap[active, 0])]
-            v, g = np.nonzero(grp_open[active, 1:] & np.isfinite(cap[active, 1:]))
-            v, g = active[v], g + 1
+            has = searching[np.isfinite(cap[searching, 0]) & grp_open[searching, 0]]
+            v, g = np.nonzero(grp_open[searching, 1:] & np.isfinite(cap[searching, 1:]))
+            v, g = searching[v], g + 1
             cv, centres = [v], [worst[v, g]]
-            v, g, a = np.nonzero(axis_open[active] & np.isfinite(axis[active]))
-            v = active[v]
+            v, g, a = np.nonzero(axis_open[searching] & np.isfinite(axis[searching]))
+            v = searching[v]
             cv.append(v)
             centres.append(axis_worst[v, g, a])
             cv, centres = np.concatenate(cv), np.concatenate(centres)
@@ -237,15 +237,24 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
             known = np.column_stack([has, worst[has, 0]])
             rows = np.column_stack([cv, centres])
             _, keep = np.unique(rows, axis=0, return_index=True)
-            keep = keep[~_rows_in(rows[keep], known)]
+            keep = keep[~rows_in(rows[keep], known)]
             v, centre = cv[keep], centres[keep]
-            local = np.concatenate([np.repeat(has, len(_PATTERN)), np.repeat(v, len(_COMPASS))])
-            local_pts = np.concatenate([_around(worst[has, 0], _PATTERN, h, grid, idx3[has]),
-                                        _around(centre, _COMPASS, h, grid, idx3[v])])
+            local = np.concatenate([np.repeat(has, len(PATTERN)), np.repeat(v, len(COMPASS))])
+            local_pts = np.concatenate([around(worst[has, 0], PATTERN, h, grid, idx3[has]),
+                                        around(centre, COMPASS, h, grid, idx3[v])])
         local = np.concatenate([local, bisect])
         local_pts = np.concatenate([local_pts, 0.5 * (fa[bisect] + fb[bisect])])
+        rows = np.column_stack([local, local_pts])
+        _, first = np.unique(rows, axis=0, return_index=True)
+        first = np.sort(first)
+        first = first[~rows_in(rows[first], seen)]
+        local, local_pts = local[first], local_pts[first]
         n_local = np.bincount(local, minlength=V)[active]
-        new = np.clip(np.minimum(n_pts[active], s.max_points - n_pts[active]) - n_local, 0, None)
+        need = np.where(_near(cap[active], s), s.near_min_points, s.min_points)
+        # where a fold crosses the voxel the capacity is not smooth: the uniform points double there, as before
+        need = np.where(fold[active], np.maximum(need, 2 * n_pts[active]), need)
+        new = np.where(np.isin(active, searching),
+                       np.clip(np.minimum(need, s.max_points) - n_pts[active] - n_local, 0, None), 0)
         uniform = np.repeat(active, new)
         owner = np.concatenate([local, uniform])
         pts = np.concatenate([local_pts,
@@ -255,6 +264,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
             progress(rounds, len(active), len(pts))
         ev = evaluate(pts, cap[owner, 0], owner)
         evaluated += len(pts)
+        seen = np.concatenate([seen, np.column_stack([owner, pts])])
         c, b, ac = _groups(ev, C)
         old = cap[active].copy()
         axis_old = axis[active].copy()
@@ -306,6 +316,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         axis_open[active] = (axis_drop >= s.rel_tol) & ~quiet[:, :, None] & (0.5 ** (rounds + 1) >= s.finest_step)
         enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
         converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold) | zero()[active]
+        settled[active] = (change[active] < s.rel_tol) & enough & open_fold
         if 0.5 ** (rounds + 1) < s.finest_step:  # the patterns have reached their finest step: stop
             stopped[active] = ~open_fold
     unseen = np.isinf(cap)  # groups no point held: NaN
@@ -322,15 +333,6 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
                        binding=binding[:, 0], rounds=rounds, n_evaluated=evaluated, **per_config)
 
 
-def _rows_in(rows: np.ndarray, known: np.ndarray) -> np.ndarray:
-    """(n,) bool: each row of rows (n, k) is one of known (m, k) exactly."""
-    if not len(rows) or not len(known):
-        return np.zeros(len(rows), dtype=bool)
-    both = np.concatenate([known, rows])
-    _, inv = np.unique(both, axis=0, return_inverse=True)
-    return np.isin(inv.reshape(-1)[len(known):], inv.reshape(-1)[:len(known)])
-
-
 def _rel_drop(old: np.ndarray, new: np.ndarray) -> np.ndarray:
     """(old - new) / old elementwise, 0 where old is not positive or new is 0 (nothing left to fall);
     from +inf (not seen before) 1 where new is finite and positive, else 0."""
@@ -339,10 +341,3 @@ def _rel_drop(old: np.ndarray, new: np.ndarray) -> np.ndarray:
         d = np.where(fin & (old > 0), (old - new) / np.where(fin & (old > 0), old, 1.0), 0.0)
     d = np.where(np.isinf(old), np.where(np.isinf(new), 0.0, 1.0), d)
     return np.where(new == 0.0, 0.0, d)
-
-
-def _around(centres: np.ndarray, pattern: np.ndarray, h: float, grid: Grid, idx3: np.ndarray) -> np.ndarray:
-    """Points (len(centres) * len(pattern), 3) m: each centre (n, 3) plus h times the pattern (p, 3),
-    clipped to its voxel idx3 (n, 3)."""
-    lo = (grid.lower + idx3 * grid.edge_m)[:, None, :]
-    return np.clip(centres[:, None, :] + h * pattern, lo, lo + grid.edge_m).reshape(-1, 3)
