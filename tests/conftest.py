@@ -15,9 +15,9 @@ from tests.scenario import SSRMS_YAML
 def pytest_configure(config):
     """Compile the numba kernels once before the xdist workers start (each would compile them)."""
     if not hasattr(config, "workerinput"):
-        from capmap.kernels import ensure_warm
+        from capmap.kernels import main
 
-        ensure_warm()
+        main([])  # the default config's kernels (others compile in the tests that use them)
 
 
 @pytest.fixture(scope="session")

@@ -2,15 +2,18 @@
 
 Every kernel is compiled with ``cache=True``; the first process that calls one compiles it and
 writes the cache, the others load it. Parallel jobs started together (the capacity shards) would
-each compile the same kernels; :func:`warm` compiles them once, before any job runs (Snakemake's
-``onstart``: ``python -m capmap.kernels``), by running each family's
-compiled paths on a few inputs of the types the stages use. A marker named by a hash of the kernels'
-source files, numba's version and the CPU makes the next call a check of a few milliseconds (after
-its imports, about a second).
+each compile the same kernels; :func:`warm` compiles those a run uses once, before its jobs, by
+running the stages' compiled calls on a few inputs of their types: the locked arm's IK (whichever
+method its chain takes), the capacity kernels, and the dual-arm distances when the run has that
+family. ``python -m capmap.kernels [--configfile FILE]`` (the README's install command; Snakemake's
+``onstart`` runs it for the run's own config). A marker per hash of the kernels' source files, numba's
+version and the CPU lists what was warmed, so the next call is a check of milliseconds (after its
+imports, about a second).
 """
 
 from __future__ import annotations
 
+import argparse
 import hashlib
 import logging
 import sys
@@ -22,18 +25,19 @@ import numba
 import numpy as np
 
 from capmap.capacity import directions, engine
-from capmap.capacity.sphere import min_over_sphere
+from capmap.config.parse import parse_config
 from capmap.config.robot_file import load
+from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.dualarm import distance
+from capmap.errors import CapmapError
 
-__all__ = ["fingerprint", "warm", "ensure_warm"]
+__all__ = ["fingerprint", "warm", "ensure_warm", "main"]
 
 log = logging.getLogger(__name__)
 PACKAGE = Path(__file__).resolve().parent
-ROBOT = PACKAGE.parents[1] / "config" / "robots" / "ssrms7.yaml"  # a checkout's bundled arm (editable install)
 
 
 def fingerprint() -> str:
@@ -52,50 +56,70 @@ def _marker() -> Path:
     return where / f"kernels-{fingerprint()}.ok"
 
 
-def warm() -> None:
-    """Compile (or load) every cached kernel through the stages' own calls on small inputs."""
+def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
+    """Compile (or load) the kernels of a run: ``robot_file``'s arm with ``joint`` (1-based) locked at
+    ``angle_rad`` (its IK method, the capacity kernels), and the dual-arm distances if ``dualarm``."""
     rng = np.random.default_rng(0)
-    if ROBOT.is_file():
-        robot = load(ROBOT)
-        for joint in range(1, robot.n_joints + 1):  # every IK method the bundled arm's locks take
-            arm = lock(robot, joint, 0.3)
-            T = arm.fk(rng.uniform(-np.pi, np.pi, (8, arm.n_active)))
-            sol = ik.solve(arm, T[:, :3, 3], T[:, :3, :3])
-            if joint == 1:
-                ik.GeneralSixR().solve_chain(arm.chain, T, arm.q_lower, arm.q_upper)
-                dyn = ArmDynamics(arm)
-                limits = engine.LoadLimits.uniform(robot.n_joints, 700, 200, 500).for_arm(arm)
-                motion = engine.Motion(0.15, 0.03)
-                for dirs in (directions.exact(), directions.sphere(12)):
-                    engine.point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits, directions.grid_axes())
-                coef = dyn.batch.coefficients(sol.q[:, 0], np.full(len(sol.q), 0.3))
-                min_over_sphere(coef.stacked(), coef.S, 0.03, 0.15, dyn.gravity, limits.limit)
-    else:
-        log.info("no bundled robot at %s: the capacity kernels compile in the first job", ROBOT)
-    p = rng.normal(size=(4, 3))
-    distance.segment_segment(p, p + 1, p + 2, p + 3)
-    distance.point_triangle(p, p + 1, p + 2, p + 3)
-    distance.segment_triangle(p, p + 1, p + 2, p + 3, p + 4)
+    arm = lock(load(robot_file), joint, angle_rad)
+    T = arm.fk(rng.uniform(arm.q_lower, arm.q_upper, (8, arm.n_active)))
+    sol = ik.solve(arm, T[:, :3, 3], T[:, :3, :3])
+    dyn = ArmDynamics(arm)
+    limits = engine.LoadLimits.uniform(arm.robot.n_joints, 700, 200, 500).for_arm(arm)
+    for dirs in (directions.exact(), directions.sphere(12)):
+        engine.point_capacity(dyn, sol.q, sol.n_solutions, dirs, engine.Motion(0.15, 0.03), limits,
+                              directions.grid_axes())
+    dyn.batch.coefficients(sol.q[:, 0], np.full(len(sol.q), angle_rad))  # the baseline's held angles
+    if dualarm:
+        p = rng.normal(size=(4, 3))
+        distance.segment_segment(p, p + 1, p + 2, p + 3)
+        distance.point_triangle(p, p + 1, p + 2, p + 3)
+        distance.segment_triangle(p, p + 1, p + 2, p + 3, p + 4)
 
 
-def ensure_warm() -> bool:
-    """:func:`warm` unless this code's kernels are known warm (the marker); True if it ran."""
+def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> bool:
+    """:func:`warm` unless the marker lists this run's kernels as warm for this code; True if it ran."""
     marker = _marker()
-    if marker.is_file():
+    key = f"{Path(robot_file).resolve()} {hashlib.sha256(Path(robot_file).read_bytes()).hexdigest()[:16]} " \
+          f"joint {joint} {angle_rad:.6f}{' dualarm' if dualarm else ''}"
+    done = marker.read_text().splitlines() if marker.is_file() else []
+    if key in done:
         return False
-    warm()
+    warm(robot_file, joint, angle_rad, dualarm)
     try:
-        for old in marker.parent.glob("kernels-*.ok"):
-            old.unlink()
         marker.parent.mkdir(exist_ok=True)
-        marker.write_text("numba cache warm for this code\n")
+        for old in marker.parent.glob("kernels-*.ok"):
+            if old != marker:
+                old.unlink()
+        marker.write_text("".join(f"{k}\n" for k in (*done, key)))
     except OSError:  # a read-only install: warm each time (loading the cache is quick)
         pass
     return True
 
 
-if __name__ == "__main__":  # python -m capmap.kernels (the workflow's onstart)
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m capmap.kernels", description=__doc__.splitlines()[0])
+    ap.add_argument("--configfile", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
+    ap.add_argument("--robot", help="instead of a config: the robot file, with --joint, --angle-deg, --dualarm")
+    ap.add_argument("--joint", type=int, default=1)
+    ap.add_argument("--angle-deg", type=float, default=0.0)
+    ap.add_argument("--dualarm", action="store_true")
+    args = ap.parse_args(argv)
     t0 = time.perf_counter()
-    ran = ensure_warm()
-    print(f"capmap: numba kernels {'compiled' if ran else 'already compiled'} ({time.perf_counter() - t0:.1f} s)",
-          file=sys.stderr)
+    try:
+        if args.robot:
+            robot, joint, angle, dualarm = args.robot, args.joint, args.angle_deg, args.dualarm
+        else:
+            run = parse_config(run_document([args.configfile]), args.configfile)
+            robot, joint, dualarm = run.robot, run.lock.joint, run.dualarm is not None
+            angle = run.lock.angle_deg if run.lock.angle_deg is not None else run.task.q_ini_deg[joint - 1]
+        ran = ensure_warm(robot, joint, np.deg2rad(angle), dualarm)
+    except (CapmapError, IndexError, OSError) as exc:  # the workflow's own checks say what is wrong, and where
+        print(f"capmap: kernels not compiled before the jobs ({exc}); each job compiles its own", file=sys.stderr)
+        return 1
+    print(f"capmap: numba kernels {'compiled' if ran else 'already compiled'} for {robot}, joint {joint} locked "
+          f"({time.perf_counter() - t0:.1f} s)", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -5,7 +5,8 @@
 Prints its figures (IK: the shortest of 3 runs); targets: IK >= 14,000 points/s per core (closed
 form, all branches), >= 14,000 with the SSRMS's joint 3, 4 or 5 locked and >= 5,000 for the general
 6R method on the Panda and the xArm7 with any joint locked; capacity >= 30 M states/s on this machine's 2 cores (state =
-configuration x direction) and >= 8x the per-configuration Pinocchio path measured in the same run.
+configuration x direction) and >= 8x the per-configuration Pinocchio path measured in the same run; the
+exact minimum over the sphere of directions (issue 26): configurations/s/worker >= 2x the 10-degree grid's.
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ def _arm():
 
 def _init(step):
     arm = _arm()  # model built once per worker, one Data per worker
-    _worker.update(dyn=ArmDynamics(arm), dirs=directions.paper_grid(step),
+    _worker.update(dyn=ArmDynamics(arm), dirs=directions.paper_grid(step), exact=directions.exact(),
                    limits=engine.LoadLimits.uniform(7, 700, 200, 500).for_arm(arm))
 
 
@@ -50,6 +51,13 @@ def _capacity_chunk(args):
     q, n = args
     pc = engine.point_capacity(_worker["dyn"], q, n, _worker["dirs"], engine.Motion(0.15, 0.03), _worker["limits"])
     return int(pc.n_states.sum()), resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def _exact_chunk(args):
+    """The exact minimum over the sphere of directions (directions.kind: exact) of the same points."""
+    q, n = args
+    engine.point_capacity(_worker["dyn"], q, n, _worker["exact"], engine.Motion(0.15, 0.03), _worker["limits"])
+    return int(n.sum())
 
 
 def _reference_chunk(args):
@@ -157,6 +165,10 @@ def main():
         out = pool.map(_capacity_chunk, chunks)
         dt = time.perf_counter() - t
         states, peak = sum(o[0] for o in out), max(o[1] for o in out)
+        pool.map(_exact_chunk, chunks[:args.workers])  # warm-up
+        t = time.perf_counter()
+        exact_configs = sum(pool.map(_exact_chunk, chunks))
+        dt_exact = time.perf_counter() - t
         ref_chunks = chunks[: max(args.workers, len(chunks) // 20)]  # the reference is slow: a twentieth
         t = time.perf_counter()
         ref_states = sum(pool.map(_reference_chunk, ref_chunks))
@@ -168,6 +180,10 @@ def main():
           f"chunks of 200 points)")
     print(f"reference ({args.workers} workers) : {ref_states / dt_ref:12,.0f} states/s  (Pinocchio per configuration + "
           f"numpy sweep, same run); ratio {states / dt / (ref_states / dt_ref):.1f}x")
+    grid_rate, exact_rate = configs / dt / args.workers, exact_configs / dt_exact / args.workers
+    print(f"exact minimum over the sphere ({args.workers} workers): {exact_rate:,.0f} configurations/s/worker "
+          f"(coefficients + exact minimum), {exact_rate / grid_rate:.2f}x the {len(dirs)}-direction grid's "
+          f"{grid_rate:,.0f} in the same run (target: 2x)")
 
 
 if __name__ == "__main__":

@@ -103,5 +103,6 @@ onstart:
     # compiling them (capmap.kernels; about a second, its imports, when this code's kernels are compiled already)
     import subprocess
 
-    if subprocess.run([sys.executable, "-m", "capmap.kernels"], check=False).returncode:
-        print("capmap: warning: compiling the kernels before the jobs failed; each job compiles its own", file=sys.stderr)
+    subprocess.run([sys.executable, "-m", "capmap.kernels", "--robot", str(Path(RUN.robot).resolve()), "--joint",
+                    str(RUN.failure.joint), "--angle-deg", repr(RUN.failure.angle_deg)]
+                   + (["--dualarm"] if RUN.dualarm else []), check=False)

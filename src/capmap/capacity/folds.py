@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FoldBrackets"]
+__all__ = ["FoldBrackets", "ConfigBrackets"]
 
 
 @dataclass
@@ -58,3 +58,45 @@ class FoldBrackets:
             self.fold[v] = True
             self.fa[v], self.na[v], self.ca[v] = self.ref_pt[v], self.ref_n[v], self.ref_c[v]
             self.fb[v], self.cb[v] = pts[j], cnt[j]
+
+
+@dataclass
+class ConfigBrackets:
+    """Per voxel and configuration (V, C): two points whose solution counts of that configuration differ
+    (the configuration's own boundary crosses the voxel: a singular surface where it meets another
+    configuration, or a fold of the IK map), bisected round by round like :class:`FoldBrackets`. Its
+    midpoints are ordinary points of the voxel: near a singular boundary the configuration's capacity
+    falls to 0 (the joint rates grow without bound), and the bisection's last points find it.
+    ``open_`` (V, C) a bracket longer than the tolerance; ends a, b (V, C, 3) m; count at a: na (V, C)."""
+
+    open_: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    na: np.ndarray
+
+    @classmethod
+    def empty(cls, V: int, C: int) -> "ConfigBrackets":
+        return cls(np.zeros((V, C), dtype=bool), np.zeros((V, C, 3)), np.zeros((V, C, 3)), np.zeros((V, C), dtype=int))
+
+    def midpoints(self, tol_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The open brackets (longer than tol_m): voxel (n,), configuration (n,), midpoint (n, 3)."""
+        self.open_ &= np.linalg.norm(self.b - self.a, axis=2) > tol_m
+        v, c = np.nonzero(self.open_)
+        return v, c, 0.5 * (self.a[v, c] + self.b[v, c])
+
+    def track(self, v: np.ndarray, c: np.ndarray, mid_pts: np.ndarray, mid_cnt: np.ndarray, owner: np.ndarray,
+              pts: np.ndarray, cnt: np.ndarray, ref_pt: np.ndarray, ref_c: np.ndarray, seen: np.ndarray) -> None:
+        """Update in place: each evaluated midpoint mid_pts (n, 3) of bracket (v, c), with its count mid_cnt
+        (n,), replaces the end whose count it shares; a (voxel, configuration) without a bracket so far
+        (``seen`` (V, C) False, set here) gets one from the first point (owner (N,), pts (N, 3), counts cnt
+        (N, C)) whose count differs from the voxel's first point's (ref_pt (V, 3), ref_c (V, C))."""
+        same = mid_cnt == self.na[v, c]
+        self.a[v[same], c[same]] = mid_pts[same]
+        self.b[v[~same], c[~same]] = mid_pts[~same]
+        i, c2 = np.nonzero((cnt != ref_c[owner]) & ~seen[owner])
+        if len(i):
+            _, first = np.unique(owner[i] * cnt.shape[1] + c2, return_index=True)
+            i, c2 = i[first], c2[first]
+            v2 = owner[i]
+            self.open_[v2, c2] = seen[v2, c2] = True
+            self.a[v2, c2], self.na[v2, c2], self.b[v2, c2] = ref_pt[v2], ref_c[v2, c2], pts[i]

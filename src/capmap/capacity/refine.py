@@ -9,16 +9,18 @@ of each configuration and each per-axis minimum still falling, their step halvin
 minimiser from the worst points), and uniform points until the voxel holds ``min_points``
 (``near_min_points`` when its value lies within ``near_band`` of a task payload); no point of a voxel is
 evaluated twice. The voxel has converged when the round lowered its minimum, and each per-axis minimum,
-by less than ``rel_tol`` (relative) and it holds those points; the patterns' step reaching
-``finest_step`` of the edge ends the rounds (the voxel is then reported as not converged).
+by less than ``rel_tol``; the patterns' step reaching ``finest_step`` of the edge, or the voxel holding
+``max_points``, ends its search (it is then reported as not converged).
 
 Where two points of a voxel have different numbers of IK branches, a fold of the IK map (a singular
 surface, or the workspace boundary) crosses the voxel; there two branches merge at a singular
 configuration and the capacity falls towards 0 in a thin shell that uniform points rarely hit. Such a
 voxel also bisects the segment between two points of different branch counts, one point per round,
-until the bracket is shorter than ``fold_tol_m``, and stays unconverged until then; the capacity is not
-smooth there, so its uniform points keep doubling (to ``max_points``, a statistical search), and once
-its minima have settled only the bisection goes on. When the closed bracket holds a point of capacity
+until the bracket is shorter than ``fold_tol_m``, and stays unconverged until then (once its minima have
+settled only the bisection goes on). Likewise per configuration: where two points of a voxel hold
+different numbers of a configuration's solutions, its boundary crosses the voxel (a singular surface where
+it meets another configuration, or a fold), and that segment is bisected too; near a singular boundary
+the configuration's capacity falls to 0 (unbounded joint rates), which the bisection's last points find. When the closed bracket holds a point of capacity
 0, the fold is a singular surface: moving along any grid axis that crosses it needs unbounded joint
 rates (those of the direction normal to it), so every per-axis value of the voxel is set to 0 too (a
 grid axis tangent to the fold everywhere in the voxel is the exception this rounds down). With
@@ -27,9 +29,8 @@ all-branch value from the same points; the configurations a fold ends (the two w
 on it) fall to 0 with it, the others keep their own values.
 
 A voxel whose minimum and per-axis minima are all 0 cannot fall further and has converged. The per-axis
-capacities (moves along the 13 axes of the grid) are minimised over the same points. The evaluation of
-points is passed in as a function, so this module holds only the rounds; randomness comes from the
-Generator passed in.
+capacities (moves along the 13 grid axes) are minimised over the same points. The evaluation of points
+is passed in as a function (this module holds the rounds); randomness comes from the Generator given.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.engine import argmin_per_group
-from capmap.capacity.folds import FoldBrackets
+from capmap.capacity.folds import ConfigBrackets, FoldBrackets
 from capmap.capacity.patterns import COMPASS, CORNERS, PATTERN, around, rows_in
 from capmap.capacity.voxels import Grid
 from capmap.errors import CapmapError
@@ -51,17 +52,17 @@ __all__ = ["RefineSettings", "Evaluation", "VoxelMinima", "refine"]
 
 @dataclass(frozen=True)
 class RefineSettings:
-    """rel_tol: convergence (relative change of the minimum in the last round); min_points: uniform
-    points per voxel at least; max_points: where the uniform doubling of a voxel that a fold crosses
-    stops (patterns and the fold's bisection add to it); payloads_kg with near_band and
+    """rel_tol: convergence (relative change of the minimum in the last round); min_points: points per
+    voxel at least; max_points: a voxel holding that many stops searching (its brackets' bisections go
+    on); payloads_kg with near_band and
     near_min_points: voxels whose value is within near_band of a payload get at least that many."""
 
     rel_tol: float = 0.005
-    min_points: int = 16
+    min_points: int = 8
     max_points: int = 256
     payloads_kg: tuple[float, ...] = ()
     near_band: float = 0.1
-    near_min_points: int = 64
+    near_min_points: int = 16
     fold_tol_m: float = 1e-3
     finest_step: float = 1 / 64  # of the voxel edge: the patterns stop shrinking there
 
@@ -204,13 +205,18 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     axis_worst = np.repeat(worst[:, :, None, :], A, axis=2)  # (V, G, A, 3): where each axis minimum is
     axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their pattern continues)
     grp_open = np.ones(cap.shape, dtype=bool)  # group minima still falling
-    settled = np.zeros(V, dtype=bool)  # every group quiet but an open fold's bracket: only the bisection goes on
+    cb = ConfigBrackets.empty(V, C)  # per voxel and configuration: a bracket of different solution counts
+    c_seen = np.zeros((V, C), dtype=bool)
+    settled = np.zeros(V, dtype=bool)  # every group quiet but an open bracket: only the bisections go on
     seen = np.zeros((0, 4))  # (voxel, point) of every point evaluated: none twice
     rounds, evaluated = 0, 0
     while True:
         bisect = np.flatnonzero(fold & ~zero() & (np.linalg.norm(fb - fa, axis=1) > s.fold_tol_m))
+        kv, kc, kmid = cb.midpoints(s.fold_tol_m)  # each configuration's boundary, bisected
+        keep = ~zero()[kv]  # (not where nothing can fall further)
+        kv, kc, kmid = kv[keep], kc[keep], kmid[keep]
         searching = np.flatnonzero(~converged & ~stopped & ~settled & (n_pts < s.max_points))
-        active = np.union1d(searching, bisect)
+        active = np.union1d(np.union1d(searching, bisect), kv)
         if not len(active):
             break
         rounds += 1
@@ -239,22 +245,19 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
             _, keep = np.unique(rows, axis=0, return_index=True)
             keep = keep[~rows_in(rows[keep], known)]
             v, centre = cv[keep], centres[keep]
-            local = np.concatenate([np.repeat(has, len(PATTERN)), np.repeat(v, len(COMPASS))])
-            local_pts = np.concatenate([around(worst[has, 0], PATTERN, h, grid, idx3[has]),
+            local = np.concatenate([np.repeat(has, len(COMPASS)), np.repeat(v, len(COMPASS))])
+            local_pts = np.concatenate([around(worst[has, 0], COMPASS, h, grid, idx3[has]),
                                         around(centre, COMPASS, h, grid, idx3[v])])
-        local = np.concatenate([local, bisect])
-        local_pts = np.concatenate([local_pts, 0.5 * (fa[bisect] + fb[bisect])])
-        rows = np.column_stack([local, local_pts])
+        rows = np.column_stack([local, local_pts])  # a point of a voxel evaluated once (patterns clip to corners)
         _, first = np.unique(rows, axis=0, return_index=True)
         first = np.sort(first)
         first = first[~rows_in(rows[first], seen)]
-        local, local_pts = local[first], local_pts[first]
+        n_first = len(first)  # then the brackets' midpoints, in this order (the brackets find them by index)
+        local = np.concatenate([local[first], bisect, kv])
+        local_pts = np.concatenate([local_pts[first], 0.5 * (fa[bisect] + fb[bisect]), kmid])
         n_local = np.bincount(local, minlength=V)[active]
         need = np.where(_near(cap[active], s), s.near_min_points, s.min_points)
-        # where a fold crosses the voxel the capacity is not smooth: the uniform points double there, as before
-        need = np.where(fold[active], np.maximum(need, 2 * n_pts[active]), need)
-        new = np.where(np.isin(active, searching),
-                       np.clip(np.minimum(need, s.max_points) - n_pts[active] - n_local, 0, None), 0)
+        new = np.where(np.isin(active, searching), np.clip(need - n_pts[active] - n_local, 0, None), 0)
         uniform = np.repeat(active, new)
         owner = np.concatenate([local, uniform])
         pts = np.concatenate([local_pts,
@@ -285,7 +288,9 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         drop = _rel_drop(old, cap[active])  # (active, G)
         axis_drop = _rel_drop(axis_old, axis[active])  # (active, G, A)
         cnt = ev.config_branches if C else np.zeros((len(pts), 0), dtype=int)
-        fs.track(owner, pts, ev.n_branches, cnt, len(local) - len(bisect), bisect)
+        fs.track(owner, pts, ev.n_branches, cnt, n_first, bisect)
+        mid = n_first + len(bisect) + np.arange(len(kv))
+        cb.track(kv, kc, pts[mid], cnt[mid, kc], owner, pts, cnt, fs.ref_pt, fs.ref_c, c_seen)
         n_pts[active] += new
         np.add.at(n_reach, owner, np.isfinite(ev.capacity_kg).astype(int))
         open_fold = fold[active] & (np.linalg.norm(fb[active] - fa[active], axis=1) > s.fold_tol_m)
@@ -316,7 +321,9 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         axis_open[active] = (axis_drop >= s.rel_tol) & ~quiet[:, :, None] & (0.5 ** (rounds + 1) >= s.finest_step)
         enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
         converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold) | zero()[active]
-        settled[active] = (change[active] < s.rel_tol) & enough & open_fold
+        open_cfg = np.any(cb.open_[active] & (np.linalg.norm(cb.b[active] - cb.a[active], axis=2) > s.fold_tol_m), axis=1)
+        converged[active] = (converged[active] & ~open_cfg) | zero()[active]
+        settled[active] = (change[active] < s.rel_tol) & enough & (open_fold | open_cfg)
         if 0.5 ** (rounds + 1) < s.finest_step:  # the patterns have reached their finest step: stop
             stopped[active] = ~open_fold
     unseen = np.isinf(cap)  # groups no point held: NaN

@@ -29,10 +29,10 @@ class RefineConfig:
     payload, the seed of the refinement's random points."""
 
     rel_tol: float = 0.005
-    min_points: int = 16
+    min_points: int = 8
     max_points: int = 256
     near_band: float = 0.1
-    near_min_points: int = 64
+    near_min_points: int = 16
     seed: int = 0
 
     @classmethod
