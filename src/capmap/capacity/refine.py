@@ -42,7 +42,7 @@ import numpy as np
 
 from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.folds import ConfigBrackets, FoldBrackets
-from capmap.capacity.patterns import COMPASS, CORNERS, PATTERN, around, rows_in
+from capmap.capacity.patterns import COMPASS, CORNERS, around, rows_in
 from capmap.capacity.voxels import Grid
 from capmap.errors import CapmapError
 
