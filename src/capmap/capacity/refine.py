@@ -15,18 +15,18 @@ by less than ``rel_tol``; the patterns' step reaching ``finest_step`` of the edg
 Where two points of a voxel have different numbers of IK branches, a fold of the IK map (a singular
 surface, or the workspace boundary) crosses the voxel; there two branches merge at a singular
 configuration and the capacity falls towards 0 in a thin shell that uniform points rarely hit. Such a
-voxel also bisects the segment between two points of different branch counts, one point per round,
-until the bracket is shorter than ``fold_tol_m``, and stays unconverged until then (once its minima have
-settled only the bisection goes on). Likewise per configuration: where two points of a voxel hold
-different numbers of a configuration's solutions, its boundary crosses the voxel (a singular surface where
-it meets another configuration, or a fold), and that segment is bisected too; near a singular boundary
-the configuration's capacity falls to 0 (unbounded joint rates), which the bisection's last points find. When the closed bracket holds a point of capacity
-0, the fold is a singular surface: moving along any grid axis that crosses it needs unbounded joint
-rates (those of the direction normal to it), so every per-axis value of the voxel is set to 0 too (a
-grid axis tangent to the fold everywhere in the voxel is the exception this rounds down). With
-configuration maps (:meth:`VoxelMinima.with_configurations`) every configuration is refined beside the
-all-branch value from the same points; the configurations a fold ends (the two whose solutions merge
-on it) fall to 0 with it, the others keep their own values.
+voxel bisects the segment between two points of different branch counts, one point per round, until
+the bracket is shorter than ``fold_tol_m``, and stays unconverged until then (once its minima settled,
+only the bisection goes on). Likewise per configuration: where two points of a voxel hold different
+numbers of a configuration's solutions, its boundary (a singular surface where it meets another, or a
+fold) crosses the voxel and that segment is bisected too; near a singular boundary the configuration's
+capacity falls to 0, which the bisection's last points find. When the closed fold bracket holds a point
+of capacity 0, the fold is a singular surface: moving along any grid axis that crosses it needs
+unbounded joint rates, so every per-axis value of the voxel is set to 0 too (a grid axis tangent to the
+fold everywhere in the voxel is the exception this rounds down). With configuration maps
+(:meth:`VoxelMinima.with_configurations`) every configuration is refined beside the all-branch value from
+the same points; the configurations a fold ends (the two whose solutions merge on it) fall to 0 with it,
+the others keep their own values.
 
 A voxel whose minimum and per-axis minima are all 0 cannot fall further and has converged. The per-axis
 capacities (moves along the 13 grid axes) are minimised over the same points. The evaluation of points
