@@ -42,4 +42,3 @@ def test_arm_prints_each_lock_classification():
     lines = [ln for ln in out.stdout.splitlines() if "locked at" in ln]
     assert "COLLINEAR" in lines[1] and "may miss branches" in lines[1]
     assert all("general_6r (complete)" in lines[j - 1] for j in (1, 3, 4, 5, 6, 7))
-

@@ -17,7 +17,7 @@
 - :mod:`~capmap.capacity.baseline`     the healthy arm: the failed joint swept, the best posture per point
 - :mod:`~capmap.capacity.refine`       voxel minima refined until they converge, all branches and each configuration
 - :mod:`~capmap.capacity.folds`        the refinement's fold brackets (singular surfaces crossing a voxel)
-- :mod:`~capmap.capacity.patterns`     the refinement's local-search points (corners, compass, pattern)
+- :mod:`~capmap.capacity.patterns`     the refinement's local-search points (corners, compass)
 - :mod:`~capmap.capacity.query`        questions answered directly: a point on every configuration, a line on one
 """
 

@@ -1,6 +1,5 @@
 """Points of the voxel refinement's local search (:mod:`capmap.capacity.refine`): the voxel's
-corners, a compass and a compass-and-diagonal pattern around a centre clipped to its voxel, and
-which rows of points are already known."""
+corners, a compass around a centre clipped to its voxel, and which rows of points are already known."""
 
 from __future__ import annotations
 
@@ -8,14 +7,12 @@ import numpy as np
 
 from capmap.capacity.voxels import Grid
 
-__all__ = ["CORNERS", "COMPASS", "PATTERN", "around", "rows_in"]
+__all__ = ["CORNERS", "COMPASS", "around", "rows_in"]
 
 CORNERS = np.array([[i, j, k] for i in (0.0, 1.0) for j in (0.0, 1.0) for k in (0.0, 1.0)])
 """(8, 3): the corners of the unit cube."""
 COMPASS = np.concatenate([np.eye(3), -np.eye(3)])
 """(6, 3): the six axis directions."""
-PATTERN = np.concatenate([COMPASS, CORNERS * 2 - 1])
-"""(14, 3): the compass and the eight diagonals."""
 
 
 def rows_in(rows: np.ndarray, known: np.ndarray) -> np.ndarray:

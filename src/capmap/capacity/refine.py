@@ -4,12 +4,12 @@ A voxel's capacity is the minimum over the points inside it (the spec's step 7),
 points evaluated there. A handful of points overstates it where the capacity falls steeply inside the
 voxel (a singular configuration, a branch that appears at a workspace boundary), so every voxel that
 has a reachable point is refined in rounds: the first evaluates the voxel's corners; then, each round,
-a pattern around its worst point (while that minimum still falls) and a compass around the worst point
-of each configuration and each per-axis minimum still falling, their step halving every round (a local
-minimiser from the worst points), and uniform points until the voxel holds ``min_points``
+a compass of points around the worst point of the all-branch value, of each configuration and of each
+per-axis minimum while it still falls, the step halving every round (a local minimiser from the worst
+points), and uniform points until the voxel holds ``min_points``
 (``near_min_points`` when its value lies within ``near_band`` of a task payload); no point of a voxel is
 evaluated twice. The voxel has converged when the round lowered its minimum, and each per-axis minimum,
-by less than ``rel_tol``; the patterns' step reaching ``finest_step`` of the edge, or the voxel holding
+by less than ``rel_tol``; the compass' step reaching ``finest_step`` of the edge, or the voxel holding
 ``max_points``, ends its search (it is then reported as not converged).
 
 Where two points of a voxel have different numbers of IK branches, a fold of the IK map (a singular
@@ -49,7 +49,6 @@ from capmap.errors import CapmapError
 __all__ = ["RefineSettings", "Evaluation", "VoxelMinima", "refine"]
 
 
-
 @dataclass(frozen=True)
 class RefineSettings:
     """rel_tol: convergence (relative change of the minimum in the last round); min_points: points per
@@ -64,7 +63,7 @@ class RefineSettings:
     near_band: float = 0.1
     near_min_points: int = 16
     fold_tol_m: float = 1e-3
-    finest_step: float = 1 / 64  # of the voxel edge: the patterns stop shrinking there
+    finest_step: float = 1 / 64  # of the voxel edge: the compasses stop shrinking there
 
     def __post_init__(self):
         if not 0 < self.rel_tol < 1:
@@ -162,7 +161,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     all-branch ones are (groups: all branches, then each configuration), from the same points: a
     voxel has converged when every group has; a compass around each group's worst point still
     falling. A fold ends some configurations (their solution counts differ at the bracket's two ends:
-    the two that merge on the singular surface): while the bracket is open they wait (no pattern, not
+    the two that merge on the singular surface): while the bracket is open they wait (no compass, not
     counted against convergence), and when it closes on a singular fold (all-branch capacity 0) their
     minimum and per-axis values are 0 (the infimum at the surface), their worst point the bracket's end
     on their side, within ``fold_tol_m`` of it. A group whose value and axes are all 0 has converged.
@@ -198,12 +197,12 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
 
     # a voxel whose configurations are not known yet is refined at least once
     converged = ~reach0 | (zero() & ~np.any(np.isinf(cap[:, 1:]), axis=1))
-    stopped = np.zeros(V, dtype=bool)  # still falling when the patterns reached their finest step
+    stopped = np.zeros(V, dtype=bool)  # still falling when the compasses reached their finest step
     idx3 = np.stack(np.unravel_index(start.voxel, grid.shape), axis=1)
     fs = FoldBrackets.empty(V, C)  # per voxel: a bracket [a, b] of different branch counts, once one is seen
     fold, fa, fb = fs.fold, fs.fa, fs.fb
     axis_worst = np.repeat(worst[:, :, None, :], A, axis=2)  # (V, G, A, 3): where each axis minimum is
-    axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their pattern continues)
+    axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their compass continues)
     grp_open = np.ones(cap.shape, dtype=bool)  # group minima still falling
     cb = ConfigBrackets.empty(V, C)  # per voxel and configuration: a bracket of different solution counts
     c_seen = np.zeros((V, C), dtype=bool)
@@ -220,9 +219,9 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         if not len(active):
             break
         rounds += 1
-        # new points: the voxel's corners in the first round; then a pattern around its worst point so
-        # far, a compass around the worst point of each configuration and of each axis minimum still
-        # falling (one per distinct point); uniform points doubling the count (capped)
+        # new points: the voxel's corners in the first round; then a compass around the worst point of the
+        # all-branch value, of each configuration and of each axis minimum still falling (one per distinct
+        # point); uniform points up to the voxel's least count; the brackets' midpoints
         if rounds == 1:  # with configurations, the start's worst point again: its value on each of them
             local = np.repeat(active, 8)
             local_pts = grid.lower + (idx3[local] + np.tile(CORNERS, (len(active), 1))) * grid.edge_m
@@ -248,7 +247,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
             local = np.concatenate([np.repeat(has, len(COMPASS)), np.repeat(v, len(COMPASS))])
             local_pts = np.concatenate([around(worst[has, 0], COMPASS, h, grid, idx3[has]),
                                         around(centre, COMPASS, h, grid, idx3[v])])
-        rows = np.column_stack([local, local_pts])  # a point of a voxel evaluated once (patterns clip to corners)
+        rows = np.column_stack([local, local_pts])  # a point of a voxel evaluated once (compasses clip to corners)
         _, first = np.unique(rows, axis=0, return_index=True)
         first = np.sort(first)
         first = first[~rows_in(rows[first], seen)]
@@ -308,7 +307,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         cap[singular] = np.where(ends, 0.0, cap[singular])
         axis[singular] = np.where((cap[singular] == 0.0)[:, :, None], 0.0, axis[singular])
         # the configurations an open fold ends (different solution counts at its two ends) wait for the
-        # bisection: their minimum lies at the fold, where the bracket closes; no pattern for them
+        # bisection: their minimum lies at the fold, where the bracket closes; no compass for them
         pending = np.zeros((len(active), 1 + C), dtype=bool)
         pending[:, 1:] = open_fold[:, None] & (fs.ca[active] != fs.cb[active])
         # a group whose value and axes are all 0 has nothing left to fall
@@ -324,7 +323,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         open_cfg = np.any(cb.open_[active] & (np.linalg.norm(cb.b[active] - cb.a[active], axis=2) > s.fold_tol_m), axis=1)
         converged[active] = (converged[active] & ~open_cfg) | zero()[active]
         settled[active] = (change[active] < s.rel_tol) & enough & (open_fold | open_cfg)
-        if 0.5 ** (rounds + 1) < s.finest_step:  # the patterns have reached their finest step: stop
+        if 0.5 ** (rounds + 1) < s.finest_step:  # the compasses have reached their finest step: stop
             stopped[active] = ~open_fold
     unseen = np.isinf(cap)  # groups no point held: NaN
     cap[unseen] = np.nan
