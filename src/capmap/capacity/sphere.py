@@ -288,17 +288,16 @@ def _sphere(C, S, U, a, v2, g, limit, cap, worst_u, binding, n_sub):
                             dd[i] = -sigma * w[k, i]
                         val, low = _trs(c0, b, dd, V[k], u, be, x)
                         nsub += 1
-                        if low >= -_REL * scale:
-                            break  # lambda <= this (output, sign)'s minimum
-                        # the minimiser's own bound
+                        if low >= -_REL * scale or val >= 0.0:
+                            break  # lambda <= this (output, sign)'s minimum (to the dual's rounding)
+                        # the minimiser's own bound: N - lambda D < 0 there, so N < 0 (|y| > L: nothing can be
+                        # carried along u) unless D > 0, and then N / D < lambda
                         y = (c[0] + a * (c[1] * u[0] + c[2] * u[1] + c[3] * u[2])
                              + v2 * (c[4] * u[0] ** 2 + c[5] * u[1] ** 2 + c[6] * u[2] ** 2 + c[7] * u[0] * u[1]
                                      + c[8] * u[0] * u[2] + c[9] * u[1] * u[2]))
                         den = sigma * (a * (s[0] * u[0] + s[1] * u[1] + s[2] * u[2]) - sg)
                         num = lim - sigma * y
-                        if not (den > 0.0) or num < 0.0:
-                            break  # rounding at the limit (|y| = L): nothing lower to find
-                        r = num / den
+                        r = num / den if den > 0.0 and num >= 0.0 else 0.0
                         if not r < lam:
                             break
                         lam, kb, ub0, ub1, ub2 = r, k, u[0], u[1], u[2]
