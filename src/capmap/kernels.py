@@ -32,7 +32,6 @@ from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.dualarm import distance
-from capmap.errors import CapmapError
 
 __all__ = ["fingerprint", "warm", "ensure_warm", "main"]
 
@@ -61,7 +60,7 @@ def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
     ``angle_rad`` (its IK method, the capacity kernels), and the dual-arm distances if ``dualarm``."""
     rng = np.random.default_rng(0)
     arm = lock(load(robot_file), joint, angle_rad)
-    T = arm.fk(rng.uniform(arm.q_lower, arm.q_upper, (8, arm.n_active)))
+    T = arm.fk(rng.uniform(np.maximum(arm.q_lower, -np.pi), np.minimum(arm.q_upper, np.pi), (8, arm.n_active)))
     sol = ik.solve(arm, T[:, :3, 3], T[:, :3, :3])
     dyn = ArmDynamics(arm)
     limits = engine.LoadLimits.uniform(arm.robot.n_joints, 700, 200, 500).for_arm(arm)
@@ -113,8 +112,9 @@ def main(argv: list[str] | None = None) -> int:
             robot, joint, dualarm = run.robot, run.lock.joint, run.dualarm is not None
             angle = run.lock.angle_deg if run.lock.angle_deg is not None else run.task.q_ini_deg[joint - 1]
         ran = ensure_warm(robot, joint, np.deg2rad(angle), dualarm)
-    except (CapmapError, IndexError, OSError) as exc:  # the workflow's own checks say what is wrong, and where
-        print(f"capmap: kernels not compiled before the jobs ({exc}); each job compiles its own", file=sys.stderr)
+    except Exception as exc:  # best effort: the workflow's own checks say what is wrong, and the jobs compile
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        print(f"capmap: kernels not compiled before the jobs ({why}); each job compiles its own", file=sys.stderr)
         return 1
     print(f"capmap: numba kernels {'compiled' if ran else 'already compiled'} for {robot}, joint {joint} locked "
           f"({time.perf_counter() - t0:.1f} s)", file=sys.stderr)
