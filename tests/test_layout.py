@@ -26,7 +26,7 @@ ALLOWED = {
     # the command line (python -m capmap check, check-config, arm; query: a stage, as a workflow script calls one)
     "__main__": {"config", "io", "stages", "errors"},
     # compile the numba kernels once before the jobs (python -m capmap.kernels): each family's compiled calls
-    "kernels": {"core", "capacity", "dualarm", "config", "errors"},
+    "kernels": {"core", "capacity", "dualarm", "config", "io", "errors"},
     "_lazy": set(),  # lazy package exports (PEP 562): any package may use it
 }
 for _part_name in ALLOWED:

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import hashlib
-import logging
 import sys
 import time
 from pathlib import Path
@@ -32,10 +31,10 @@ from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.dualarm import distance
+from capmap.io.fingerprint import file_sha256
 
 __all__ = ["fingerprint", "warm", "ensure_warm", "main"]
 
-log = logging.getLogger(__name__)
 PACKAGE = Path(__file__).resolve().parent
 
 
@@ -78,7 +77,7 @@ def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
 def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> bool:
     """:func:`warm` unless the marker lists this run's kernels as warm for this code; True if it ran."""
     marker = _marker()
-    key = f"{Path(robot_file).resolve()} {hashlib.sha256(Path(robot_file).read_bytes()).hexdigest()[:16]} " \
+    key = f"{Path(robot_file).resolve()} {file_sha256(robot_file)[:16]} " \
           f"joint {joint} {angle_rad:.6f}{' dualarm' if dualarm else ''}"
     done = marker.read_text().splitlines() if marker.is_file() else []
     if key in done:

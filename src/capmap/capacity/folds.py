@@ -67,9 +67,10 @@ class ConfigBrackets:
     configuration, or a fold of the IK map), bisected round by round like :class:`FoldBrackets`. Its
     midpoints are ordinary points of the voxel: near a singular boundary the configuration's capacity
     falls to 0 (the joint rates grow without bound), and the bisection's last points find it.
-    ``open_`` (V, C) a bracket longer than the tolerance; ends a, b (V, C, 3) m; count at a: na (V, C)."""
+    ``seen`` (V, C) a bracket exists (one per voxel and configuration); ends a, b (V, C, 3) m; count at a:
+    na (V, C)."""
 
-    open_: np.ndarray
+    seen: np.ndarray
     a: np.ndarray
     b: np.ndarray
     na: np.ndarray
@@ -78,25 +79,28 @@ class ConfigBrackets:
     def empty(cls, V: int, C: int) -> "ConfigBrackets":
         return cls(np.zeros((V, C), dtype=bool), np.zeros((V, C, 3)), np.zeros((V, C, 3)), np.zeros((V, C), dtype=int))
 
+    def open(self, tol_m: float) -> np.ndarray:
+        """(V, C) bool: a bracket longer than tol_m."""
+        return self.seen & (np.linalg.norm(self.b - self.a, axis=2) > tol_m)
+
     def midpoints(self, tol_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The open brackets (longer than tol_m): voxel (n,), configuration (n,), midpoint (n, 3)."""
-        self.open_ &= np.linalg.norm(self.b - self.a, axis=2) > tol_m
-        v, c = np.nonzero(self.open_)
+        """The open brackets: voxel (n,), configuration (n,), midpoint (n, 3)."""
+        v, c = np.nonzero(self.open(tol_m))
         return v, c, 0.5 * (self.a[v, c] + self.b[v, c])
 
     def track(self, v: np.ndarray, c: np.ndarray, mid_pts: np.ndarray, mid_cnt: np.ndarray, owner: np.ndarray,
-              pts: np.ndarray, cnt: np.ndarray, ref_pt: np.ndarray, ref_c: np.ndarray, seen: np.ndarray) -> None:
+              pts: np.ndarray, cnt: np.ndarray, ref_pt: np.ndarray, ref_c: np.ndarray) -> None:
         """Update in place: each evaluated midpoint mid_pts (n, 3) of bracket (v, c), with its count mid_cnt
-        (n,), replaces the end whose count it shares; a (voxel, configuration) without a bracket so far
-        (``seen`` (V, C) False, set here) gets one from the first point (owner (N,), pts (N, 3), counts cnt
-        (N, C)) whose count differs from the voxel's first point's (ref_pt (V, 3), ref_c (V, C))."""
+        (n,), replaces the end whose count it shares; a (voxel, configuration) without a bracket so far gets
+        one from the first point (owner (N,), pts (N, 3), counts cnt (N, C)) whose count differs from the
+        voxel's first point's (ref_pt (V, 3), ref_c (V, C))."""
         same = mid_cnt == self.na[v, c]
         self.a[v[same], c[same]] = mid_pts[same]
         self.b[v[~same], c[~same]] = mid_pts[~same]
-        i, c2 = np.nonzero((cnt != ref_c[owner]) & ~seen[owner])
+        i, c2 = np.nonzero((cnt != ref_c[owner]) & ~self.seen[owner])
         if len(i):
             _, first = np.unique(owner[i] * cnt.shape[1] + c2, return_index=True)
             i, c2 = i[first], c2[first]
             v2 = owner[i]
-            self.open_[v2, c2] = seen[v2, c2] = True
+            self.seen[v2, c2] = True
             self.a[v2, c2], self.na[v2, c2], self.b[v2, c2] = ref_pt[v2], ref_c[v2, c2], pts[i]

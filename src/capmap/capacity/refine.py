@@ -205,7 +205,6 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their compass continues)
     grp_open = np.ones(cap.shape, dtype=bool)  # group minima still falling
     cb = ConfigBrackets.empty(V, C)  # per voxel and configuration: a bracket of different solution counts
-    c_seen = np.zeros((V, C), dtype=bool)
     settled = np.zeros(V, dtype=bool)  # every group quiet but an open bracket: only the bisections go on
     seen = np.zeros((0, 4))  # (voxel, point) of every point evaluated: none twice
     rounds, evaluated = 0, 0
@@ -289,7 +288,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         cnt = ev.config_branches if C else np.zeros((len(pts), 0), dtype=int)
         fs.track(owner, pts, ev.n_branches, cnt, n_first, bisect)
         mid = n_first + len(bisect) + np.arange(len(kv))
-        cb.track(kv, kc, pts[mid], cnt[mid, kc], owner, pts, cnt, fs.ref_pt, fs.ref_c, c_seen)
+        cb.track(kv, kc, pts[mid], cnt[mid, kc], owner, pts, cnt, fs.ref_pt, fs.ref_c)
         n_pts[active] += new
         np.add.at(n_reach, owner, np.isfinite(ev.capacity_kg).astype(int))
         open_fold = fold[active] & (np.linalg.norm(fb[active] - fa[active], axis=1) > s.fold_tol_m)
@@ -319,9 +318,8 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         grp_open[active] = grp_drop >= s.rel_tol
         axis_open[active] = (axis_drop >= s.rel_tol) & ~quiet[:, :, None] & (0.5 ** (rounds + 1) >= s.finest_step)
         enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
-        converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold) | zero()[active]
-        open_cfg = np.any(cb.open_[active] & (np.linalg.norm(cb.b[active] - cb.a[active], axis=2) > s.fold_tol_m), axis=1)
-        converged[active] = (converged[active] & ~open_cfg) | zero()[active]
+        open_cfg = np.any(cb.open(s.fold_tol_m)[active], axis=1)
+        converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold & ~open_cfg) | zero()[active]
         settled[active] = (change[active] < s.rel_tol) & enough & (open_fold | open_cfg)
         if 0.5 ** (rounds + 1) < s.finest_step:  # the compasses have reached their finest step: stop
             stopped[active] = ~open_fold

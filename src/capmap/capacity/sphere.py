@@ -51,6 +51,13 @@ def start_directions(n_pairs: int = START_DIRECTIONS) -> np.ndarray:
     return np.concatenate([u, -u])
 
 
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _y(c, a, v2, x0, x1, x2):
+    """The payload-free output y(u) of coefficients c (10,) along u = (x0, x1, x2)."""
+    return (c[0] + a * (c[1] * x0 + c[2] * x1 + c[3] * x2)
+            + v2 * (c[4] * x0 * x0 + c[5] * x1 * x1 + c[6] * x2 * x2 + c[7] * x0 * x1 + c[8] * x0 * x2 + c[9] * x1 * x2))
+
+
 @_jit
 def _eig3(Q, w, V, A):
     """Symmetric Q (3, 3) -> eigenvalues w (3,) and eigenvectors V (3, 3) (columns), cyclic Jacobi;
@@ -220,9 +227,7 @@ def _sphere(C, S, U, a, v2, g, limit, cap, worst_u, binding, n_sub):
             sg = s[0] * g[0] + s[1] * g[1] + s[2] * g[2]
             for p in range(P2):
                 x0, x1, x2 = U[p, 0], U[p, 1], U[p, 2]
-                y = (c[0] + a * (c[1] * x0 + c[2] * x1 + c[3] * x2)
-                     + v2 * (c[4] * x0 * x0 + c[5] * x1 * x1 + c[6] * x2 * x2 + c[7] * x0 * x1 + c[8] * x0 * x2
-                             + c[9] * x1 * x2))
+                y = _y(c, a, v2, x0, x1, x2)
                 t = a * (s[0] * x0 + s[1] * x1 + s[2] * x2) - sg
                 if lim - abs(y) < 0.0:
                     r = 0.0
@@ -292,9 +297,7 @@ def _sphere(C, S, U, a, v2, g, limit, cap, worst_u, binding, n_sub):
                             break  # lambda <= this (output, sign)'s minimum (to the dual's rounding)
                         # the minimiser's own bound: N - lambda D < 0 there, so N < 0 (|y| > L: nothing can be
                         # carried along u) unless D > 0, and then N / D < lambda
-                        y = (c[0] + a * (c[1] * u[0] + c[2] * u[1] + c[3] * u[2])
-                             + v2 * (c[4] * u[0] ** 2 + c[5] * u[1] ** 2 + c[6] * u[2] ** 2 + c[7] * u[0] * u[1]
-                                     + c[8] * u[0] * u[2] + c[9] * u[1] * u[2]))
+                        y = _y(c, a, v2, u[0], u[1], u[2])
                         den = sigma * (a * (s[0] * u[0] + s[1] * u[1] + s[2] * u[2]) - sg)
                         num = lim - sigma * y
                         r = num / den if den > 0.0 and num >= 0.0 else 0.0
