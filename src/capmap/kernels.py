@@ -4,8 +4,8 @@ Every kernel is compiled with ``cache=True``; the first process that calls one c
 writes the cache, the others load it. Parallel jobs started together (the capacity shards) would
 each compile the same kernels; :func:`warm` compiles those a run uses once, before its jobs, by
 running the stages' compiled calls on a few inputs of their types: the locked arm's IK (whichever
-method its chain takes), the capacity kernels, and the dual-arm distances when the run has that
-family. ``python -m capmap.kernels [--configfile FILE]`` (the README's install command; Snakemake's
+method its chain takes), the capacity kernels, and the dual-arm distances and node models when the
+run has that family. ``python -m capmap.kernels [--configfile FILE]`` (the README's install command; Snakemake's
 ``onstart`` runs it for the run's own config). A marker per hash of the kernels' source files, numba's
 version and the CPU lists what was warmed, so the next call is a check of milliseconds (after its
 imports, about a second).
@@ -30,7 +30,7 @@ from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
-from capmap.dualarm import distance
+from capmap.dualarm import distance, nodes
 from capmap.io.fingerprint import file_sha256
 
 __all__ = ["fingerprint", "warm", "ensure_warm", "main"]
@@ -72,6 +72,7 @@ def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
         distance.segment_segment(p, p + 1, p + 2, p + 3)
         distance.point_triangle(p, p + 1, p + 2, p + 3)
         distance.segment_triangle(p, p + 1, p + 2, p + 3, p + 4)
+        nodes.warm_up()
 
 
 def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> bool:

@@ -11,17 +11,23 @@ panel assembly.
 - :mod:`~capmap.dualarm.task`        the task's equality constraints at a node
 - :mod:`~capmap.dualarm.assembly`    the problem put together; warm start; clearance of key poses
 - :mod:`~capmap.dualarm.settings`    cost weights and the AL loop's parameters
-- :mod:`~capmap.dualarm.ocp`         one Crocoddyl action model per node (AL terms or constraints)
+- :mod:`~capmap.dualarm.ocp`         one Crocoddyl action model per node (AL terms or constraints), on Pinocchio
+- :mod:`~capmap.dualarm.lie`         SO(3)/SE(3) logarithms and their Jacobians, compiled
+- :mod:`~capmap.dualarm.chain`       the revolute chain packed for compiled kinematics; batched pair distances
+- :mod:`~capmap.dualarm.nodes`       the node model compiled: one numba call per calc / calcDiff (the default)
 - :mod:`~capmap.dualarm.solver`      the augmented-Lagrangian loop around FDDP
 - :mod:`~capmap.dualarm.evaluate`    errors and safety of a solution, on the nodes and a finer grid
 """
 
 __all__ = [
            "assembly",
+           "chain",
            "cloud",
            "collision",
            "distance",
            "evaluate",
+           "lie",
+           "nodes",
            "ocp",
            "primitives",
            "robot",

@@ -59,15 +59,16 @@ class AssemblyMotion:
 
 
 def plan_assembly(asm: Assembly, robot: DualArm, weights: Weights, solver: ALSettings, fine_factor: int,
-                  progress: Callable[[str], None] = lambda _: None) -> AssemblyMotion:
+                  progress: Callable[[str], None] = lambda _: None, compiled: bool = True) -> AssemblyMotion:
     """Key poses, warm start, solve within the joint limits, evaluation on the nodes and on a grid
-    ``fine_factor`` times finer."""
+    ``fine_factor`` times finer; ``compiled=False``: Pinocchio's node models (the reference)."""
     t0 = time.perf_counter()
     qs = warm_start(asm)
     clear = key_poses(asm, qs, progress)
     xs0, us0 = initial_guess(qs, asm.task.dt)
     t1 = time.perf_counter()
-    sol = solve(asm, weights, (robot.q_lower, robot.q_upper, robot.v_max), solver, xs0, us0, log=progress)
+    sol = solve(asm, weights, (robot.q_lower, robot.q_upper, robot.v_max), solver, xs0, us0, log=progress,
+                compiled=compiled)
     solve_s = time.perf_counter() - t1
     nq = asm.model.nq
     err = node_errors(asm, sol.xs)

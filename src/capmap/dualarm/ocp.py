@@ -1,4 +1,5 @@
-"""The optimal control problem, one Crocoddyl action model per node.
+"""The optimal control problem, one Crocoddyl action model per node, on Pinocchio's own calls (the
+reference; :mod:`.nodes` evaluates the same model compiled, and the solver uses that one).
 
 State x = [q; v] (2 nq), control u = joint accelerations (nq), exact for a constant
 acceleration over a step: q+ = q + dt v + dt^2 u / 2, v+ = v + dt u (so the motion between
@@ -35,8 +36,9 @@ LOCAL = pin.ReferenceFrame.LOCAL
 
 @dataclass
 class Context:
-    """Shared by every node: the model, task, collision model, weights, joint limits and the
-    penalty mu (the augmented-Lagrangian loop changes it)."""
+    """Shared by every node: the model, task, collision model, weights, joint limits, the
+    penalty mu (the augmented-Lagrangian loop changes it) and, when the model packs, the packed
+    chain of the compiled node models."""
 
     model: pin.Model
     task: AssemblyTask
@@ -47,6 +49,7 @@ class Context:
     v_max: np.ndarray
     mu: float = 100.0
     with_limits: bool = True
+    packed: object = None  # the chain packed for the compiled node models (chain.Packed), or None
     counters: dict = field(default_factory=lambda: {"calc": 0, "calcDiff": 0})
 
 
@@ -93,6 +96,14 @@ class NodeModel(crocoddyl.ActionModelAbstract):
 
     def createData(self):
         return NodeData(self)
+
+    def values(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Equality values c (m,) and inequality values g (p,) at the state x (2 nq,)."""
+        nq = self.ctx.model.nq
+        pd = self.ctx.model.createData()
+        q, v = x[:nq], x[nq:]
+        self._kinematics(pd, q, jac=False)
+        return self.equalities(pd, q, v, False)[0], self.inequalities(pd, q, v, False)[0]
 
     # ------------------------------------------------------------------ pieces
     def _kinematics(self, pd, q, jac):

@@ -20,12 +20,38 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.dualarm.assembly import Assembly
+from capmap.dualarm.chain import batch_distances, pack
 from capmap.dualarm.collision import Pairs
+from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
 from capmap.dualarm.settings import ALSettings, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
-           "all_distances"]
+           "all_distances", "context", "node_model"]
+
+NO_PAIRS = Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int))
+
+
+def context(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], compiled: bool = True,
+            log=None, **kw) -> Context:
+    """The nodes' shared context; with ``compiled`` the chain packed for :class:`CompiledNodeModel`
+    (when the model packs: else Pinocchio's node models, said through ``log``)."""
+    packed = None
+    if compiled:
+        t = asm.task
+        packed = pack(asm.model, (t.left, t.right, t.panel), asm.collision.prims)
+        if isinstance(packed, str):
+            if log:
+                log(f"node models on Pinocchio's calls, not compiled: {packed}")
+            packed = None
+    return Context(asm.model, asm.task, asm.collision, weights, *limits, packed=packed, **kw)
+
+
+def node_model(ctx: Context, k: int, pairs: Pairs, mode: str = "al"):
+    """Node k's action model: compiled when the context has the packed chain."""
+    if ctx.packed is not None:
+        return CompiledNodeModel(ctx, k, pairs, mode, ctx.packed)
+    return NodeModel(ctx, k, pairs, mode)
 
 
 @dataclass(frozen=True)
@@ -73,21 +99,19 @@ def all_distances(asm: Assembly, qs: np.ndarray, pairs: Pairs) -> np.ndarray:
     return out
 
 
-def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float) -> list[np.ndarray]:
+def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float, packed=None) -> list[np.ndarray]:
     """Per node, which candidate pairs are within filter_m (safety distance) on the path qs."""
-    d = all_distances(asm, qs, asm.pairs)
+    if packed is not None:
+        d = batch_distances(packed, qs, asm.pairs, cutoff=filter_m)
+    else:
+        d = all_distances(asm, qs, asm.pairs)
     return [row < filter_m for row in d]
 
 
-def _violations(models: list[NodeModel], xs: np.ndarray) -> tuple[float, float, list, list]:
+def _violations(models: list, xs: np.ndarray) -> tuple[float, float, list, list]:
     eq, ineq, cs, gs = 0.0, 0.0, [], []
     for m, x in zip(models, xs):
-        d = m.createData()
-        nq = m.ctx.model.nq
-        q, v = x[:nq], x[nq:]
-        m._kinematics(d.pin, q, jac=False)
-        c, _ = m.equalities(d.pin, q, v, False)
-        g, _ = m.inequalities(d.pin, q, v, False)
+        c, g = m.values(x)
         cs.append(c)
         gs.append(g)
         eq = max(eq, float(np.abs(c).max()))
@@ -96,16 +120,17 @@ def _violations(models: list[NodeModel], xs: np.ndarray) -> tuple[float, float, 
 
 
 def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], settings: ALSettings,
-          xs0: np.ndarray, us0: np.ndarray, log=None, inequalities: bool = True) -> Solution:
+          xs0: np.ndarray, us0: np.ndarray, log=None, inequalities: bool = True, compiled: bool = True) -> Solution:
     """The augmented-Lagrangian loop (module docstring) from the initial guess xs0, us0;
-    ``inequalities=False``: the equality-only problem (no collision pairs, no limits)."""
+    ``inequalities=False``: the equality-only problem (no collision pairs, no limits);
+    ``compiled=False``: Pinocchio's node models (the reference) instead of the compiled ones."""
     st = settings
-    ctx = Context(asm.model, asm.task, asm.collision, weights, *limits, mu=st.mu0, with_limits=inequalities)
+    ctx = context(asm, weights, limits, compiled, log, mu=float(st.mu0), with_limits=inequalities)
     if not inequalities:
-        asm = replace(asm, pairs=Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int)))
+        asm = replace(asm, pairs=NO_PAIRS)
     N = asm.task.N
-    keep = node_pairs(asm, xs0[:, :asm.model.nq], st.filter_m)
-    models = [NodeModel(ctx, k, asm.pairs.subset(keep[k])) for k in range(N + 1)]
+    keep = node_pairs(asm, xs0[:, :asm.model.nq], st.filter_m, ctx.packed)
+    models = [node_model(ctx, k, asm.pairs.subset(keep[k])) for k in range(N + 1)]
     problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:N], models[N])
     solver = crocoddyl.SolverFDDP(problem)
     solver.th_stop = st.inner_stop
@@ -120,14 +145,14 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
         X = np.array(xs)
         eq, ineq, cs, gs = _violations(models, X)
         # re-check every candidate pair on the solution; pairs that came near join their node
-        near = node_pairs(asm, X[:, :asm.model.nq], st.filter_m)
+        near = node_pairs(asm, X[:, :asm.model.nq], st.filter_m, ctx.packed)
         added = 0
         for k in range(N + 1):
             new = near[k] & ~keep[k]
             if new.any():
                 keep[k] |= new
                 old = models[k]
-                m = NodeModel(ctx, k, asm.pairs.subset(keep[k]))
+                m = node_model(ctx, k, asm.pairs.subset(keep[k]))
                 m.lam_eq = old.lam_eq
                 m.lam_in[:len(m.pairs)] = _carry(old.pairs, m.pairs, old.lam_in[:len(old.pairs)])
                 m.lam_in[len(m.pairs):] = old.lam_in[len(old.pairs):]
@@ -184,12 +209,11 @@ class CSQPResult:
 
 
 def solve_csqp(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], xs0: np.ndarray,
-               us0: np.ndarray, iterations: int, tolerance: float) -> CSQPResult:
+               us0: np.ndarray, iterations: int, tolerance: float, compiled: bool = True) -> CSQPResult:
     """The equality-only problem (the same costs; the task constraints as the nodes' constraint rows,
     bounds 0; no collisions or limits) by mim-solvers' CSQP from xs0, us0."""
-    ctx = Context(asm.model, asm.task, asm.collision, weights, *limits, with_limits=False)
-    none = Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int))
-    models = [NodeModel(ctx, k, none, mode="constrained") for k in range(asm.task.N + 1)]
+    ctx = context(asm, weights, limits, compiled, with_limits=False)
+    models = [node_model(ctx, k, NO_PAIRS, mode="constrained") for k in range(asm.task.N + 1)]
     problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:-1], models[-1])
     csqp = mim_solvers.SolverCSQP(problem)
     csqp.max_qp_iters, csqp.eps_abs, csqp.eps_rel = 1000, 1e-9, 0.0
@@ -203,10 +227,9 @@ def equality_cost(asm: Assembly, weights: Weights, xs: np.ndarray, us: np.ndarra
     """The cost of a trajectory without any constraint term (the objective both solvers share)."""
     unused = np.zeros(asm.model.nq)  # no limits in the objective
     ctx = Context(asm.model, asm.task, asm.collision, weights, unused, unused, unused, with_limits=False)
-    none = Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int))
     total = 0.0
     for k, x in enumerate(xs):
-        m = NodeModel(ctx, k, none, mode="constrained")
+        m = NodeModel(ctx, k, NO_PAIRS, mode="constrained")
         d = m.createData()
         m.calc(d, x, us[k]) if k < len(us) else m.calc(d, x)
         total += float(d.cost)

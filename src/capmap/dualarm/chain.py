@@ -1,0 +1,214 @@
+"""A Pinocchio model of revolute joints packed into flat arrays, and compiled (numba) kinematics and
+safety distances on it, for the node models and the pair filter.
+
+Joint j: parent, placement in its parent (R, p), unit axis in its own frame, its q index; the
+placement of joint j in the world is oMi[parent] * placement * Rot(axis, q). Column i of the
+world Jacobian (the joint with q index i): angular w_i = R_j axis_j, and a point X carried by a
+body that joint moves has velocity w_i x (X - o_j). Frames: left gripper, right gripper, panel
+(their joint and placement in it). Only 1-dof revolute joints (Pinocchio's RX/RY/RZ and
+revolute-unaligned) are packed; :func:`pack` says why not otherwise (the node models then stay
+on Pinocchio's own calls). Tested against Pinocchio in tests/dualarm/test_nodes.py.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+import pinocchio as pin
+
+from capmap.dualarm.collision import Pairs, Primitives
+from capmap.dualarm.distance import segseg, segtri
+
+__all__ = ["Packed", "pack", "fk", "pair_table", "distances", "batch_distances"]
+
+_jit = numba.njit(cache=True)  # plain calls (numba's IR inlining, inline="always", compiles several times slower)
+
+
+@dataclass(frozen=True, eq=False)
+class Packed:
+    """chain_f (nj, 15): placement R (9), p (3), axis (3); chain_i (nj, 2): parent, q index (-1 for
+    the universe); moves (nj, nv) bool: the columns that move joint j's body; frame_f (3, 12): R,
+    p of the left gripper, right gripper and panel frames in their joints; frame_j (3,);
+    seg_f (S, 6): segment ends a, b (in their joint's frame, world for joint 0); seg_j (S,);
+    seg_r (S,); tri_f (T, 9); tri_j (T,); tri_r (T,)."""
+
+    chain_f: np.ndarray
+    chain_i: np.ndarray
+    moves: np.ndarray
+    frame_f: np.ndarray
+    frame_j: np.ndarray
+    seg_f: np.ndarray
+    seg_j: np.ndarray
+    seg_r: np.ndarray
+    tri_f: np.ndarray
+    tri_j: np.ndarray
+    tri_r: np.ndarray
+
+
+def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> Packed | str:
+    """The packed chain, or a sentence saying which joint cannot be packed."""
+    nj = model.njoints
+    if model.nq != model.nv or model.nq != nj - 1:
+        return f"the model has {model.nq} configuration and {model.nv} velocity variables for {nj - 1} joints"
+    data = model.createData()
+    q0 = pin.neutral(model)
+    pin.computeJointJacobians(model, data, q0)
+    chain_f, chain_i = np.zeros((nj, 15)), np.full((nj, 2), -1, dtype=np.int64)
+    chain_f[0, :9] = np.eye(3).ravel()
+    for j in range(1, nj):
+        jm = model.joints[j]
+        if jm.nq != 1 or jm.nv != 1:
+            return f"joint {model.names[j]!r} ({jm.shortname()}) is not a 1-dof joint"
+        col = data.J[:, jm.idx_v]
+        R0, o0 = data.oMi[j].rotation, data.oMi[j].translation
+        w = col[3:]
+        if abs(np.linalg.norm(w) - 1.0) > 1e-9 or np.linalg.norm(col[:3] - np.cross(o0, w)) > 1e-9:
+            return f"joint {model.names[j]!r} ({jm.shortname()}) is not a revolute joint"
+        M = model.jointPlacements[j]
+        chain_f[j] = np.concatenate([M.rotation.ravel(), M.translation, R0.T @ w])
+        chain_i[j] = (model.parents[j], jm.idx_q)
+    moves = np.zeros((nj, model.nv), dtype=np.bool_)
+    for j in range(1, nj):
+        for i in model.supports[j][1:]:
+            moves[j, model.joints[i].idx_v] = True
+    frame_f = np.array([np.concatenate([model.frames[f].placement.rotation.ravel(), model.frames[f].placement.translation])
+                        for f in frames])
+    frame_j = np.array([model.frames[f].parentJoint for f in frames], dtype=np.int64)
+    return Packed(chain_f, chain_i, moves, frame_f, frame_j,
+                  np.ascontiguousarray(np.hstack([prims.seg_a, prims.seg_b]), dtype=float),
+                  prims.seg_joint.astype(np.int64), prims.seg_r.astype(float),
+                  np.ascontiguousarray(prims.tri_v.reshape(-1, 9), dtype=float), prims.tri_joint.astype(np.int64),
+                  prims.tri_r.astype(float))
+
+
+def pair_table(packed: Packed, pairs: Pairs) -> tuple[np.ndarray, np.ndarray]:
+    """(P, 3) int rows (kind 0 segment-segment / 1 segment-triangle, first, second) and the sums of
+    the two radii (P,), segment-segment pairs first (the order of :class:`Pairs`)."""
+    ss, st = np.asarray(pairs.ss, dtype=np.int64).reshape(-1, 2), np.asarray(pairs.st, dtype=np.int64).reshape(-1, 2)
+    rows = np.vstack([np.column_stack([np.zeros(len(ss), np.int64), ss]),
+                      np.column_stack([np.ones(len(st), np.int64), st])]).astype(np.int64)
+    rsum = np.concatenate([packed.seg_r[ss[:, 0]] + packed.seg_r[ss[:, 1]], packed.seg_r[st[:, 0]] + packed.tri_r[st[:, 1]]])
+    return np.ascontiguousarray(rows), rsum
+
+
+@_jit
+def fk(chain_f, chain_i, q, R, p):
+    """World placements R (nj, 3, 3), p (nj, 3) of every joint at q (joint 0: the world)."""
+    R[0, :, :] = 0.0
+    for i in range(3):
+        R[0, i, i] = 1.0
+        p[0, i] = 0.0
+    for j in range(1, chain_f.shape[0]):
+        par, iq = chain_i[j, 0], chain_i[j, 1]
+        ax, ay, az = chain_f[j, 12], chain_f[j, 13], chain_f[j, 14]
+        c, s = np.cos(q[iq]), np.sin(q[iq])
+        v = 1.0 - c
+        # Rot(axis, q), Rodrigues
+        m00, m01, m02 = c + v * ax * ax, v * ax * ay - s * az, v * ax * az + s * ay
+        m10, m11, m12 = v * ax * ay + s * az, c + v * ay * ay, v * ay * az - s * ax
+        m20, m21, m22 = v * ax * az - s * ay, v * ay * az + s * ax, c + v * az * az
+        for r in range(3):
+            # row r of R[par] @ placement
+            a0 = R[par, r, 0] * chain_f[j, 0] + R[par, r, 1] * chain_f[j, 3] + R[par, r, 2] * chain_f[j, 6]
+            a1 = R[par, r, 0] * chain_f[j, 1] + R[par, r, 1] * chain_f[j, 4] + R[par, r, 2] * chain_f[j, 7]
+            a2 = R[par, r, 0] * chain_f[j, 2] + R[par, r, 1] * chain_f[j, 5] + R[par, r, 2] * chain_f[j, 8]
+            R[j, r, 0] = a0 * m00 + a1 * m10 + a2 * m20
+            R[j, r, 1] = a0 * m01 + a1 * m11 + a2 * m21
+            R[j, r, 2] = a0 * m02 + a1 * m12 + a2 * m22
+            p[j, r] = p[par, r] + R[par, r, 0] * chain_f[j, 9] + R[par, r, 1] * chain_f[j, 10] + R[par, r, 2] * chain_f[j, 11]
+
+
+@_jit
+def place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V):
+    """World segment ends A, B (S, 3) and triangles V (T, 3, 3) at the joint placements R, p."""
+    for s in range(seg_f.shape[0]):
+        j = seg_j[s]
+        for i in range(3):
+            if j == 0:
+                A[s, i], B[s, i] = seg_f[s, i], seg_f[s, 3 + i]
+            else:
+                A[s, i] = p[j, i] + R[j, i, 0] * seg_f[s, 0] + R[j, i, 1] * seg_f[s, 1] + R[j, i, 2] * seg_f[s, 2]
+                B[s, i] = p[j, i] + R[j, i, 0] * seg_f[s, 3] + R[j, i, 1] * seg_f[s, 4] + R[j, i, 2] * seg_f[s, 5]
+    for t in range(tri_f.shape[0]):
+        j = tri_j[t]
+        for k in range(3):
+            for i in range(3):
+                if j == 0:
+                    V[t, k, i] = tri_f[t, 3 * k + i]
+                else:
+                    V[t, k, i] = (p[j, i] + R[j, i, 0] * tri_f[t, 3 * k] + R[j, i, 1] * tri_f[t, 3 * k + 1]
+                                  + R[j, i, 2] * tri_f[t, 3 * k + 2])
+
+
+@_jit
+def distances(A, B, V, rows, rsum, d, P, Q):
+    """Safety distances d (P,) of the pair rows (kind, first, second) with closest points P, Q."""
+    for n in range(rows.shape[0]):
+        if rows[n, 0] == 0:
+            core = segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, n)
+        else:
+            core = segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, n)
+        d[n] = core - rsum[n]
+
+
+@numba.njit(cache=True)
+def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, cutoff, out):
+    nj, S, T = chain_f.shape[0], seg_f.shape[0], tri_f.shape[0]
+    R, p = np.empty((nj, 3, 3)), np.empty((nj, 3))
+    A, B, V = np.empty((S, 3)), np.empty((S, 3)), np.empty((T, 3, 3))
+    ctr, rad = np.empty((S + T, 3)), np.empty(S + T)  # bounding spheres: segments, then triangles
+    P, Q = np.empty((1, 3)), np.empty((1, 3))
+    for k in range(qs.shape[0]):
+        fk(chain_f, chain_i, qs[k], R, p)
+        place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
+        for s in range(S):
+            r2 = 0.0
+            for i in range(3):
+                ctr[s, i] = 0.5 * (A[s, i] + B[s, i])
+                r2 += (0.5 * (B[s, i] - A[s, i])) ** 2
+            rad[s] = np.sqrt(r2)
+        for t in range(T):
+            for i in range(3):
+                ctr[S + t, i] = (V[t, 0, i] + V[t, 1, i] + V[t, 2, i]) / 3.0
+            r = 0.0
+            for m in range(3):
+                r = max(r, np.sqrt((V[t, m, 0] - ctr[S + t, 0]) ** 2 + (V[t, m, 1] - ctr[S + t, 1]) ** 2
+                                   + (V[t, m, 2] - ctr[S + t, 2]) ** 2))
+            rad[S + t] = r
+        for n in range(rows.shape[0]):
+            a, b = rows[n, 1], rows[n, 2] + (S if rows[n, 0] == 1 else 0)
+            gap = np.sqrt((ctr[a, 0] - ctr[b, 0]) ** 2 + (ctr[a, 1] - ctr[b, 1]) ** 2 + (ctr[a, 2] - ctr[b, 2]) ** 2)
+            if gap - rad[a] - rad[b] - rsum[n] > cutoff:  # a lower bound of the distance above the cutoff
+                out[k, n] = np.inf
+                continue
+            if rows[n, 0] == 1:  # both ends on one side of the triangle's plane, farther than the cutoff
+                t, s = rows[n, 2], rows[n, 1]
+                e1 = (V[t, 1, 0] - V[t, 0, 0], V[t, 1, 1] - V[t, 0, 1], V[t, 1, 2] - V[t, 0, 2])
+                e2 = (V[t, 2, 0] - V[t, 0, 0], V[t, 2, 1] - V[t, 0, 1], V[t, 2, 2] - V[t, 0, 2])
+                nx = e1[1] * e2[2] - e1[2] * e2[1]
+                ny = e1[2] * e2[0] - e1[0] * e2[2]
+                nz = e1[0] * e2[1] - e1[1] * e2[0]
+                nn = np.sqrt(nx * nx + ny * ny + nz * nz)
+                if nn > 0.0:
+                    da = (nx * (A[s, 0] - V[t, 0, 0]) + ny * (A[s, 1] - V[t, 0, 1]) + nz * (A[s, 2] - V[t, 0, 2])) / nn
+                    db = (nx * (B[s, 0] - V[t, 0, 0]) + ny * (B[s, 1] - V[t, 0, 1]) + nz * (B[s, 2] - V[t, 0, 2])) / nn
+                    if da * db > 0.0 and min(abs(da), abs(db)) - rsum[n] > cutoff:
+                        out[k, n] = np.inf
+                        continue
+            if rows[n, 0] == 0:
+                out[k, n] = segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, 0) - rsum[n]
+            else:
+                out[k, n] = segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, 0) - rsum[n]
+
+
+def batch_distances(packed: Packed, qs: np.ndarray, pairs: Pairs, cutoff: float = np.inf) -> np.ndarray:
+    """Safety distances (K, P) m of every pair at every configuration qs (K, nq); a pair whose
+    bounding spheres are farther apart than ``cutoff`` m gets inf (its distance is above it)."""
+    rows, rsum = pair_table(packed, pairs)
+    qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, packed.chain_f.shape[0] - 1)
+    out = np.empty((len(qs), len(rows)))
+    _batch(packed.chain_f, packed.chain_i, packed.seg_f, packed.seg_j, packed.tri_f, packed.tri_j, qs, rows, rsum,
+           float(cutoff), out)
+    return out
