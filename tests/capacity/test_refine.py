@@ -157,3 +157,53 @@ def test_settings_that_contradict_each_other():
         RefineSettings(min_points=300, max_points=256)
     with pytest.raises(CapmapError):
         RefineSettings(rel_tol=0.0)
+
+
+def test_neighbouring_voxels_evaluate_a_shared_point_once(scenario):
+    """A block of neighbours refined together: no call evaluates a point twice, a corner shared by
+    up to 8 voxels is evaluated once (fewer points evaluated than the voxels count), each shared point
+    with the highest of its owners' ceilings and a group of its own; and the block's minima are
+    still within 1 % of 300 uniform points per voxel."""
+    arm, evaluate = scenario
+    rng = np.random.default_rng(5)
+    grid, one = _voxels(arm, evaluate, 1, rng)
+    c = np.stack(np.unravel_index(one.voxel, grid.shape), axis=1)[0]
+    idx3 = np.array([c + [i, j, k] for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (0, 1)])
+    ctr = grid.lower + (idx3 + 0.5) * EDGE
+    ev0 = evaluate(ctr)
+    ok = np.isfinite(ev0.capacity_kg)
+    assert ok.sum() >= 8
+    idx3, ctr = idx3[ok], ctr[ok]
+    n = len(idx3)
+    start = VoxelMinima(voxel=grid.flat(idx3), capacity_kg=ev0.capacity_kg[ok], axis_capacity_kg=ev0.axis_capacity_kg[ok],
+                        n_points=np.ones(n, dtype=int), n_reachable=np.ones(n, dtype=int), last_change=np.zeros(n),
+                        converged=np.zeros(n, dtype=bool), worst_m=ctr, binding=ev0.binding[ok], rounds=0,
+                        n_evaluated=0)
+    calls = []
+
+    def counting(p, ceiling, owner):
+        calls.append((p.copy(), np.asarray(ceiling).copy(), np.asarray(owner).copy()))
+        return evaluate(p)
+    res = refine(grid, start, counting, RefineSettings(), np.random.default_rng(1))
+    for p, ceiling, owner in calls:
+        assert len(np.unique(p, axis=0)) == len(p)
+    assert res.n_evaluated == sum(len(p) for p, _, _ in calls) < res.n_points.sum() - n
+    # round 1: the corners of the block, each once, shared ones with a group of their own above the voxels'
+    p, ceiling, owner = calls[0]
+    lattice = np.unique((idx3[:, None, :] + np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)]))
+                        .reshape(-1, 3), axis=0)
+    corners = grid.lower + lattice * EDGE
+    assert len(np.unique(np.concatenate([p, corners]), axis=0)) == len(p)  # every corner among them, once
+    shared = owner >= len(start.voxel)
+    assert shared.sum() >= 8
+    lo = grid.lower + idx3 * EDGE
+    for i in np.flatnonzero(shared):  # its owners: the voxels whose cube holds it
+        holds = np.all((p[i] >= lo) & (p[i] <= lo + EDGE), axis=1)
+        assert holds.sum() >= 2 and ceiling[i] == start.capacity_kg[holds].max()
+    assert np.all(owner[~shared] < len(start.voxel))
+    m = 300
+    dense_pts = grid.lower + (np.repeat(idx3, m, axis=0) + rng.uniform(0, 1, (m * n, 3))) * EDGE
+    ev = evaluate(dense_pts)
+    dense = np.minimum(np.min(np.where(np.isfinite(ev.capacity_kg), ev.capacity_kg, np.inf).reshape(n, m), axis=1),
+                       start.capacity_kg)
+    assert np.all(res.capacity_kg <= dense * 1.01 + 1e-9)

@@ -6,11 +6,13 @@ voxel (a singular configuration, a branch that appears at a workspace boundary),
 has a reachable point is refined in rounds: the first evaluates the voxel's corners; then, each round,
 a compass of points around the worst point of the all-branch value, of each configuration and of each
 per-axis minimum while it still falls, the step halving every round (a local minimiser from the worst
-points), and uniform points until the voxel holds ``min_points``
+points), and from the second round uniform points until the voxel holds ``min_points``
 (``near_min_points`` when its value lies within ``near_band`` of a task payload); no point of a voxel is
-evaluated twice. The voxel has converged when the round lowered its minimum, and each per-axis minimum,
-by less than ``rel_tol``; the compass' step reaching ``finest_step`` of the edge, or the voxel holding
-``max_points``, ends its search (it is then reported as not converged).
+evaluated twice, and a point several voxels ask for in a round (a shared corner or face point) is
+evaluated once. The voxel has converged when the round lowered its minimum, and each per-axis minimum,
+by less than ``rel_tol``; the compass' step reaching ``finest_step`` of the edge (every voxel's, an open
+bracket's bisection goes on), or the voxel holding ``max_points``, ends its search (it is then reported
+as not converged if its minima were still falling).
 
 Where two points of a voxel have different numbers of IK branches, a fold of the IK map (a singular
 surface, or the workspace boundary) crosses the voxel; there two branches merge at a singular
@@ -20,7 +22,8 @@ the bracket is shorter than ``fold_tol_m``, and stays unconverged until then (on
 only the bisection goes on). Likewise per configuration: where two points of a voxel hold different
 numbers of a configuration's solutions, its boundary (a singular surface where it meets another, or a
 fold) crosses the voxel and that segment is bisected too; near a singular boundary the configuration's
-capacity falls to 0, which the bisection's last points find. When the closed fold bracket holds a point
+capacity falls to 0, which the bisection's last points find (a configuration whose value and every
+per-axis value are 0 already has nothing left to find: its bracket stops). When the closed fold bracket holds a point
 of capacity 0, the fold is a singular surface: moving along any grid axis that crosses it needs
 unbounded joint rates, so every per-axis value of the voxel is set to 0 too (a grid axis tangent to the
 fold everywhere in the voxel is the exception this rounds down). With configuration maps
@@ -154,7 +157,9 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     owner (N,))`` gives the point results; ``ceiling`` is each point's voxel's all-branch minimum so far,
     ``owner`` its voxel: only the least capacity_kg of each voxel's points (below the ceiling) must be
     exact, any other may be a value at or above it (the per-axis and per-configuration values must be
-    exact); ``progress(round, active voxels, points)`` is called per round.
+    exact); ``progress(round, active voxels, points)`` is called per round. A point several voxels (or
+    brackets) ask for in one round is evaluated once (its owner then a group of its own, see
+    :func:`_evaluate_once`): neighbouring voxels share their corners.
 
     With configuration fields in ``start`` (:meth:`VoxelMinima.with_configurations`; ``evaluate``
     then gives them too), every configuration's minimum and per-axis minima are refined as the
@@ -190,6 +195,9 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     n_reach = start.n_reachable.astype(int).copy()
     change = np.zeros(V)
 
+    def flat0() -> np.ndarray:  # (V, G): the group's value and every axis 0, nothing left to fall
+        return (cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=2)
+
     def zero() -> np.ndarray:  # nothing can fall further in any group (groups not seen: nothing to fall)
         z = ((cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=2)) | ~np.isfinite(cap)
         z[:, 0] &= np.isfinite(cap[:, 0])
@@ -211,7 +219,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     while True:
         bisect = np.flatnonzero(fold & ~zero() & (np.linalg.norm(fb - fa, axis=1) > s.fold_tol_m))
         kv, kc, kmid = cb.midpoints(s.fold_tol_m)  # each configuration's boundary, bisected
-        keep = ~zero()[kv]  # (not where nothing can fall further)
+        keep = ~zero()[kv] & ~flat0()[kv, 1 + kc]  # (not where nothing can fall further, in the voxel or the group)
         kv, kc, kmid = kv[keep], kc[keep], kmid[keep]
         searching = np.flatnonzero(~converged & ~stopped & ~settled & (n_pts < s.max_points))
         active = np.union1d(np.union1d(searching, bisect), kv)
@@ -255,16 +263,17 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         local_pts = np.concatenate([local_pts[first], 0.5 * (fa[bisect] + fb[bisect]), kmid])
         n_local = np.bincount(local, minlength=V)[active]
         need = np.where(_near(cap[active], s), s.near_min_points, s.min_points)
-        new = np.where(np.isin(active, searching), np.clip(need - n_pts[active] - n_local, 0, None), 0)
+        # (from the second round: the corners and the first compass count before any uniform point)
+        new = np.where(np.isin(active, searching) & (rounds > 1), np.clip(need - n_pts[active] - n_local, 0, None), 0)
         uniform = np.repeat(active, new)
         owner = np.concatenate([local, uniform])
         pts = np.concatenate([local_pts,
                               grid.lower + (idx3[uniform] + rng.uniform(0.0, 1.0, (len(uniform), 3))) * grid.edge_m])
         new = new + n_local
+        ev, n_unique = _evaluate_once(evaluate, pts, cap[owner, 0], owner, V)
         if progress:
-            progress(rounds, len(active), len(pts))
-        ev = evaluate(pts, cap[owner, 0], owner)
-        evaluated += len(pts)
+            progress(rounds, len(active), n_unique)
+        evaluated += n_unique
         seen = np.concatenate([seen, np.column_stack([owner, pts])])
         c, b, ac = _groups(ev, C)
         old = cap[active].copy()
@@ -318,11 +327,11 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         grp_open[active] = grp_drop >= s.rel_tol
         axis_open[active] = (axis_drop >= s.rel_tol) & ~quiet[:, :, None] & (0.5 ** (rounds + 1) >= s.finest_step)
         enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
-        open_cfg = np.any(cb.open(s.fold_tol_m)[active], axis=1)
+        open_cfg = np.any(cb.open(s.fold_tol_m)[active] & ~flat0()[active, 1:], axis=1)
         converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold & ~open_cfg) | zero()[active]
         settled[active] = (change[active] < s.rel_tol) & enough & (open_fold | open_cfg)
         if 0.5 ** (rounds + 1) < s.finest_step:  # the compasses have reached their finest step: stop
-            stopped[active] = ~open_fold
+            stopped[active] = True
     unseen = np.isinf(cap)  # groups no point held: NaN
     cap[unseen] = np.nan
     axis[np.isinf(axis)] = np.nan
@@ -335,6 +344,25 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     return VoxelMinima(voxel=start.voxel, capacity_kg=cap[:, 0], axis_capacity_kg=axis[:, 0], n_points=n_pts,
                        n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst[:, 0],
                        binding=binding[:, 0], rounds=rounds, n_evaluated=evaluated, **per_config)
+
+
+def _evaluate_once(evaluate, pts: np.ndarray, ceiling: np.ndarray, owner: np.ndarray, V: int
+                   ) -> tuple[Evaluation, int]:
+    """``evaluate`` on the distinct points of a round only (a corner or face point shared by
+    neighbouring voxels, a bracket's midpoint shared by configurations): results per row of pts, and
+    the number of points evaluated. A shared point gets the highest of its owners' ceilings (its
+    value is exact below each of them, or at or above all) and a group of its own (V + its index),
+    so that no owner's pruning decides it for another."""
+    uniq, first, inv, count = np.unique(pts, axis=0, return_index=True, return_inverse=True, return_counts=True)
+    inv = inv.reshape(-1)
+    if len(uniq) == len(pts):
+        return evaluate(pts, ceiling, owner), len(pts)
+    ceil = np.full(len(uniq), -np.inf)
+    np.maximum.at(ceil, inv, ceiling)
+    group = np.where(count > 1, V + np.arange(len(uniq)), owner[first])
+    ev = evaluate(uniq, ceil, group)
+    return Evaluation(*(None if (x := getattr(ev, f)) is None else x[inv] for f in Evaluation.__dataclass_fields__)), \
+        len(uniq)
 
 
 def _rel_drop(old: np.ndarray, new: np.ndarray) -> np.ndarray:

@@ -31,9 +31,9 @@ CONFIGURATION_COLUMNS = ["i", "j", "k", "x_m", "y_m", "z_m", "configuration", "c
 
 
 def stage_refine(voxels: str, out: str, out_configurations: str, slice_json: str, shard: int, shards: int) -> None:
-    """Refine the reachable voxels with flat index % shards == shard, all branches and each
-    configuration; write one row per voxel (``out``) and one per voxel x configuration met there
-    (``out_configurations``)."""
+    """Refine shard ``shard`` of the reachable voxels (in flat-index order, ``shards`` slabs of equal count:
+    a slab's voxels share their corners and faces), all branches and each configuration; write one row
+    per voxel (``out``) and one per voxel x configuration met there (``out_configurations``)."""
     cfg = stage_config(slice_json)
     log = stage_logger(__name__, f"refine shard {shard + 1}/{shards}")
     at = arm_task_from(cfg.run)
@@ -49,8 +49,10 @@ def stage_refine(voxels: str, out: str, out_configurations: str, slice_json: str
 
     vox = datasets.read(voxels)
     grid = grid_of(vox)
-    flat = grid.flat(vox[["i", "j", "k"]].to_numpy())
-    mine = vox[(flat % shards == shard) & (vox.n_reachable > 0).to_numpy()]
+    mine = vox[vox.n_reachable > 0]
+    mine = mine.iloc[np.argsort(grid.flat(mine[["i", "j", "k"]].to_numpy()), kind="stable")]
+    cut = np.linspace(0, len(mine), shards + 1).round().astype(int)  # slabs: neighbours share their corners
+    mine = mine.iloc[cut[shard]:cut[shard + 1]]
 
     dyn, axes, labels = ArmDynamics(arm), grid_axes(), arm_configurations(arm)
 
