@@ -43,7 +43,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.folds import ConfigBrackets, FoldBrackets
 from capmap.capacity.patterns import COMPASS, CORNERS, around, rows_in
 from capmap.capacity.voxels import Grid
@@ -278,20 +277,22 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         c, b, ac = _groups(ev, C)
         old = cap[active].copy()
         axis_old = axis[active].copy()
-        for gi in range(1 + C):  # per group: the new minimum and where it is
-            best_i = argmin_per_group(c[:, gi], owner)
-            best_v = owner[best_i]
-            lower = c[best_i, gi] < cap[best_v, gi]
-            cap[best_v[lower], gi] = c[best_i[lower], gi]
-            worst[best_v[lower], gi] = pts[best_i[lower]]
-            binding[best_v[lower], gi] = b[best_i[lower], gi]
-            np.add.at(n_grp[:, gi], owner, np.isfinite(c[:, gi]).astype(int))
-            for a in range(A):  # per axis: the new minimum and where it is
-                bi = argmin_per_group(ac[:, gi, a], owner)
-                bv = owner[bi]
-                better = ac[bi, gi, a] < axis[bv, gi, a]
-                axis[bv[better], gi, a] = ac[bi[better], gi, a]
-                axis_worst[bv[better], gi, a] = pts[bi[better]]
+        # per group and per (group, axis): the new minimum of each voxel and where it is (one sort for all)
+        G = 1 + C
+        vs, rows_min = argmin_columns(np.concatenate([c, ac.reshape(len(pts), G * A)], axis=1), owner)
+        best_i, best_a = rows_min[:, :G], rows_min[:, G:].reshape(len(vs), G, A)
+        gi = np.arange(G)
+        val = c[best_i, gi]
+        lower = val < cap[vs]
+        vv, gg = np.nonzero(lower)
+        cap[vs[vv], gg] = val[vv, gg]
+        worst[vs[vv], gg] = pts[best_i[vv, gg]]
+        binding[vs[vv], gg] = b[best_i[vv, gg], gg]
+        np.add.at(n_grp, owner, np.isfinite(c).astype(int))
+        aval = ac[best_a, gi[None, :, None], np.arange(A)[None, None, :]]
+        vv, gg, aa = np.nonzero(aval < axis[vs])
+        axis[vs[vv], gg, aa] = aval[vv, gg, aa]
+        axis_worst[vs[vv], gg, aa] = pts[best_a[vv, gg, aa]]
         drop = _rel_drop(old, cap[active])  # (active, G)
         axis_drop = _rel_drop(axis_old, axis[active])  # (active, G, A)
         cnt = ev.config_branches if C else np.zeros((len(pts), 0), dtype=int)
@@ -344,6 +345,20 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     return VoxelMinima(voxel=start.voxel, capacity_kg=cap[:, 0], axis_capacity_kg=axis[:, 0], n_points=n_pts,
                        n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst[:, 0],
                        binding=binding[:, 0], rounds=rounds, n_evaluated=evaluated, **per_config)
+
+
+def argmin_columns(values: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The groups present in groups (N,) int, ascending (G,), and per group and column of values (N, K)
+    the row of the smallest value (G, K); ties go to the first row (as
+    :func:`capmap.capacity.engine.argmin_per_group` on each column, with one sort for all columns)."""
+    order = np.argsort(groups, kind="stable")
+    g = groups[order]
+    starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]]) if len(g) else np.zeros(0, dtype=int)
+    v = values[order]
+    mins = np.minimum.reduceat(v, starts, axis=0)
+    seg = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(order)]))
+    pos = np.where(v == mins[seg], np.arange(len(order))[:, None], len(order))
+    return g[starts], order[np.minimum.reduceat(pos, starts, axis=0)]
 
 
 def _evaluate_once(evaluate, pts: np.ndarray, ceiling: np.ndarray, owner: np.ndarray, V: int

@@ -148,6 +148,46 @@ def _rnea(Rl, p0, axis, mass, com, Ic, qd, qdd, a0, ee_joint, ee_p, fext_w, R, t
 
 
 @_jit
+def _rnea_rest(Rl, p0, axis, mass, com, Ic, qdd, a0, tau, f1, W):
+    """:func:`_rnea` at rest (qd = 0) and without an external force: the velocity terms vanish, so
+    only the accelerations go forward and f = I a comes back (the same recursion, a third of the work)."""
+    n = len(qdd)
+    a, al, fl, fn = W[2], W[3], W[4], W[5]
+    small = W[6]
+    tmp, tmp2, gl, ga, pf = small[0], small[1], small[4], small[5], small[6]
+    for j in range(n):
+        if j == 0:
+            for b in range(3):
+                tmp2[b] = a0[b]
+                tmp[b] = 0.0
+        else:
+            _cross(al[j - 1], p0[j], tmp2)
+            for b in range(3):
+                tmp2[b] += a[j - 1, b]
+                tmp[b] = al[j - 1, b]
+        for b in range(3):
+            a[j, b] = Rl[j, 0, b] * tmp2[0] + Rl[j, 1, b] * tmp2[1] + Rl[j, 2, b] * tmp2[2]
+            al[j, b] = Rl[j, 0, b] * tmp[0] + Rl[j, 1, b] * tmp[1] + Rl[j, 2, b] * tmp[2] + axis[j, b] * qdd[j]
+        _inertia(mass[j], com[j], Ic[j], a[j], al[j], gl, ga, tmp)
+        for b in range(3):
+            fl[j, b] = gl[b]
+            fn[j, b] = ga[b]
+    for j in range(n - 1, -1, -1):
+        tau[j] = axis[j, 0] * fn[j, 0] + axis[j, 1] * fn[j, 1] + axis[j, 2] * fn[j, 2]
+        if j > 0:
+            for b in range(3):
+                tmp[b] = Rl[j, b, 0] * fl[j, 0] + Rl[j, b, 1] * fl[j, 1] + Rl[j, b, 2] * fl[j, 2]
+                tmp2[b] = Rl[j, b, 0] * fn[j, 0] + Rl[j, b, 1] * fn[j, 1] + Rl[j, b, 2] * fn[j, 2]
+            _cross(p0[j], tmp, pf)
+            for b in range(3):
+                fl[j - 1, b] += tmp[b]
+                fn[j - 1, b] += tmp2[b] + pf[b]
+    for b in range(3):
+        f1[b] = fl[0, b]
+        f1[3 + b] = fn[0, b]
+
+
+@_jit
 def _workspace(n):
     """Work arrays of :func:`_rnea`: six (n, 3) recursions and nine 3-vectors (padded to (n, 3))."""
     return np.zeros((7, max(n, 9), 3))
@@ -278,12 +318,12 @@ def batch_coefficients(R0, p0, axis, mass, com, Ic, ee_joint, ee_p, gravity, bas
             for k in range(na):
                 A[r, active[k]] = Jinv[k, r]
         # c0: gravity only
-        _rnea(Rl, p0, axis, mass, com, Ic, zero, zero, ng, je, ee_p, zero3, R, tau, f1, W)
+        _rnea_rest(Rl, p0, axis, mass, com, Ic, zero, ng, tau, f1, W)
         _outputs(tau, f1, R, p, base_com, active, y, V)
         c0[i] = y
         # L: qdd = J^-1 e_r, no gravity
         for r in range(3):
-            _rnea(Rl, p0, axis, mass, com, Ic, zero, A[r], zero3, je, ee_p, zero3, R, tau, f1, W)
+            _rnea_rest(Rl, p0, axis, mass, com, Ic, A[r], zero3, tau, f1, W)
             _outputs(tau, f1, R, p, base_com, active, y, V)
             L[i, :, r] = y
         # Z(w) for the polarisation pairs: qd = w, qdd = -J^-1 Jdot w
@@ -312,10 +352,17 @@ def batch_coefficients(R0, p0, axis, mass, com, Ic, ee_joint, ee_p, gravity, bas
             Q[i, k, 3] = Z[3, k] - Z[0, k] - Z[1, k]
             Q[i, k, 4] = Z[4, k] - Z[0, k] - Z[2, k]
             Q[i, k, 5] = Z[5, k] - Z[1, k] - Z[2, k]
-        # S: the arm applies a unit force e_r to the payload (the payload pushes back with -e_r)
+        # S: the arm applies a unit force e_r to the payload (the payload pushes back with -e_r). At rest and
+        # without gravity the RNEA's only force is e_r carried from the end-effector point to the base:
+        # tau_j = z_j . ((pee - p_j) x e_r) = J[r, k] (joints up to the end effector's), base force -e_r,
+        # base moment about base_com (base_com - pee) x e_r
+        for b in range(3):
+            d[b] = base_com[b] - pee[b]
         for r in range(3):
-            fe = np.zeros(3)
-            fe[r] = -1.0
-            _rnea(Rl, p0, axis, mass, com, Ic, zero, zero, zero3, je, ee_p, fe, R, tau, f1, W)
-            _outputs(tau, f1, R, p, base_com, active, y, V)
-            S[i, :, r] = y
+            for k in range(na):
+                S[i, k, r] = J[r, k] if active[k] <= je else 0.0
+            for b in range(3):
+                S[i, na + b, r] = -1.0 if b == r else 0.0
+        S[i, na + 3, 0], S[i, na + 4, 0], S[i, na + 5, 0] = 0.0, d[2], -d[1]
+        S[i, na + 3, 1], S[i, na + 4, 1], S[i, na + 5, 1] = -d[2], 0.0, d[0]
+        S[i, na + 3, 2], S[i, na + 4, 2], S[i, na + 5, 2] = d[1], -d[0], 0.0

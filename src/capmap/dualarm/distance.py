@@ -204,8 +204,10 @@ def _pointtri_batch(x, V, out):
 
 
 def _rows(first, *xs):
+    """Writable C-contiguous float copies broadcast to first's shape (one argument type for the kernels,
+    whatever the caller passes: read-only broadcasts would compile a second signature)."""
     shape = np.shape(first)
-    return tuple(np.ascontiguousarray(np.broadcast_to(x, shape), dtype=float) for x in (first, *xs))
+    return tuple(np.array(np.broadcast_to(x, shape), dtype=float, order="C") for x in (first, *xs))
 
 
 def segment_segment(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> Closest:

@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.dualarm.chain import Packed, batch_distances, distances, fk, pack, pair_table, place_primitives
-from capmap.dualarm.collision import Pairs, Primitives
+from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
 from capmap.dualarm.lie import jlog3, jlog6, log3, log6
 from capmap.dualarm.ocp import Context, equality_size
 from capmap.dualarm.settings import Weights
@@ -397,8 +397,9 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
 
 
 def warm_up() -> None:
-    """Compile (or load from numba's cache) the node kernel and the pair filter, on a two-joint
-    chain with the argument types of a real run (Crocoddyl's own data arrays)."""
+    """Compile (or load from numba's cache) the node kernel, the pair filter and the collision model's
+    distances and gradients, on a two-joint chain with the argument types of a real run (Crocoddyl's
+    own data arrays)."""
     model = pin.Model()
     j1 = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "a")
     j2 = model.addJoint(j1, pin.JointModelRX(), pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.5])), "b")
@@ -421,3 +422,6 @@ def warm_up() -> None:
             d = m.createData()
             (m.calc(d, x), m.calcDiff(d, x)) if k == 3 else (m.calc(d, x, u), m.calcDiff(d, x, u))
     batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1)
+    data = model.createData()  # the Pinocchio-side evaluation (key poses, the independent check)
+    pin.computeJointJacobians(model, data, x[:2])
+    CollisionModel(model, prims).evaluate(data, pairs, gradient=True)
