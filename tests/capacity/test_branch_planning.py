@@ -88,7 +88,10 @@ def test_the_verification_executes_the_planned_configurations(setting, reference
     pb, starts = setting
     n_nodes, moves = reference[0]
     lengths = {M: branch_graph.shortest(n_nodes, moves, M) for M in np.unique([m[3] for m in moves])}
-    M = max(m for m, L in lengths.items() if np.isfinite(L))  # the heaviest payload with a path: a detour here
+    # the heaviest payload with a path (a detour here), less the rounding between the planner's batched
+    # coefficients and the reference's Pinocchio loads (they agree to ~1e-12 relative: tests/core/test_batch_dynamics):
+    # at the exact boundary either side may round below the other
+    M = max(m for m, L in lengths.items() if np.isfinite(L)) * (1 - 1e-9)
     plan = plan_on_branch(pb, START, GOAL, starts[0], M)
     assert plan.waypoint_kind[0] == "start" and plan.waypoint_kind[-1] == "goal"
     assert np.all(plan.move_capacity_kg[1:] >= M)

@@ -16,6 +16,7 @@
 - :mod:`~capmap.capacity.atlas`        one coarse map per (locked joint, angle) and its summary rows
 - :mod:`~capmap.capacity.baseline`     the healthy arm: the failed joint swept, the best posture per point
 - :mod:`~capmap.capacity.refine`       voxel minima refined until they converge, all branches and each configuration
+- :mod:`~capmap.capacity.refine_data`  the refinement's settings, point results and per-voxel minima (plain data)
 - :mod:`~capmap.capacity.folds`        the refinement's fold brackets (singular surfaces crossing a voxel)
 - :mod:`~capmap.capacity.patterns`     the refinement's local-search points (corners, compass)
 - :mod:`~capmap.capacity.query`        questions answered directly: a point on every configuration, a line on one
@@ -38,6 +39,7 @@ _EXPORTS = {
     'gain': 'gain',
     'atlas': 'atlas',
     'refine': 'refine',
+    'refine_data': 'refine_data',
     'query': 'query',
     'point_query': 'query',
     'line_query': 'query',
@@ -57,6 +59,7 @@ __all__ = [
     "point_query",
     "query",
     "refine",
+    "refine_data",
     "LoadLimits",
     "Motion",
     "directions",

@@ -11,7 +11,7 @@ import pinocchio as pin
 from capmap.capacity import directions
 from capmap.capacity.directions import Directions
 from capmap.capacity.engine import LoadLimits, Motion
-from capmap.capacity.refine import RefineSettings
+from capmap.capacity.refine_data import RefineSettings
 from capmap.config.validation import as_tuple, per_item
 from capmap.errors import CapmapError, ConfigError
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from capmap.core.coefficients import Coefficients
-from capmap.core.ne_kernels import batch_coefficients
+from capmap.core.ne_coefficients import batch_coefficients
 from capmap.core.reduction import LockedArm
 
 __all__ = ["BatchDynamics"]

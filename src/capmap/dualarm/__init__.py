@@ -14,6 +14,7 @@ panel assembly.
 - :mod:`~capmap.dualarm.ocp`         one Crocoddyl action model per node (AL terms or constraints), on Pinocchio
 - :mod:`~capmap.dualarm.lie`         SO(3)/SE(3) logarithms and their Jacobians, compiled
 - :mod:`~capmap.dualarm.chain`       the revolute chain packed for compiled kinematics; batched pair distances
+- :mod:`~capmap.dualarm.node_kernel` the compiled node: cost, constraints and derivatives in one function
 - :mod:`~capmap.dualarm.nodes`       the node model compiled: one numba call per calc / calcDiff (the default)
 - :mod:`~capmap.dualarm.solver`      the augmented-Lagrangian loop around FDDP
 - :mod:`~capmap.dualarm.evaluate`    errors and safety of a solution, on the nodes and a finer grid
@@ -27,6 +28,7 @@ __all__ = [
            "distance",
            "evaluate",
            "lie",
+           "node_kernel",
            "nodes",
            "ocp",
            "primitives",
