@@ -14,13 +14,9 @@ imports, about a second).
 from __future__ import annotations
 
 import argparse
-import hashlib
 import sys
 import time
-from pathlib import Path
 
-import llvmlite.binding as ll
-import numba
 import numpy as np
 
 from capmap.capacity import directions, engine
@@ -31,27 +27,9 @@ from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.dualarm import distance, nodes
-from capmap.io.fingerprint import file_sha256
+from capmap.io.kernel_marker import is_warm, record, run_key
 
-__all__ = ["fingerprint", "warm", "ensure_warm", "main"]
-
-PACKAGE = Path(__file__).resolve().parent
-
-
-def fingerprint() -> str:
-    """Hash of what the compiled code depends on: every source file using numba, numba's version, the CPU."""
-    h = hashlib.sha256(f"{numba.__version__} {sys.version} {ll.get_host_cpu_name()}".encode())
-    for f in sorted(PACKAGE.rglob("*.py")):
-        text = f.read_bytes()
-        if b"import numba" in text:
-            h.update(str(f.relative_to(PACKAGE)).encode() + text)
-    return h.hexdigest()[:16]
-
-
-def _marker() -> Path:
-    """Beside numba's cache: NUMBA_CACHE_DIR when set, else the package's __pycache__ folders."""
-    where = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else PACKAGE / "__pycache__"
-    return where / f"kernels-{fingerprint()}.ok"
+__all__ = ["warm", "ensure_warm", "main"]
 
 
 def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
@@ -77,21 +55,11 @@ def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
 
 def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> bool:
     """:func:`warm` unless the marker lists this run's kernels as warm for this code; True if it ran."""
-    marker = _marker()
-    key = f"{Path(robot_file).resolve()} {file_sha256(robot_file)[:16]} " \
-          f"joint {joint} {angle_rad:.6f}{' dualarm' if dualarm else ''}"
-    done = marker.read_text().splitlines() if marker.is_file() else []
-    if key in done:
+    key = run_key(robot_file, joint, angle_rad, dualarm)
+    if is_warm(key):
         return False
     warm(robot_file, joint, angle_rad, dualarm)
-    try:
-        marker.parent.mkdir(exist_ok=True)
-        for old in marker.parent.glob("kernels-*.ok"):
-            if old != marker:
-                old.unlink()
-        marker.write_text("".join(f"{k}\n" for k in (*done, key)))
-    except OSError:  # a read-only install: warm each time (loading the cache is quick)
-        pass
+    record(key)
     return True
 
 

@@ -8,14 +8,17 @@ from capmap.io import fingerprint as fp
 from tests.scenario import ROOT
 
 _CACHED = (fp.module_closure, fp._module_tree, fp._module_imports, fp._module_digest, fp._lazy_exports,
-           fp.code_fingerprint, fp._script_fingerprint)
+           fp.code_fingerprint, fp._script_fingerprint, fp._source_hash, fp._disk)
 
 
 @pytest.fixture
-def fresh():
-    """Empty the per-process caches before and after (a test changes the tree or the digests)."""
+def fresh(monkeypatch):
+    """Empty the per-process caches before and after (a test changes the tree or the digests), and no
+    disk cache (a test that patches a digest would otherwise read the fingerprint an earlier process left)."""
     for f in _CACHED:
         f.cache_clear()
+    monkeypatch.setattr(fp, "_disk", lambda: {})
+    monkeypatch.setattr(fp, "_remember", lambda key, value: None)
     yield
     for f in _CACHED:
         f.cache_clear()
@@ -119,3 +122,30 @@ def test_imports_for_annotations_only_are_not_followed_and_named_modules_are(fre
     plain = fp.script_fingerprint(script)
     assert fp.script_fingerprint(script, ["capmap.config.reconfig"]) != plain
     assert fp.script_fingerprint(script, []) == plain
+
+
+def test_the_disk_cache_serves_the_same_sources_and_not_edited_ones(tmp_path, monkeypatch):
+    """A second process (caches emptied) reads the fingerprints of the same sources from the disk cache
+    (a wrong value planted there is what it returns); an edit of any source file is a new key."""
+    for f in _CACHED:
+        f.cache_clear()
+    root = tmp_path / "capmap"
+    _tree(root, {"__init__.py": "", "a.py": "X = 1\n", "b.py": "from capmap.a import X\n"})
+    monkeypatch.setattr(fp, "_SRC", root)
+    try:
+        first = fp.code_fingerprint("capmap.b")
+        files = list((root / "__pycache__").glob("fingerprints-*.json"))
+        assert len(files) == 1 and first in files[0].read_text()
+        files[0].write_text(files[0].read_text().replace(first, "planted"))
+        for f in _CACHED:
+            f.cache_clear()
+        assert fp.code_fingerprint("capmap.b") == "planted"  # read from disk, not recomputed
+        (root / "a.py").write_text("X = 2\n")
+        for f in _CACHED:
+            f.cache_clear()
+        edited = fp.code_fingerprint("capmap.b")
+        assert edited not in ("planted", first)
+        assert len(list((root / "__pycache__").glob("fingerprints-*.json"))) == 1  # the old one removed
+    finally:
+        for f in _CACHED:
+            f.cache_clear()

@@ -100,9 +100,15 @@ def dualarm_files(*keys):
 
 onstart:
     # compile the numba kernels once, before the first job, so that parallel jobs load them instead of each
-    # compiling them (capmap.kernels; about a second, its imports, when this code's kernels are compiled already)
+    # compiling them (capmap.kernels); the marker says in milliseconds when this code's are compiled already
     import subprocess
 
-    subprocess.run([sys.executable, "-m", "capmap.kernels", "--robot", str(Path(RUN.robot).resolve()), "--joint",
-                    str(RUN.failure.joint), "--angle-deg", repr(RUN.failure.angle_deg)]
-                   + (["--dualarm"] if RUN.dualarm else []), check=False)
+    import numpy as np
+
+    from capmap.io.kernel_marker import is_warm, run_key
+
+    if not is_warm(run_key(str(Path(RUN.robot).resolve()), RUN.failure.joint, np.deg2rad(RUN.failure.angle_deg),
+                           RUN.dualarm is not None)):
+        subprocess.run([sys.executable, "-m", "capmap.kernels", "--robot", str(Path(RUN.robot).resolve()), "--joint",
+                        str(RUN.failure.joint), "--angle-deg", repr(RUN.failure.angle_deg)]
+                       + (["--dualarm"] if RUN.dualarm else []), check=False)

@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import json
+import os
 from functools import lru_cache
 from pathlib import Path
 
@@ -137,11 +139,60 @@ def _tree(path: Path) -> ast.Module:
 
 
 @lru_cache(maxsize=None)
+def _source_hash() -> str:
+    """16 hex digits of every capmap source file (path and content): the key of the disk cache."""
+    h = hashlib.sha256()
+    for f in sorted(_SRC.rglob("*.py")):
+        h.update(str(f.relative_to(_SRC)).encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _cache_file() -> Path:
+    return _SRC / "__pycache__" / f"fingerprints-{_source_hash()}.json"
+
+
+@lru_cache(maxsize=None)
+def _disk() -> dict:
+    """Closures and fingerprints computed by an earlier process for exactly these sources (a Snakemake
+    invocation parses ~150 modules otherwise: ~2.5 s); {} when there is none or it is unreadable."""
+    try:
+        return json.loads(_cache_file().read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def _remember(key: str, value) -> None:
+    """Store a result in the disk cache (atomically; older caches removed; a read-only install keeps none)."""
+    cache = _disk()
+    cache[key] = value
+    path = _cache_file()
+    try:
+        path.parent.mkdir(exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(cache))
+        os.replace(tmp, path)
+        for old in path.parent.glob("fingerprints-*.json"):
+            if old != path:
+                old.unlink(missing_ok=True)
+    except OSError:
+        pass
+
+
+@lru_cache(maxsize=None)
 def module_closure(name: str) -> tuple[str, ...]:
     """The capmap modules ``name`` imports, transitively, sorted. A package's ``__init__`` counts
     with its own code; its re-exports are followed only where names are imported from the
     package itself (``from capmap.config import canonical``), not where a submodule is
-    (``from capmap.config.failure import ...``): a stage depends on what it uses."""
+    (``from capmap.config.failure import ...``): a stage depends on what it uses. Cached on disk per
+    version of the sources."""
+    if f"closure:{name}" in _disk():
+        return tuple(_disk()[f"closure:{name}"])
+    out = _module_closure(name)
+    _remember(f"closure:{name}", list(out))
+    return out
+
+
+def _module_closure(name: str) -> tuple[str, ...]:
     seen, expanded, todo = set(), set(), [name]
     while todo:
         mod = todo.pop()
@@ -173,11 +224,15 @@ def _module_digest(mod: str) -> bytes:
 
 @lru_cache(maxsize=None)
 def code_fingerprint(name: str) -> str:
-    """16 hex digits of the syntax trees (no docstrings) of every capmap module ``name`` runs."""
+    """16 hex digits of the syntax trees (no docstrings) of every capmap module ``name`` runs (cached on
+    disk per version of the sources)."""
+    if f"code:{name}" in _disk():
+        return _disk()[f"code:{name}"]
     h = hashlib.sha256()
     for mod in module_closure(name):
         h.update(mod.encode())
         h.update(_module_digest(mod))
+    _remember(f"code:{name}", h.hexdigest()[:16])
     return h.hexdigest()[:16]
 
 
