@@ -70,15 +70,18 @@ def _groups(ev: Evaluation, C: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Evaluation], settings: RefineSettings,
-           rng: np.random.Generator, progress: Callable[[int, int, int], None] | None = None) -> VoxelMinima:
+           rng: np.random.Generator, progress: Callable[[int, int, int], None] | None = None,
+           share_points: bool = True) -> VoxelMinima:
     """Refine the voxels of ``start`` (their minima from the points already evaluated; a voxel
     without a reachable point keeps NaN and is not refined). ``evaluate(points (N, 3) m, ceiling (N,) kg,
     owner (N,))`` gives the point results; ``ceiling`` is each point's voxel's all-branch minimum so far,
     ``owner`` its voxel: only the least capacity_kg of each voxel's points (below the ceiling) must be
     exact, any other may be a value at or above it (the per-axis and per-configuration values must be
-    exact); ``progress(round, active voxels, points)`` is called per round. A point several voxels (or
-    brackets) ask for in one round is evaluated once (its owner then a group of its own, see
-    :func:`_evaluate_once`): neighbouring voxels share their corners.
+    exact); ``progress(round, active voxels, points)`` is called per round. A point several brackets of
+    a voxel ask for in one round is evaluated once; with ``share_points`` also a point several voxels
+    ask for (neighbours share their corners), owned by one of them with the highest of their ceilings:
+    for an ``evaluate`` whose values are exact wherever they are below the ceiling it is given (not one
+    that prunes a point by the other points of its owner, as the baseline's does: it passes False).
 
     With configuration fields in ``start`` (:meth:`VoxelMinima.with_configurations`; ``evaluate``
     then gives them too), every configuration's minimum and per-axis minima are refined as the
@@ -189,7 +192,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         pts = np.concatenate([local_pts,
                               grid.lower + (idx3[uniform] + rng.uniform(0.0, 1.0, (len(uniform), 3))) * grid.edge_m])
         new = new + n_local
-        ev, n_unique = _evaluate_once(evaluate, pts, cap[owner, 0], owner, V)
+        ev, n_unique = _evaluate_once(evaluate, pts, cap[owner, 0], owner, share_points)
         if progress:
             progress(rounds, len(active), n_unique)
         evaluated += n_unique
@@ -281,23 +284,22 @@ def argmin_columns(values: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, 
     return g[starts], order[np.minimum.reduceat(pos, starts, axis=0)]
 
 
-def _evaluate_once(evaluate, pts: np.ndarray, ceiling: np.ndarray, owner: np.ndarray, V: int
+def _evaluate_once(evaluate, pts: np.ndarray, ceiling: np.ndarray, owner: np.ndarray, share: bool
                    ) -> tuple[Evaluation, int]:
-    """``evaluate`` on the distinct points of a round only (a corner or face point shared by
-    neighbouring voxels, a bracket's midpoint shared by configurations): results per row of pts, and
-    the number of points evaluated. A shared point gets the highest of its owners' ceilings (its
-    value is exact below each of them, or at or above all) and a group of its own (V + its index),
-    so that no owner's pruning decides it for another."""
-    uniq, first, inv, count = np.unique(pts, axis=0, return_index=True, return_inverse=True, return_counts=True)
+    """``evaluate`` on the distinct points of a round only (a bracket's midpoint shared by a voxel's
+    configurations; with ``share``, also a corner or face point shared by neighbouring voxels): results
+    per row of pts, and the number of points evaluated. A point shared by voxels goes to ``evaluate``
+    once, owned by one of them, with the highest of their ceilings."""
+    key = pts if share else np.column_stack([owner, pts])
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
-    if len(uniq) == len(pts):
+    if len(first) == len(pts):
         return evaluate(pts, ceiling, owner), len(pts)
-    ceil = np.full(len(uniq), -np.inf)
+    ceil = np.full(len(first), -np.inf)
     np.maximum.at(ceil, inv, ceiling)
-    group = np.where(count > 1, V + np.arange(len(uniq)), owner[first])
-    ev = evaluate(uniq, ceil, group)
+    ev = evaluate(pts[first], ceil, owner[first])
     return Evaluation(*(None if (x := getattr(ev, f)) is None else x[inv] for f in Evaluation.__dataclass_fields__)), \
-        len(uniq)
+        len(first)
 
 
 def _rel_drop(old: np.ndarray, new: np.ndarray) -> np.ndarray:

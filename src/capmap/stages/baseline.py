@@ -135,7 +135,7 @@ def stage_baseline_shard(voxels: str, out: str, slice_json: str, shard: int, sha
                      f"({time.perf_counter() - t0:.1f} s so far)")
 
         res = refine(grid, start, evaluate, settings, np.random.default_rng([run.refine.seed, shard, shards, 7]),
-                     progress)
+                     progress, share_points=False)  # its evaluate prunes a point by its voxel's other points
     reach = np.isfinite(res.capacity_kg)
     final = healthy_capacity(sm, res.worst_m[reach], at.rotation, dirs, screen, at.motion)  # exact, with its angle
     names = list(sm.limits.names) + ["singular"]
