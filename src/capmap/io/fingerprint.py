@@ -30,6 +30,7 @@ import ast
 import hashlib
 import json
 import os
+import sys
 from functools import lru_cache
 from pathlib import Path
 
@@ -140,8 +141,9 @@ def _tree(path: Path) -> ast.Module:
 
 @lru_cache(maxsize=None)
 def _source_hash() -> str:
-    """16 hex digits of every capmap source file (path and content): the key of the disk cache."""
-    h = hashlib.sha256()
+    """16 hex digits of every capmap source file (path and content) and the Python version (its syntax
+    trees' dump format): the key of the disk cache."""
+    h = hashlib.sha256(sys.version.encode())
     for f in sorted(_SRC.rglob("*.py")):
         h.update(str(f.relative_to(_SRC)).encode() + b"\0" + f.read_bytes())
     return h.hexdigest()[:16]
