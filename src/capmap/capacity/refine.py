@@ -121,7 +121,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         return (cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=2)
 
     def zero() -> np.ndarray:  # nothing can fall further in any group (groups not seen: nothing to fall)
-        z = ((cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=2)) | ~np.isfinite(cap)
+        z = flat0() | ~np.isfinite(cap)
         z[:, 0] &= np.isfinite(cap[:, 0])
         return np.all(z, axis=1)
 
@@ -139,9 +139,10 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
     seen = np.zeros((0, 4))  # (voxel, point) of every point evaluated: none twice
     rounds, evaluated = 0, 0
     while True:
-        bisect = np.flatnonzero(fold & ~zero() & (np.linalg.norm(fb - fa, axis=1) > s.fold_tol_m))
+        z = zero()
+        bisect = np.flatnonzero(fold & ~z & (np.linalg.norm(fb - fa, axis=1) > s.fold_tol_m))
         kv, kc, kmid = cb.midpoints(s.fold_tol_m)  # each configuration's boundary, bisected
-        keep = ~zero()[kv] & ~flat0()[kv, 1 + kc]  # (not where nothing can fall further, in the voxel or the group)
+        keep = ~z[kv] & ~flat0()[kv, 1 + kc]  # (not where nothing can fall further, in the voxel or the group)
         kv, kc, kmid = kv[keep], kc[keep], kmid[keep]
         searching = np.flatnonzero(~converged & ~stopped & ~settled & (n_pts < s.max_points))
         active = np.union1d(np.union1d(searching, bisect), kv)
@@ -243,7 +244,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         pending = np.zeros((len(active), 1 + C), dtype=bool)
         pending[:, 1:] = open_fold[:, None] & (fs.ca[active] != fs.cb[active])
         # a group whose value and axes are all 0 has nothing left to fall
-        done = (cap[active] == 0.0) & np.all(np.nan_to_num(axis[active], nan=0.0) == 0.0, axis=2)
+        done = flat0()[active]
         # every group and every axis has converged too
         quiet = pending | done
         grp_drop = np.where(quiet, 0.0, np.maximum(drop, np.nan_to_num(axis_drop.max(axis=2, initial=0.0))))

@@ -67,6 +67,25 @@ def _kinematics(R0, p0, axis, q, Rl, R, p):
                     R[j, a, b] = R[j - 1, a, 0] * Rl[j, 0, b] + R[j - 1, a, 1] * Rl[j, 1, b] + R[j - 1, a, 2] * Rl[j, 2, b]
 
 
+@_inline
+def _backward(Rl, p0, axis, fl, fn, tau, f1, tmp, tmp2, pf):
+    """The RNEA's backward pass over the link forces (fl, fn) (n, 3), in place: tau_j = axis . n_j; parent +=
+    X^T f: f_p = Rl f, n_p = Rl n + p x (Rl f); f1 (6,) = joint 1's [f; n]. tmp, tmp2, pf: 3-vectors."""
+    for j in range(len(tau) - 1, -1, -1):
+        tau[j] = axis[j, 0] * fn[j, 0] + axis[j, 1] * fn[j, 1] + axis[j, 2] * fn[j, 2]
+        if j > 0:
+            for b in range(3):
+                tmp[b] = Rl[j, b, 0] * fl[j, 0] + Rl[j, b, 1] * fl[j, 1] + Rl[j, b, 2] * fl[j, 2]
+                tmp2[b] = Rl[j, b, 0] * fn[j, 0] + Rl[j, b, 1] * fn[j, 1] + Rl[j, b, 2] * fn[j, 2]
+            _cross(p0[j], tmp, pf)
+            for b in range(3):
+                fl[j - 1, b] += tmp[b]
+                fn[j - 1, b] += tmp2[b] + pf[b]
+    for b in range(3):
+        f1[b] = fl[0, b]
+        f1[3 + b] = fn[0, b]
+
+
 @_jit
 def _rnea(Rl, p0, axis, mass, com, Ic, qd, qdd, a0, ee_joint, ee_p, fext_w, R, tau, f1, W):
     """Pinocchio's RNEA (local frames): joint torques tau (n,) and the spatial force f1 (6,) =
@@ -132,20 +151,7 @@ def _rnea(Rl, p0, axis, mass, com, Ic, qd, qdd, a0, ee_joint, ee_p, fext_w, R, t
     for b in range(3):
         fl[je, b] -= fe[b]
         fn[je, b] -= tmp[b]
-    # backward: tau_j = axis . n_j; parent += X^T f: f_p = Rl f, n_p = Rl n + p x (Rl f)
-    for j in range(n - 1, -1, -1):
-        tau[j] = axis[j, 0] * fn[j, 0] + axis[j, 1] * fn[j, 1] + axis[j, 2] * fn[j, 2]
-        if j > 0:
-            for b in range(3):
-                tmp[b] = Rl[j, b, 0] * fl[j, 0] + Rl[j, b, 1] * fl[j, 1] + Rl[j, b, 2] * fl[j, 2]
-                tmp2[b] = Rl[j, b, 0] * fn[j, 0] + Rl[j, b, 1] * fn[j, 1] + Rl[j, b, 2] * fn[j, 2]
-            _cross(p0[j], tmp, pf)
-            for b in range(3):
-                fl[j - 1, b] += tmp[b]
-                fn[j - 1, b] += tmp2[b] + pf[b]
-    for b in range(3):
-        f1[b] = fl[0, b]
-        f1[3 + b] = fn[0, b]
+    _backward(Rl, p0, axis, fl, fn, tau, f1, tmp, tmp2, pf)
 
 
 @_jit
@@ -173,19 +179,7 @@ def _rnea_rest(Rl, p0, axis, mass, com, Ic, qdd, a0, tau, f1, W):
         for b in range(3):
             fl[j, b] = gl[b]
             fn[j, b] = ga[b]
-    for j in range(n - 1, -1, -1):
-        tau[j] = axis[j, 0] * fn[j, 0] + axis[j, 1] * fn[j, 1] + axis[j, 2] * fn[j, 2]
-        if j > 0:
-            for b in range(3):
-                tmp[b] = Rl[j, b, 0] * fl[j, 0] + Rl[j, b, 1] * fl[j, 1] + Rl[j, b, 2] * fl[j, 2]
-                tmp2[b] = Rl[j, b, 0] * fn[j, 0] + Rl[j, b, 1] * fn[j, 1] + Rl[j, b, 2] * fn[j, 2]
-            _cross(p0[j], tmp, pf)
-            for b in range(3):
-                fl[j - 1, b] += tmp[b]
-                fn[j - 1, b] += tmp2[b] + pf[b]
-    for b in range(3):
-        f1[b] = fl[0, b]
-        f1[3 + b] = fn[0, b]
+    _backward(Rl, p0, axis, fl, fn, tau, f1, tmp, tmp2, pf)
 
 
 @_jit

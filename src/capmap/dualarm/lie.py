@@ -70,6 +70,17 @@ def log3(R, out):
 
 
 @_jit
+def _add_half_skew(v, M):
+    """M (3, 3) += skew(v) / 2 (Pinocchio's addSkew(0.5 v, M))."""
+    M[0, 1] -= 0.5 * v[2]
+    M[0, 2] += 0.5 * v[1]
+    M[1, 0] += 0.5 * v[2]
+    M[1, 2] -= 0.5 * v[0]
+    M[2, 0] -= 0.5 * v[1]
+    M[2, 1] += 0.5 * v[0]
+
+
+@_jit
 def jlog3(theta, w, J):
     """J (3, 3) = Jlog3 at log w (3,) of angle theta."""
     st, ct = np.sin(theta), np.cos(theta)
@@ -84,12 +95,7 @@ def jlog3(theta, w, J):
         for j in range(3):
             J[i, j] = alpha * w[i] * w[j]
         J[i, i] += diag
-    J[0, 1] -= 0.5 * w[2]
-    J[0, 2] += 0.5 * w[1]
-    J[1, 0] += 0.5 * w[2]
-    J[1, 2] -= 0.5 * w[0]
-    J[2, 0] -= 0.5 * w[1]
-    J[2, 1] += 0.5 * w[0]
+    _add_half_skew(w, J)
 
 
 @_jit
@@ -139,12 +145,7 @@ def jlog6(R, p, J):
         for j in range(3):
             C[i, j] = v3 * w[j] + beta * w[i] * p[j]
         C[i, i] += wp * beta
-    C[0, 1] -= 0.5 * p[2]
-    C[0, 2] += 0.5 * p[1]
-    C[1, 0] += 0.5 * p[2]
-    C[1, 2] -= 0.5 * p[0]
-    C[2, 0] -= 0.5 * p[1]
-    C[2, 1] += 0.5 * p[0]
+    _add_half_skew(p, C)
     for i in range(3):
         for j in range(3):
             b = 0.0
