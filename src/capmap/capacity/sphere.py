@@ -154,9 +154,10 @@ def _trs(c, b, d, V, u, be, x):
             # Newton on 1/sqrt(phi) - 1 (near linear in mu by the least eigenvalue's term)
             g = 1.0 / np.sqrt(phi) - 1.0
             dg = -0.5 * dphi / (phi * np.sqrt(phi))
-            step = mu - g / dg if dg != 0.0 else 0.5 * (lo + hi)
-            if not (lo < step < hi):
-                step = 0.5 * (lo + hi)
+            newton = mu - g / dg if dg != 0.0 else 0.5 * (lo + hi)
+            if abs(newton - mu) <= 1e-15 * (abs(mu) + scale):
+                break  # converged to rounding at mu (any mu < d1 keeps the dual a valid lower bound)
+            step = newton if lo < newton < hi else 0.5 * (lo + hi)
             if hi - lo <= 1e-16 * (abs(mu) + scale) or step == mu:
                 break
             mu = step
@@ -289,8 +290,12 @@ def _sphere(C, S, U, a, v2, g, limit, cap, worst_u, binding, n_sub):
                         if not have[k]:
                             _eig3(Qv[k], w[k], V[k], A)
                             have[k] = True
+                        dmin = np.inf
                         for i in range(3):
                             dd[i] = -sigma * w[k, i]
+                            dmin = min(dmin, dd[i])
+                        if c0 - np.sqrt(nb2) + dmin >= _REL * scale:
+                            break  # G >= c - |b| + the least eigenvalue >= 0: lambda is below this minimum
                         val, low = _trs(c0, b, dd, V[k], u, be, x)
                         nsub += 1
                         if low >= -_REL * scale or val >= 0.0:

@@ -8,106 +8,113 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from capmap.core.ne_kernels import cross, drift, kinematics, outputs, rnea, rnea_rest, workspace
+from capmap.core.ne_kernels import invert, kinematics, outputs_multi, rest_multi, velocity_multi, workspace
 
 __all__ = ["batch_coefficients"]
 
 _jit = numba.njit(cache=True)
+_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the polarisation's velocities e_r + e_s (r == s: e_r)
 
 
 @_jit
 def batch_coefficients(R0, p0, axis, mass, com, Ic, ee_joint, ee_p, gravity, base_com, active, q, c0, L, Q, S, singular):
+    """Fill c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6), S (B, n_out, 3) and singular (B,) for the
+    configurations q (B, n) rad (full joint vectors, the locked joint included).
+
+    Per configuration: one RNEA at rest on 7 right-hand sides (gravity alone: c0; qdd = J^-1 e_c for
+    the six Cartesian accelerations c: L6, whose linear columns are L) and one RNEA with velocities on
+    6 right-hand sides (qd = J^-1 w for the polarisation's w, qdd = 0), whose forward pass also gives
+    the drift Jdot qd. The velocity outputs at the consistent qdd = -J^-1 Jdot qd are, by linearity in
+    qdd, Z(w) = y(w, qdd=0) - L6 Jdot qd; Q follows by polarisation."""
     B, n = q.shape
     na = len(active)
     Rl = np.empty((n, 3, 3))
     R = np.empty((n, 3, 3))
     p = np.empty((n, 3))
-    tau = np.empty(n)
-    f1 = np.empty(6)
-    y = np.empty(na + 6)
-    zero = np.zeros(n)
-    zero3 = np.zeros(3)
-    ng = -gravity
     J = np.empty((6, na))
-    A = np.zeros((3, n))
-    Z = np.empty((6, na + 6))
+    Jinv = np.zeros((na, 6))
+    M = np.empty((6, 12))
     pee = np.empty(3)
     d = np.empty(3)
-    tmp = np.empty(3)
-    W = workspace(n)
-    V = np.zeros((8, 3))
-    dd = np.zeros(6)
-    wv = np.zeros(n)
-    qdd = np.zeros(n)
+    LW, TW = workspace(n, 7)
+    LV, TV = workspace(n, 6)
+    qdd = np.zeros((n, 7))
+    a0 = np.zeros((3, 7))
+    qd = np.zeros((n, 6))
+    tau7 = np.empty((n, 7))
+    f7 = np.empty((6, 7))
+    y7 = np.empty((na + 6, 7))
+    tau6 = np.empty((n, 6))
+    f6 = np.empty((6, 6))
+    y6 = np.empty((na + 6, 6))
+    dd = np.empty((6, 6))
+    for b in range(3):
+        a0[b, 0] = -gravity[b]
     for i in range(B):
         kinematics(R0, p0, axis, q[i], Rl, R, p)
         je = ee_joint
         for b in range(3):
             pee[b] = p[je, b] + R[je, b, 0] * ee_p[0] + R[je, b, 1] * ee_p[1] + R[je, b, 2] * ee_p[2]
-        # world-aligned Jacobian of the end-effector point, active joints
+        # world-aligned Jacobian of the end-effector point, active joints: [z x (pee - p_j); z]
         for k in range(na):
             j = active[k]
-            z = V[3]
-            for b in range(3):
-                z[b] = R[j, b, 0] * axis[j, 0] + R[j, b, 1] * axis[j, 1] + R[j, b, 2] * axis[j, 2]
-            for b in range(3):
-                d[b] = pee[b] - p[j, b]
-            cross(z, d, tmp)
-            for b in range(3):
-                J[b, k] = tmp[b]
-                J[3 + b, k] = z[b]
-        norm_J = np.abs(J).sum(axis=0).max()
-        ok = True
-        Jinv = np.zeros((na, 6))
-        if np.abs(np.linalg.det(J)) < 1e-300:
-            ok = False
-        else:
-            Jinv = np.linalg.inv(J)
-            if norm_J * np.abs(Jinv).sum(axis=0).max() > 1e12:
-                ok = False
-        if not ok:
+            z0 = R[j, 0, 0] * axis[j, 0] + R[j, 0, 1] * axis[j, 1] + R[j, 0, 2] * axis[j, 2]
+            z1 = R[j, 1, 0] * axis[j, 0] + R[j, 1, 1] * axis[j, 1] + R[j, 1, 2] * axis[j, 2]
+            z2 = R[j, 2, 0] * axis[j, 0] + R[j, 2, 1] * axis[j, 1] + R[j, 2, 2] * axis[j, 2]
+            e0, e1, e2 = pee[0] - p[j, 0], pee[1] - p[j, 1], pee[2] - p[j, 2]
+            J[0, k] = z1 * e2 - z2 * e1
+            J[1, k] = z2 * e0 - z0 * e2
+            J[2, k] = z0 * e1 - z1 * e0
+            J[3, k] = z0
+            J[4, k] = z1
+            J[5, k] = z2
+        # singular: a vanishing determinant or a 1-norm condition number above 1e12
+        if invert(J, Jinv, M) < 1e-300:
             singular[i] = True
             continue
-        for r in range(3):
-            for k in range(n):
-                A[r, k] = 0.0
+        nJ = 0.0
+        nJi = 0.0
+        for k in range(6):
+            sJ = 0.0
+            sJi = 0.0
+            for r in range(6):
+                sJ += abs(J[r, k])
+                sJi += abs(Jinv[r, k])
+            nJ = max(nJ, sJ)
+            nJi = max(nJi, sJi)
+        if nJ * nJi > 1e12:
+            singular[i] = True
+            continue
+        # at rest: column 0 gravity alone (qdd = 0), column 1 + c: qdd = J^-1 e_c without gravity
+        for c in range(6):
             for k in range(na):
-                A[r, active[k]] = Jinv[k, r]
-        # c0: gravity only
-        rnea_rest(Rl, p0, axis, mass, com, Ic, zero, ng, tau, f1, W)
-        outputs(tau, f1, R, p, base_com, active, y, V)
-        c0[i] = y
-        # L: qdd = J^-1 e_r, no gravity
-        for r in range(3):
-            rnea_rest(Rl, p0, axis, mass, com, Ic, A[r], zero3, tau, f1, W)
-            outputs(tau, f1, R, p, base_com, active, y, V)
-            L[i, :, r] = y
-        # Z(w) for the polarisation pairs: qd = w, qdd = -J^-1 Jdot w
-        for pidx in range(6):
-            if pidx < 3:
-                for k in range(n):
-                    wv[k] = A[pidx, k]
-            else:
-                r1, r2 = (0, 1) if pidx == 3 else ((0, 2) if pidx == 4 else (1, 2))
-                for k in range(n):
-                    wv[k] = A[r1, k] + A[r2, k]
-            drift(Rl, p0, axis, wv, R, je, ee_p, dd, V)
-            for k in range(n):
-                qdd[k] = 0.0
-            for k in range(na):
-                acc = 0.0
-                for c in range(6):
-                    acc += Jinv[k, c] * dd[c]
-                qdd[active[k]] = -acc
-            rnea(Rl, p0, axis, mass, com, Ic, wv, qdd, zero3, je, ee_p, zero3, R, tau, f1, W)
-            outputs(tau, f1, R, p, base_com, active, Z[pidx], V)
+                qdd[active[k], 1 + c] = Jinv[k, c]
+        rest_multi(Rl, p0, axis, mass, com, Ic, qdd, a0, tau7, f7, LW, TW)
+        outputs_multi(tau7, f7, R, p, base_com, active, y7)
         for k in range(na + 6):
-            Q[i, k, 0] = Z[0, k]
-            Q[i, k, 1] = Z[1, k]
-            Q[i, k, 2] = Z[2, k]
-            Q[i, k, 3] = Z[3, k] - Z[0, k] - Z[1, k]
-            Q[i, k, 4] = Z[4, k] - Z[0, k] - Z[2, k]
-            Q[i, k, 5] = Z[5, k] - Z[1, k] - Z[2, k]
+            c0[i, k] = y7[k, 0]
+            for r in range(3):
+                L[i, k, r] = y7[k, 1 + r]
+        # with velocities: qd = J^-1 w for the polarisation's w (linear velocity e_r + e_s), qdd = 0
+        for pi in range(6):
+            r1, r2 = _PAIRS[pi]
+            for k in range(na):
+                qd[active[k], pi] = Jinv[k, r1] + (Jinv[k, r2] if r2 != r1 else 0.0)
+        velocity_multi(Rl, p0, axis, mass, com, Ic, qd, R, je, ee_p, tau6, f6, dd, LV, TV)
+        outputs_multi(tau6, f6, R, p, base_com, active, y6)
+        # Z(w) = y(w, 0) - L6 (Jdot qd), into y6; then Q by polarisation
+        for k in range(na + 6):
+            for pi in range(6):
+                acc = y6[k, pi]
+                for c in range(6):
+                    acc -= y7[k, 1 + c] * dd[c, pi]
+                y6[k, pi] = acc
+            Q[i, k, 0] = y6[k, 0]
+            Q[i, k, 1] = y6[k, 1]
+            Q[i, k, 2] = y6[k, 2]
+            Q[i, k, 3] = y6[k, 3] - y6[k, 0] - y6[k, 1]
+            Q[i, k, 4] = y6[k, 4] - y6[k, 0] - y6[k, 2]
+            Q[i, k, 5] = y6[k, 5] - y6[k, 1] - y6[k, 2]
         # S: the arm applies a unit force e_r to the payload (the payload pushes back with -e_r). At rest and
         # without gravity the RNEA's only force is e_r carried from the end-effector point to the base:
         # tau_j = z_j . ((pee - p_j) x e_r) = J[r, k] (joints up to the end effector's), base force -e_r,

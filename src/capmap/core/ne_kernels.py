@@ -1,37 +1,24 @@
 """Compiled recursions of :mod:`capmap.core.batch_dynamics`: forward kinematics, Pinocchio's
 recursive Newton-Euler (local joint frames, spatial motion (v, w) at the frame origin, force
-(f, n) about it) in general and at rest, the end-effector drift Jdot qd, and the outputs (active
-torques, base wrench); :mod:`capmap.core.ne_coefficients` puts them together per configuration."""
+(f, n) about it) on K right-hand sides at once, at rest or with velocities, the outputs (active
+torques, base wrench) and a 6x6 inverse; :mod:`capmap.core.ne_coefficients` puts them together per
+configuration.
+
+Layout: every per-link quantity is (n, 3, K) and every temporary (3, K), the right-hand sides on the
+last, contiguous axis, so that each step of the recursion (a 3x3 rotation, a cross product) runs as
+one short loop over K that the compiler vectorises: the transforms of a joint are read once for all
+K columns instead of once per call.
+"""
 
 from __future__ import annotations
 
 import numba
 import numpy as np
 
-__all__ = ["cross", "kinematics", "rnea", "rnea_rest", "drift", "outputs", "workspace"]
+__all__ = ["kinematics", "rest_multi", "velocity_multi", "outputs_multi", "invert", "workspace"]
 
 _jit = numba.njit(cache=True)
 _inline = numba.njit(cache=True, inline="always")
-
-
-
-@_inline
-def _cross(a, b, out):
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
-
-
-@_inline
-def _inertia(m, c, Ic, lin, ang, out_l, out_a, tmp):
-    """Spatial inertia (mass m, com c, Ic about the com) times the motion (lin, ang):
-    linear m (lin + ang x c), angular Ic ang + c x (m (lin + ang x c))."""
-    _cross(ang, c, tmp)
-    for b in range(3):
-        out_l[b] = m * (lin[b] + tmp[b])
-    _cross(c, out_l, tmp)
-    for b in range(3):
-        out_a[b] = Ic[b, 0] * ang[0] + Ic[b, 1] * ang[1] + Ic[b, 2] * ang[2] + tmp[b]
 
 
 @_jit
@@ -67,192 +54,251 @@ def _kinematics(R0, p0, axis, q, Rl, R, p):
                     R[j, a, b] = R[j - 1, a, 0] * Rl[j, 0, b] + R[j - 1, a, 1] * Rl[j, 1, b] + R[j - 1, a, 2] * Rl[j, 2, b]
 
 
+@_jit
+def _workspace(n, K):
+    """Work arrays for K right-hand sides: six per-link (n, 3, K) recursions and eight (3, K) temporaries."""
+    return np.zeros((6, n, 3, K)), np.zeros((8, 3, K))
+
+
 @_inline
-def _backward(Rl, p0, axis, fl, fn, tau, f1, tmp, tmp2, pf):
-    """The RNEA's backward pass over the link forces (fl, fn) (n, 3), in place: tau_j = axis . n_j; parent +=
-    X^T f: f_p = Rl f, n_p = Rl n + p x (Rl f); f1 (6,) = joint 1's [f; n]. tmp, tmp2, pf: 3-vectors."""
-    for j in range(len(tau) - 1, -1, -1):
-        tau[j] = axis[j, 0] * fn[j, 0] + axis[j, 1] * fn[j, 1] + axis[j, 2] * fn[j, 2]
+def _cross_c(x, c, out, sign):
+    """out = sign (x x c): x (3, K), c a constant 3-vector."""
+    c0, c1, c2 = c[0], c[1], c[2]
+    for r in range(x.shape[1]):
+        out[0, r] = sign * (x[1, r] * c2 - x[2, r] * c1)
+        out[1, r] = sign * (x[2, r] * c0 - x[0, r] * c2)
+        out[2, r] = sign * (x[0, r] * c1 - x[1, r] * c0)
+
+
+@_inline
+def _add_cross(x, y, out):
+    """out += x x y, all (3, K)."""
+    for r in range(x.shape[1]):
+        out[0, r] += x[1, r] * y[2, r] - x[2, r] * y[1, r]
+        out[1, r] += x[2, r] * y[0, r] - x[0, r] * y[2, r]
+        out[2, r] += x[0, r] * y[1, r] - x[1, r] * y[0, r]
+
+
+@_inline
+def _transform_in(Rj, x, y, out):
+    """out = Rj' x + y: x (3, K) from the parent's frame into the joint's, plus y (3, K) already there."""
+    for b in range(3):
+        r0, r1, r2 = Rj[0, b], Rj[1, b], Rj[2, b]
+        for r in range(x.shape[1]):
+            out[b, r] = r0 * x[0, r] + r1 * x[1, r] + r2 * x[2, r] + y[b, r]
+
+
+@_inline
+def _inertia(m, c, Ic, lin, ang, out_l, out_a, tmp):
+    """Spatial inertia (mass m, com c, Ic about the com) times the motions (lin, ang) (3, K):
+    linear m (lin + ang x c), angular Ic ang + c x (m (lin + ang x c))."""
+    _cross_c(ang, c, tmp, 1.0)
+    for b in range(3):
+        for r in range(lin.shape[1]):
+            out_l[b, r] = m * (lin[b, r] + tmp[b, r])
+    _cross_c(out_l, c, tmp, -1.0)
+    for b in range(3):
+        i0, i1, i2 = Ic[b, 0], Ic[b, 1], Ic[b, 2]
+        for r in range(lin.shape[1]):
+            out_a[b, r] = i0 * ang[0, r] + i1 * ang[1, r] + i2 * ang[2, r] + tmp[b, r]
+
+
+@_inline
+def _backward(Rl, p0, axis, fl, fn, tau, f1, t1, t2):
+    """The RNEA's backward pass over the link forces (fl, fn) (n, 3, K), in place: tau_j = axis . n_j;
+    parent += X' f: f_p = Rl f, n_p = Rl n + p x (Rl f); f1 (6, K) = joint 1's [f; n]."""
+    n, _, K = fl.shape
+    for j in range(n - 1, -1, -1):
+        x0, x1, x2 = axis[j, 0], axis[j, 1], axis[j, 2]
+        for r in range(K):
+            tau[j, r] = x0 * fn[j, 0, r] + x1 * fn[j, 1, r] + x2 * fn[j, 2, r]
         if j > 0:
+            Rj = Rl[j]
             for b in range(3):
-                tmp[b] = Rl[j, b, 0] * fl[j, 0] + Rl[j, b, 1] * fl[j, 1] + Rl[j, b, 2] * fl[j, 2]
-                tmp2[b] = Rl[j, b, 0] * fn[j, 0] + Rl[j, b, 1] * fn[j, 1] + Rl[j, b, 2] * fn[j, 2]
-            _cross(p0[j], tmp, pf)
-            for b in range(3):
-                fl[j - 1, b] += tmp[b]
-                fn[j - 1, b] += tmp2[b] + pf[b]
+                r0, r1, r2 = Rj[b, 0], Rj[b, 1], Rj[b, 2]
+                for r in range(K):
+                    t1[b, r] = r0 * fl[j, 0, r] + r1 * fl[j, 1, r] + r2 * fl[j, 2, r]
+                    t2[b, r] = r0 * fn[j, 0, r] + r1 * fn[j, 1, r] + r2 * fn[j, 2, r]
+            px, py, pz = p0[j, 0], p0[j, 1], p0[j, 2]
+            for r in range(K):
+                for b in range(3):
+                    fl[j - 1, b, r] += t1[b, r]
+                fn[j - 1, 0, r] += t2[0, r] + py * t1[2, r] - pz * t1[1, r]
+                fn[j - 1, 1, r] += t2[1, r] + pz * t1[0, r] - px * t1[2, r]
+                fn[j - 1, 2, r] += t2[2, r] + px * t1[1, r] - py * t1[0, r]
     for b in range(3):
-        f1[b] = fl[0, b]
-        f1[3 + b] = fn[0, b]
+        for r in range(K):
+            f1[b, r] = fl[0, b, r]
+            f1[3 + b, r] = fn[0, b, r]
 
 
 @_jit
-def _rnea(Rl, p0, axis, mass, com, Ic, qd, qdd, a0, ee_joint, ee_p, fext_w, R, tau, f1, W):
-    """Pinocchio's RNEA (local frames): joint torques tau (n,) and the spatial force f1 (6,) =
-    [f; n] of joint 1 in its local frame. a0: the base's linear acceleration (-gravity);
-    fext_w: a force (3,) (world) that the payload applies at the end-effector point.
-    W: workspace (7 + n, ... ) of :func:`_workspace` (no allocation here)."""
-    n = len(qd)
-    v, w, a, al, fl, fn = W[0], W[1], W[2], W[3], W[4], W[5]
-    small = W[6]
-    tmp, tmp2, hl, ha, gl, ga, pf, fe = small[0], small[1], small[2], small[3], small[4], small[5], small[6], small[7]
-    zero3 = small[8]
+def _rest_multi(Rl, p0, axis, mass, com, Ic, qdd, a0, tau, f1, L, T):
+    """The RNEA at rest (qd = 0, no external force) for K right-hand sides: joint accelerations qdd
+    (n, K) rad/s^2, the base's linear acceleration a0 (3, K) (-gravity, or 0) -> torques tau (n, K)
+    and joint 1's spatial force f1 (6, K). Only the accelerations go forward and f = I a comes back.
+    L, T: :func:`_workspace`."""
+    n, K = qdd.shape
+    a, al, fl, fn = L[2], L[3], L[4], L[5]
+    t1, t2 = T[0], T[1]
+    zero = T[7]
     for b in range(3):
-        zero3[b] = 0.0
+        for r in range(K):
+            zero[b, r] = 0.0
     for j in range(n):
-        # parent quantities expressed in joint j's frame: X = (Rl^T, p) : v_j = Rl^T (v_p + w_p x p), w_j = Rl^T w_p
+        Rj = Rl[j]
         if j == 0:
-            vp, wp, ap, alp = zero3, zero3, a0, zero3
+            _transform_in(Rj, a0, zero, a[0])
+            _transform_in(Rj, zero, zero, al[0])
         else:
-            vp, wp, ap, alp = v[j - 1], w[j - 1], a[j - 1], al[j - 1]
-        _cross(wp, p0[j], tmp)
-        _cross(alp, p0[j], tmp2)
+            _cross_c(al[j - 1], p0[j], t2, 1.0)  # the parent's a + al x p
+            for b in range(3):
+                for r in range(K):
+                    t2[b, r] += a[j - 1, b, r]
+            _transform_in(Rj, t2, zero, a[j])
+            _transform_in(Rj, al[j - 1], zero, al[j])
         for b in range(3):
-            sv = 0.0
-            sw = 0.0
-            sa = 0.0
-            sal = 0.0
-            for c in range(3):
-                sv += Rl[j, c, b] * (vp[c] + tmp[c])
-                sw += Rl[j, c, b] * wp[c]
-                sa += Rl[j, c, b] * (ap[c] + tmp2[c])
-                sal += Rl[j, c, b] * alp[c]
-            v[j, b] = sv
-            w[j, b] = sw + axis[j, b] * qd[j]
-            a[j, b] = sa
-            al[j, b] = sal + axis[j, b] * qdd[j]
-        # + v_j x (S qd): (v x s, w x s) with s = axis qd (w before adding its own rate: same, s x s = 0)
+            x = axis[j, b]
+            for r in range(K):
+                al[j, b, r] += x * qdd[j, r]
+        _inertia(mass[j], com[j], Ic[j], a[j], al[j], fl[j], fn[j], t1)
+    _backward(Rl, p0, axis, fl, fn, tau, f1, t1, t2)
+
+
+@_jit
+def _velocity_multi(Rl, p0, axis, mass, com, Ic, qd, R, ee_joint, ee_p, tau, f1, dd, L, T):
+    """The RNEA at joint velocities qd (n, K) rad/s with qdd = 0, no gravity and no external force ->
+    torques tau (n, K) and f1 (6, K), and from the same forward pass the end-effector drift
+    dd (6, K) = Jdot qd: the ee point's classical linear acceleration and the body's angular
+    acceleration, world axes. L, T: :func:`_workspace`."""
+    n, K = qd.shape
+    v, w, a, al, fl, fn = L[0], L[1], L[2], L[3], L[4], L[5]
+    t1, t2, hl, ha = T[0], T[1], T[2], T[3]
+    zero = T[7]
+    for b in range(3):
+        for r in range(K):
+            zero[b, r] = 0.0
+    for j in range(n):
+        Rj = Rl[j]
+        x0, x1, x2 = axis[j, 0], axis[j, 1], axis[j, 2]
+        if j == 0:
+            for b in range(3):
+                for r in range(K):
+                    v[0, b, r] = 0.0
+                    a[0, b, r] = 0.0
+                    al[0, b, r] = 0.0
+                    w[0, b, r] = axis[0, b] * qd[0, r]
+            continue  # v = 0 and w parallel to the axis: no velocity product, f = w x (Ic w) below
+        # parent quantities in joint j's frame: v_j = Rl' (v_p + w_p x p), w_j = Rl' w_p + axis qd,
+        # a_j = Rl' (a_p + al_p x p) + v_j x s, al_j = Rl' al_p + w_j x s with s = axis qd
+        _cross_c(w[j - 1], p0[j], t1, 1.0)
+        _cross_c(al[j - 1], p0[j], t2, 1.0)
         for b in range(3):
-            tmp[b] = axis[j, b] * qd[j]
-        _cross(v[j], tmp, tmp2)
-        for b in range(3):
-            a[j, b] += tmp2[b]
-        _cross(w[j], tmp, tmp2)
-        for b in range(3):
-            al[j, b] += tmp2[b]
-        # f = I a + v x* (I v); I: mass m, com c, Ic about the com
-        m = mass[j]
-        c = com[j]
-        _inertia(m, c, Ic[j], v[j], w[j], hl, ha, tmp)  # h = I v
-        _inertia(m, c, Ic[j], a[j], al[j], gl, ga, tmp)  # I a
-        # v x* h = (w x hl, w x ha + v x hl)
-        _cross(w[j], hl, tmp)
-        for b in range(3):
-            fl[j, b] = gl[b] + tmp[b]
-        _cross(w[j], ha, tmp)
-        _cross(v[j], hl, tmp2)
-        for b in range(3):
-            fn[j, b] = ga[b] + tmp[b] + tmp2[b]
-    # the payload's force at the end-effector point, into the ee joint's frame (about its origin)
+            for r in range(K):
+                t1[b, r] += v[j - 1, b, r]
+                t2[b, r] += a[j - 1, b, r]
+        _transform_in(Rj, t1, zero, v[j])
+        _transform_in(Rj, w[j - 1], zero, w[j])
+        _transform_in(Rj, t2, zero, a[j])
+        _transform_in(Rj, al[j - 1], zero, al[j])
+        for r in range(K):
+            s = qd[j, r]
+            w[j, 0, r] += x0 * s
+            w[j, 1, r] += x1 * s
+            w[j, 2, r] += x2 * s
+            a[j, 0, r] += (v[j, 1, r] * x2 - v[j, 2, r] * x1) * s
+            a[j, 1, r] += (v[j, 2, r] * x0 - v[j, 0, r] * x2) * s
+            a[j, 2, r] += (v[j, 0, r] * x1 - v[j, 1, r] * x0) * s
+            al[j, 0, r] += (w[j, 1, r] * x2 - w[j, 2, r] * x1) * s
+            al[j, 1, r] += (w[j, 2, r] * x0 - w[j, 0, r] * x2) * s
+            al[j, 2, r] += (w[j, 0, r] * x1 - w[j, 1, r] * x0) * s
+    for j in range(n):
+        # f = I a + v x* (I v) = (gl + w x hl, ga + w x ha + v x hl)
+        _inertia(mass[j], com[j], Ic[j], v[j], w[j], hl, ha, t1)
+        _inertia(mass[j], com[j], Ic[j], a[j], al[j], fl[j], fn[j], t1)
+        _add_cross(w[j], hl, fl[j])
+        _add_cross(w[j], ha, fn[j])
+        _add_cross(v[j], hl, fn[j])
+    # the drift at the ee point e (local): v_e = v + w x e; classical a_e = a + al x e + w x v_e
     je = ee_joint
+    _cross_c(w[je], ee_p, t1, 1.0)
     for b in range(3):
-        fe[b] = R[je, 0, b] * fext_w[0] + R[je, 1, b] * fext_w[1] + R[je, 2, b] * fext_w[2]
-    _cross(ee_p, fe, tmp)
+        for r in range(K):
+            t1[b, r] += v[je, b, r]  # v_e
+    _cross_c(al[je], ee_p, t2, 1.0)
     for b in range(3):
-        fl[je, b] -= fe[b]
-        fn[je, b] -= tmp[b]
-    _backward(Rl, p0, axis, fl, fn, tau, f1, tmp, tmp2, pf)
+        for r in range(K):
+            t2[b, r] += a[je, b, r]
+    _add_cross(w[je], t1, t2)
+    for b in range(3):
+        r0, r1, r2 = R[je, b, 0], R[je, b, 1], R[je, b, 2]
+        for r in range(K):
+            dd[b, r] = r0 * t2[0, r] + r1 * t2[1, r] + r2 * t2[2, r]
+            dd[3 + b, r] = r0 * al[je, 0, r] + r1 * al[je, 1, r] + r2 * al[je, 2, r]
+    _backward(Rl, p0, axis, fl, fn, tau, f1, t1, t2)
 
 
 @_jit
-def _rnea_rest(Rl, p0, axis, mass, com, Ic, qdd, a0, tau, f1, W):
-    """:func:`_rnea` at rest (qd = 0) and without an external force: the velocity terms vanish, so
-    only the accelerations go forward and f = I a comes back (the same recursion, a third of the work)."""
-    n = len(qdd)
-    a, al, fl, fn = W[2], W[3], W[4], W[5]
-    small = W[6]
-    tmp, tmp2, gl, ga, pf = small[0], small[1], small[4], small[5], small[6]
-    for j in range(n):
-        if j == 0:
-            for b in range(3):
-                tmp2[b] = a0[b]
-                tmp[b] = 0.0
-        else:
-            _cross(al[j - 1], p0[j], tmp2)
-            for b in range(3):
-                tmp2[b] += a[j - 1, b]
-                tmp[b] = al[j - 1, b]
-        for b in range(3):
-            a[j, b] = Rl[j, 0, b] * tmp2[0] + Rl[j, 1, b] * tmp2[1] + Rl[j, 2, b] * tmp2[2]
-            al[j, b] = Rl[j, 0, b] * tmp[0] + Rl[j, 1, b] * tmp[1] + Rl[j, 2, b] * tmp[2] + axis[j, b] * qdd[j]
-        _inertia(mass[j], com[j], Ic[j], a[j], al[j], gl, ga, tmp)
-        for b in range(3):
-            fl[j, b] = gl[b]
-            fn[j, b] = ga[b]
-    _backward(Rl, p0, axis, fl, fn, tau, f1, tmp, tmp2, pf)
-
-
-@_jit
-def _workspace(n):
-    """Work arrays of :func:`_rnea`: six (n, 3) recursions and nine 3-vectors (padded to (n, 3))."""
-    return np.zeros((7, max(n, 9), 3))
-
-
-@_jit
-def _drift(Rl, p0, axis, qd, R, ee_joint, ee_p, out, V):
-    """Jdot qd: the end-effector point's classical linear acceleration and the body's angular
-    acceleration (6,) at qdd = 0, world axes. V: workspace (8, 3)."""
-    v, w, a, al, nv, nw, tmp, tmp2 = V[0], V[1], V[2], V[3], V[4], V[5], V[6], V[7]
-    for b in range(3):
-        v[b] = 0.0
-        w[b] = 0.0
-        a[b] = 0.0
-        al[b] = 0.0
-    for j in range(ee_joint + 1):
-        _cross(w, p0[j], tmp)
-        _cross(al, p0[j], tmp2)
-        for b in range(3):
-            nv[b] = Rl[j, 0, b] * (v[0] + tmp[0]) + Rl[j, 1, b] * (v[1] + tmp[1]) + Rl[j, 2, b] * (v[2] + tmp[2])
-            nw[b] = Rl[j, 0, b] * w[0] + Rl[j, 1, b] * w[1] + Rl[j, 2, b] * w[2] + axis[j, b] * qd[j]
-        for b in range(3):  # a, al into the new frame (tmp2 = al_p x p), in place after use
-            x = Rl[j, 0, b] * (a[0] + tmp2[0]) + Rl[j, 1, b] * (a[1] + tmp2[1]) + Rl[j, 2, b] * (a[2] + tmp2[2])
-            tmp[b] = x
-        for b in range(3):
-            a[b] = tmp[b]
-        for b in range(3):
-            tmp[b] = Rl[j, 0, b] * al[0] + Rl[j, 1, b] * al[1] + Rl[j, 2, b] * al[2]
-        for b in range(3):
-            al[b] = tmp[b]
-        for b in range(3):
-            tmp[b] = axis[j, b] * qd[j]
-        _cross(nv, tmp, tmp2)
-        for b in range(3):
-            a[b] += tmp2[b]
-        _cross(nw, tmp, tmp2)
-        for b in range(3):
-            al[b] += tmp2[b]
-            v[b] = nv[b]
-            w[b] = nw[b]
-    # at the ee point e (local): v_e = v + w x e, a_e(spatial) = a + al x e; classical = a_e + w x v_e
-    _cross(w, ee_p, tmp)
-    for b in range(3):
-        nv[b] = v[b] + tmp[b]  # v_e
-    _cross(al, ee_p, tmp)
-    _cross(w, nv, tmp2)
-    for b in range(3):
-        nw[b] = a[b] + tmp[b] + tmp2[b]  # classical, local
-    for b in range(3):
-        out[b] = R[ee_joint, b, 0] * nw[0] + R[ee_joint, b, 1] * nw[1] + R[ee_joint, b, 2] * nw[2]
-        out[3 + b] = R[ee_joint, b, 0] * al[0] + R[ee_joint, b, 1] * al[1] + R[ee_joint, b, 2] * al[2]
-
-
-@_jit
-def _outputs(tau, f1, R, p, base_com, active, out, V):
-    """[tau_active; base force; base moment about base_com] from RNEA results; V: workspace (>= 3, 3)."""
+def _outputs_multi(tau, f1, R, p, base_com, active, out):
+    """[tau_active; base force; base moment about base_com] (n_out, K) from RNEA results tau (n, K),
+    f1 (6, K)."""
     na = len(active)
-    for k in range(na):
-        out[k] = tau[active[k]]
-    F, M, tmp = V[0], V[1], V[2]
-    for b in range(3):
-        F[b] = R[0, b, 0] * f1[0] + R[0, b, 1] * f1[1] + R[0, b, 2] * f1[2]
-    _cross(p[0], F, tmp)
-    for b in range(3):
-        M[b] = R[0, b, 0] * f1[3] + R[0, b, 1] * f1[4] + R[0, b, 2] * f1[5] + tmp[b]
-    _cross(base_com, F, tmp)
-    for b in range(3):
-        out[na + b] = -F[b]
-        out[na + 3 + b] = -M[b] + tmp[b]
+    K = tau.shape[1]
+    for r in range(K):
+        for k in range(na):
+            out[k, r] = tau[active[k], r]
+        F0 = R[0, 0, 0] * f1[0, r] + R[0, 0, 1] * f1[1, r] + R[0, 0, 2] * f1[2, r]
+        F1 = R[0, 1, 0] * f1[0, r] + R[0, 1, 1] * f1[1, r] + R[0, 1, 2] * f1[2, r]
+        F2 = R[0, 2, 0] * f1[0, r] + R[0, 2, 1] * f1[1, r] + R[0, 2, 2] * f1[2, r]
+        M0 = R[0, 0, 0] * f1[3, r] + R[0, 0, 1] * f1[4, r] + R[0, 0, 2] * f1[5, r] + p[0, 1] * F2 - p[0, 2] * F1
+        M1 = R[0, 1, 0] * f1[3, r] + R[0, 1, 1] * f1[4, r] + R[0, 1, 2] * f1[5, r] + p[0, 2] * F0 - p[0, 0] * F2
+        M2 = R[0, 2, 0] * f1[3, r] + R[0, 2, 1] * f1[4, r] + R[0, 2, 2] * f1[5, r] + p[0, 0] * F1 - p[0, 1] * F0
+        c0, c1, c2 = base_com[0], base_com[1], base_com[2]
+        out[na, r] = -F0
+        out[na + 1, r] = -F1
+        out[na + 2, r] = -F2
+        out[na + 3, r] = -M0 + c1 * F2 - c2 * F1
+        out[na + 4, r] = -M1 + c2 * F0 - c0 * F2
+        out[na + 5, r] = -M2 + c0 * F1 - c1 * F0
 
 
-cross, kinematics, rnea, rnea_rest = _cross, _kinematics, _rnea, _rnea_rest  # the names other modules call
-drift, outputs, workspace = _drift, _outputs, _workspace
+@_jit
+def _invert(J, Jinv, M):
+    """Jinv = J^-1 (n, n) by Gauss-Jordan elimination with partial pivoting (no allocation); returns
+    |det J| (0 when a pivot vanishes; Jinv is then undefined). M: (n, 2n) workspace."""
+    n = J.shape[0]
+    for i in range(n):
+        for k in range(n):
+            M[i, k] = J[i, k]
+            M[i, n + k] = 1.0 if i == k else 0.0
+    det = 1.0
+    for c in range(n):
+        piv = c
+        big = abs(M[c, c])
+        for r in range(c + 1, n):
+            if abs(M[r, c]) > big:
+                big, piv = abs(M[r, c]), r
+        if big == 0.0:
+            return 0.0
+        if piv != c:
+            for k in range(2 * n):
+                M[c, k], M[piv, k] = M[piv, k], M[c, k]
+        d = M[c, c]
+        det *= d
+        inv = 1.0 / d
+        for k in range(c, 2 * n):
+            M[c, k] *= inv
+        for r in range(n):
+            if r != c:
+                f = M[r, c]
+                if f != 0.0:
+                    for k in range(c, 2 * n):
+                        M[r, k] -= f * M[c, k]
+    for i in range(n):
+        for k in range(n):
+            Jinv[i, k] = M[i, n + k]
+    return abs(det)
+
+
+kinematics, rest_multi, velocity_multi = _kinematics, _rest_multi, _velocity_multi  # the names other modules call
+outputs_multi, invert, workspace = _outputs_multi, _invert, _workspace
