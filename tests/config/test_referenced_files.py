@@ -1,5 +1,6 @@
 """What a robot file's content hash covers: the file, its URDF and, for a dual-arm robot, the URDF's
-collision meshes found as Pinocchio finds them; a point cloud is hashed, never parsed."""
+collision and visual meshes (its capsules cover both) found as Pinocchio finds them; a point cloud is
+hashed, never parsed."""
 
 import shutil
 
@@ -16,17 +17,19 @@ from tests.scenario import ROOT
 
 BAXTER = ROOT / "config" / "robots" / "baxter_dual.yaml"
 PREFIX = "package://example-robot-data/robots/baxter_description/"
-MESHES = ("meshes/torso/base_link_collision.DAE", "meshes/base/pedestal_link_collision.DAE")
+MESHES = tuple(m.replace(PREFIX, "") for m in robot_file._meshes(load_dual_arm_file(BAXTER).urdf))  # every DAE named
+PEDESTAL = "meshes/base/pedestal_link_collision.DAE"
+assert PEDESTAL in MESHES
 
 
 def _mesh_paths(robot) -> set[str]:
-    return {o.meshPath for o in robot.geometry.geometryObjects if o.meshPath.endswith(".DAE")}
+    return {o.meshPath for gm in (robot.geometry, robot.visual) for o in gm.geometryObjects if o.meshPath.endswith(".DAE")}
 
 
 @pytest.fixture
 def local(tmp_path):
-    """Baxter's dual-arm file with its URDF and collision meshes copied beside it, named relatively
-    (the visual meshes are not copied: loading the collision geometry never reads them)."""
+    """Baxter's dual-arm file with its URDF and every mesh it names (collision and visual) copied beside
+    it, named relatively."""
     desc = load_dual_arm_file(BAXTER)
     src = desc.urdf.parents[1]  # .../baxter_description
     for rel in MESHES:
@@ -50,7 +53,7 @@ def test_a_changed_mesh_changes_the_fingerprints(local):
     files = referenced_files(robot)
     assert {str(p) for p in files[2:]} == _mesh_paths(build_dual_arm(load_dual_arm_file(robot)))
     before = file_fingerprints(files)
-    assert files == [robot, local / "baxter.urdf", *(local / m for m in MESHES)] and len(before) == 4
+    assert files == [robot, local / "baxter.urdf", *(local / m for m in MESHES)] and len(before) == 2 + len(MESHES)
     with open(local / MESHES[0], "a") as f:
         f.write("<!-- another mesh -->\n")
     after = file_fingerprints(referenced_files(robot))
@@ -66,29 +69,29 @@ def _error(robot) -> str:
 
 
 def test_a_missing_mesh_is_one_line_naming_it(local):
-    (local / MESHES[1]).unlink()
+    (local / PEDESTAL).unlink()
     assert "mesh 'meshes/base/pedestal_link_collision.DAE': not found" in _error(local / "robot.yaml")
-    assert local / MESHES[1] not in referenced_files(local / "robot.yaml")  # left to the loader's error
+    assert local / PEDESTAL not in referenced_files(local / "robot.yaml")  # left to the loader's error
 
 
 def test_a_mesh_that_is_no_file_or_of_an_unknown_scheme_is_one_line(local):
     urdf = local / "baxter.urdf"
     text = urdf.read_text()
-    (local / MESHES[1]).unlink()
-    (local / MESHES[1]).mkdir()
+    (local / PEDESTAL).unlink()
+    (local / PEDESTAL).mkdir()
     assert "not a regular file" in _error(local / "robot.yaml")
-    urdf.write_text(text.replace(MESHES[1], f"file://{local}/absent.DAE"))
+    urdf.write_text(text.replace(PEDESTAL, f"file://{local}/absent.DAE"))
     assert f"{local}/absent.DAE is missing" in _error(local / "robot.yaml")
-    urdf.write_text(text.replace(MESHES[1], "http://example.org/m.DAE"))
+    urdf.write_text(text.replace(PEDESTAL, "http://example.org/m.DAE"))
     assert "scheme http:// is not handled" in _error(local / "robot.yaml")
 
 
 def test_package_names_resolve_like_pinocchio(local, monkeypatch, tmp_path_factory):
     ros = tmp_path_factory.mktemp("ros")
     (ros / "mine/meshes").mkdir(parents=True)
-    shutil.copy(local / MESHES[1], ros / "mine/meshes/pedestal.DAE")
+    shutil.copy(local / PEDESTAL, ros / "mine/meshes/pedestal.DAE")
     urdf = local / "baxter.urdf"
-    urdf.write_text(urdf.read_text().replace(MESHES[1], "package://mine/meshes/pedestal.DAE"))
+    urdf.write_text(urdf.read_text().replace(PEDESTAL, "package://mine/meshes/pedestal.DAE"))
     assert "not found" in _error(local / "robot.yaml")
     monkeypatch.setenv("ROS_PACKAGE_PATH", str(ros))  # Pinocchio searches it after the package directory
     robot = build_dual_arm(load_dual_arm_file(local / "robot.yaml"))
@@ -114,5 +117,5 @@ def test_a_mesh_that_is_not_a_mesh_is_one_line_before_any_job(local):
     handed to assimp inside a job (whose outputs Snakemake would have deleted)."""
     urdf = local / "baxter.urdf"
     (local / "secret").write_text("root:x:0:0\n")
-    urdf.write_text(urdf.read_text().replace(MESHES[1], f"file://{local}/secret"))
+    urdf.write_text(urdf.read_text().replace(PEDESTAL, f"file://{local}/secret"))
     assert "is not a mesh file (.3ds, .dae" in _error(local / "robot.yaml")

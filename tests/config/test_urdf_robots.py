@@ -142,8 +142,9 @@ def test_unlocked_fingers_are_named_as_not_revolute(tmp_path):
 def test_a_tree_of_revolute_joints_is_not_a_serial_chain(tmp_path):
     # Baxter with its head and fingers locked: two 7-joint arms on one torso
     baxter = load_yaml(ROOT / "config" / "robots" / "baxter_dual.yaml")
+    fingers = {f["joint"]: 0.0 for side in ("left", "right") for f in baxter["arms"][side]["fingers"]}
     p = tmp_path / "baxter.yaml"
-    p.write_text(yaml.safe_dump({"name": "baxter", "locked": baxter["locked"],
+    p.write_text(yaml.safe_dump({"name": "baxter", "locked": {**baxter["locked"], **fingers},
                                  "urdf": {**baxter["urdf"], "ee_frame": "left_gripper"}}))
     msg = _error(p)
     assert "are not a serial chain (right_s0 follows the base, not left_w2)" in msg

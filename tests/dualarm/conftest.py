@@ -18,13 +18,14 @@ SECTION = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["dualarm
 
 
 @pytest.fixture(scope="session")
-def robot():
-    return fit_capsules(build_dual_arm(load_dual_arm_file(ROOT / SECTION["robot"])))[0]
+def scene():
+    return load_scene(ROOT / SECTION["scene"])
 
 
 @pytest.fixture(scope="session")
-def scene():
-    return load_scene(ROOT / SECTION["scene"])
+def robot(scene):
+    """The robot, fingers closed on the scene's panel, with its capsules."""
+    return fit_capsules(build_dual_arm(load_dual_arm_file(ROOT / SECTION["robot"]), float(scene.panel.size[0])))[0]
 
 
 @pytest.fixture(scope="session")

@@ -10,9 +10,11 @@ __all__ = ["capsule", "triangle", "distance"]
 
 
 def capsule(a: np.ndarray, b: np.ndarray, r: float) -> tuple[coal.Capsule, coal.Transform3s]:
-    """A coal capsule spanning a -> b (3,) m with radius r (its axis is z, centred)."""
+    """A coal capsule spanning a -> b (3,) m with radius r (its axis is z, centred); a sphere when a = b."""
     d = b - a
     L = np.linalg.norm(d)
+    if L == 0:
+        return coal.Sphere(r), coal.Transform3s(np.eye(3), a)
     z = d / L
     x = np.cross(z, [1.0, 0, 0] if abs(z[0]) < 0.9 else [0, 1.0, 0])
     x /= np.linalg.norm(x)

@@ -36,9 +36,10 @@ rule dualarm_envelope:
 
 
 rule dualarm_capsules:
-    """Minimum-volume capsules over the robot's URDF collision geometry (coverage checked)."""
+    """Minimum-volume capsules over the robot's visual and collision geometry, fingers closed on the
+    scene's panel (coverage checked)."""
     input:
-        dualarm_files("robot"),
+        dualarm_files("robot", "scene"),
     output:
         out("dualarm/robot_capsules.parquet"),
     params:
@@ -52,7 +53,8 @@ rule dualarm_capsules:
 
 
 rule dualarm_optimise:
-    """Augmented-Lagrangian DDP of the panel assembly; errors and safety on a finer grid."""
+    """Augmented-Lagrangian DDP of the panel assembly; errors and safety on a finer grid; joint torques
+    with the held panel by inverse dynamics."""
     input:
         environment=out("dualarm/environment.parquet"),
         capsules=out("dualarm/robot_capsules.parquet"),
@@ -61,6 +63,7 @@ rule dualarm_optimise:
         trajectory=out("dualarm/trajectory.parquet"),
         fine=out("dualarm/fine.parquet"),
         outer=out("dualarm/outer.parquet"),
+        torques=out("dualarm/torques.parquet"),
         csv=out("dualarm/summary.csv"),
         md=out("dualarm/summary.md"),
     params:
@@ -93,11 +96,13 @@ rule dualarm_check:
 
 
 rule dualarm_plots:
-    """Constraint errors, safety distances, joints and velocities vs limits, convergence."""
+    """Constraint errors, safety distances, joints and velocities vs limits, torques vs effort limits,
+    convergence."""
     input:
         trajectory=out("dualarm/trajectory.parquet"),
         fine=out("dualarm/fine.parquet"),
         outer=out("dualarm/outer.parquet"),
+        torques=out("dualarm/torques.parquet"),
     output:
         errors=report(out("dualarm/constraint_errors.png"), category="Dual-arm assembly",
                       caption="../report/dualarm_errors.rst"),
@@ -106,6 +111,7 @@ rule dualarm_plots:
         joints=report(out("dualarm/joints.png"), category="Dual-arm assembly", caption="../report/dualarm_joints.rst"),
         velocities=report(out("dualarm/velocities.png"), category="Dual-arm assembly",
                           caption="../report/dualarm_joints.rst"),
+        torques=report(out("dualarm/torques.png"), category="Dual-arm assembly", caption="../report/dualarm_torques.rst"),
         convergence=report(out("dualarm/convergence.png"), category="Dual-arm assembly",
                            caption="../report/dualarm_convergence.rst"),
     params:

@@ -238,13 +238,14 @@ def check_dualarm(cfg: RunConfig, source: str = "config") -> None:
     """The dual-arm files load, a user's cloud file is one the scan job can read, and the horizons
     and the synthetic scan fit."""
     da = cfg.dualarm
+    scene = load_scene(da.scene)
     try:
-        robot = build_dual_arm(load_dual_arm_file(da.robot))
+        robot = build_dual_arm(load_dual_arm_file(da.robot), float(scene.panel.size[0]))
     except ConfigError:
         raise
     except CapmapError as exc:
-        raise ConfigError(f"{source}: dualarm.robot = {da.robot!r}: {exc.in_terms(urdf='its URDF')}") from None
-    scene = load_scene(da.scene)
+        raise ConfigError(f"{source}: dualarm.robot = {da.robot!r} with dualarm.scene = {da.scene!r}: "
+                          f"{exc.in_terms(urdf='its URDF')}") from None
     if len(scene.q_start) != len(robot.q_lower) or np.any(scene.q_start < robot.q_lower) or \
             np.any(scene.q_start > robot.q_upper):
         raise ConfigError(f"{source}: dualarm.scene = {da.scene!r}: start_configuration_rad is outside the joint limits "

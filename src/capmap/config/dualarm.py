@@ -2,8 +2,9 @@
 
 A dual-arm robot file names a URDF (a path relative to the file, or a file shipped by a pip
 package), the two arms' joints and gripper frames, the joints to lock and their values, and
-the capsule groups (URDF collision objects each capsule covers) with the self-collision
-rules ``self_gap``, ``body_skip`` and ``hold`` (see :mod:`capmap.dualarm.assembly`).
+the capsule groups (URDF geometry objects each capsule covers), ``cover`` (the URDF models the
+capsules cover: visual and/or collision, default both) and the self-collision rules ``self_gap``,
+``body_skip`` and ``hold`` (see :mod:`capmap.dualarm.assembly`).
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ __all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fi
            "check_settings",
            "weights"]
 
-_ROBOT_KEYS = {"name", "description", "urdf", "arms", "locked", "capsules", "self_gap", "body_skip", "hold"}
+_ROBOT_KEYS = {"name", "description", "urdf", "arms", "locked", "capsules", "self_gap", "body_skip", "hold", "cover"}
+_COVER = ("visual", "collision")
 
 
 @dataclass(frozen=True)
@@ -158,9 +160,23 @@ def load_dual_arm_file(path: str | Path) -> DualArmDescription:
     arms = doc["arms"]
     if sorted(arms) != ["left", "right"]:
         raise ConfigError(f"{src}: arms must be exactly 'left' and 'right' (found {sorted(arms)})")
+    fingers = {}
     for side in ("left", "right"):
-        if len(arms[side].get("joints", [])) != 7 or "gripper" not in arms[side]:
+        if not isinstance(arms[side], dict) or len(arms[side].get("joints", [])) != 7 or "gripper" not in arms[side]:
             raise ConfigError(f"{src}: arms.{side} needs 7 joints and a gripper frame")
+        extra = sorted(set(arms[side]) - {"joints", "gripper", "fingers"})
+        if extra:
+            raise ConfigError(f"{src}: arms.{side}: unknown key {extra[0]} (allowed: fingers, gripper, joints)")
+        fl = arms[side].get("fingers", [])
+        if not isinstance(fl, list) or any(not isinstance(f, dict) or sorted(f) != ["joint", "pad"]
+                                           or not all(isinstance(v, str) for v in f.values()) for f in fl):
+            raise ConfigError(f"{src}: arms.{side}.fingers must be a list of {{joint: <prismatic joint>, pad: <geometry "
+                              "object>}} (the fingers closed on the held part's thickness)")
+        fingers[side] = tuple((f["joint"], f["pad"]) for f in fl)
+        clash = [j for j, _ in fingers[side] if j in doc.get("locked", {})]
+        if clash:
+            raise ConfigError(f"{src}: {clash[0]} is both a finger of arms.{side} (closed on the held part) and in "
+                              "locked: give it in one place")
     groups = []
     for part in ("left", "right", "body"):
         for k, g in enumerate(doc["capsules"].get(part, [])):
@@ -170,7 +186,12 @@ def load_dual_arm_file(path: str | Path) -> DualArmDescription:
     names = [g.name for g in groups]
     if len(set(names)) != len(names):
         raise ConfigError(f"{src}: capsule names must be unique")
+    cover = doc.get("cover", list(_COVER))
+    if (not isinstance(cover, list) or not cover or any(c not in _COVER for c in cover)
+            or len(set(cover)) != len(cover)):
+        raise ConfigError(f"{src}: cover = {cover!r} must be a list of {' and/or '.join(_COVER)} (default both: the "
+                          "capsules cover the visual meshes and the collision geometry)")
     return DualArmDescription(doc["name"], urdf_path, package_dir, {s: tuple(arms[s]["joints"]) for s in arms},
                               {s: arms[s]["gripper"] for s in arms}, {k: float(v) for k, v in doc.get("locked", {}).items()},
                               tuple(groups), int(doc.get("body_skip", 0)), int(doc.get("hold", 0)),
-                              int(doc.get("self_gap", 2)))
+                              int(doc.get("self_gap", 2)), tuple(cover), fingers)

@@ -193,17 +193,17 @@ def mesh_search_dirs(package_dirs) -> list[str]:
             + [p + "/share" for p in env.get("AMENT_PREFIX_PATH", [])])
 
 
-def _collision_meshes(urdf_path: Path) -> list[str]:
-    """The mesh names (``filename``) of a URDF's collision geometry, once each in order ([] when it is
-    not readable XML: the loaders report that). Visual meshes are never read (geometry is loaded as
-    COLLISION), so they are not listed."""
+def _meshes(urdf_path: Path) -> list[str]:
+    """The mesh names (``filename``) of a URDF's collision and visual geometry, once each in order ([]
+    when it is not readable XML: the loaders report that). A dual-arm robot loads both (its capsules
+    cover the visual meshes as well as the collision geometry)."""
     try:
         root = ElementTree.parse(urdf_path).getroot()
     except (ElementTree.ParseError, OSError):
         return []
     names = []
-    for collision in (c for link in root.findall("link") for c in link.findall("collision")):
-        geometry = collision.find("geometry")
+    for element in (c for link in root.findall("link") for kind in ("collision", "visual") for c in link.findall(kind)):
+        geometry = element.find("geometry")
         shape = next(iter(geometry), None) if geometry is not None else None  # urdfdom reads the first shape
         if shape is not None and shape.tag == "mesh" and shape.get("filename") and shape.get("filename") not in names:
             names.append(shape.get("filename"))
@@ -228,11 +228,11 @@ def _find_mesh(name: str, dirs: list[str]) -> Path:
 
 
 def check_meshes(urdf_path: str | Path, package_dirs, source: str) -> list[Path]:
-    """Every collision mesh a URDF names, found as Pinocchio finds it (:func:`mesh_search_dirs` of
+    """Every mesh a URDF names (collision and visual), found as Pinocchio finds it (:func:`mesh_search_dirs` of
     ``package_dirs``); returns the files. A mesh not found, not a regular file or unreadable is one
     :class:`ConfigError` line naming the robot file, the URDF and the mesh."""
     dirs, out = mesh_search_dirs(package_dirs), []
-    for name in _collision_meshes(Path(urdf_path)):
+    for name in _meshes(Path(urdf_path)):
         where = f"{source}: urdf {urdf_path}: mesh {name!r}"
         try:
             path = _find_mesh(name, dirs)
@@ -254,9 +254,9 @@ def check_meshes(urdf_path: str | Path, package_dirs, source: str) -> list[Path]
 
 
 def _mesh_files(urdf_path: Path) -> list[Path]:
-    """The collision meshes of a dual-arm URDF that exist (missing ones are left to :func:`check_meshes`)."""
+    """The collision and visual meshes of a dual-arm URDF that exist (missing ones are left to :func:`check_meshes`)."""
     dirs, out = mesh_search_dirs([urdf_package_dir(urdf_path)]), []
-    for name in _collision_meshes(urdf_path):
+    for name in _meshes(urdf_path):
         try:
             out.append(_find_mesh(name, dirs))
         except LookupError:
@@ -266,7 +266,7 @@ def _mesh_files(urdf_path: Path) -> list[Path]:
 
 def referenced_files(path: str | Path) -> list[Path]:
     """A robot, dual-arm or platform file, the URDF it names (if any) and, for a dual-arm file (one
-    with ``capsules``: the only robots whose geometry is loaded), the URDF's collision meshes
+    with ``capsules``: the only robots whose geometry is loaded), the URDF's collision and visual meshes
     (:func:`check_meshes`): what its content hash must cover. A file that is not YAML (``.yaml``,
     ``.yml``), e.g. a point cloud, is returned alone and not parsed. Unreadable or malformed files
     are left to the loaders' one-line errors."""

@@ -43,9 +43,18 @@ def parse_scene(doc: object, source: str) -> Scene:
     size = np.asarray(pn["size_m"], float)
     if not (size > 0).all():
         raise ConfigError(f"{source}: panel.size_m = {pn['size_m']} must be > 0")
+    mass = float(pn["mass_kg"])
+    x, y, z = size
+    box = mass / 12 * np.array([y * y + z * z, x * x + z * z, x * x + y * y])  # a uniform box
+    inertia = np.asarray(pn.get("inertia_kgm2", box), float)
+    a, b, c = inertia
+    if not (a + b >= c and a + c >= b and b + c >= a):
+        raise ConfigError(f"{source}: panel.inertia_kgm2 = {list(inertia)} violates the triangle inequality of "
+                          "principal moments (no rigid body has them)")
     panel = PanelSpec(size=size, holes=np.asarray(pn["holes_m"], float).reshape(-1, 2),
                       hole_radius=float(pn["hole_radius_m"]),
-                      grasp=np.array([pn["grasp_m"]["left"], pn["grasp_m"]["right"]], dtype=float))
+                      grasp=np.array([pn["grasp_m"]["left"], pn["grasp_m"]["right"]], dtype=float),
+                      mass=mass, inertia=inertia)
     poses = {k: pose(v["xyz_m"], v["rpy_deg"]) for k, v in pn["poses"].items()}
     axis = doc["insertion_axis"]
     direction = np.asarray(axis["direction"], float)

@@ -98,7 +98,7 @@ STAGES: dict[str, Stage] = {
     # family 4: dual-arm assembly
     "dualarm_scan": Stage(tuple(f"dualarm.{k}" for k in ("scene", "cloud_file", "scan", "scan_seed"))),
     "dualarm_envelope": Stage(("dualarm.fit", "dualarm.fit_seed"), ("dualarm_scan",)),
-    "dualarm_capsules": Stage(("dualarm.robot",)),
+    "dualarm_capsules": Stage(("dualarm.robot", "dualarm.scene")),  # the fingers close on the scene's panel
     "dualarm_problem": Stage(tuple(f"dualarm.{k}" for k in ("weights.control", "weights.velocity", "weights.panel",
                                                              "solver")), ("dualarm_envelope", "dualarm_capsules")),
     "dualarm_optimise": Stage(("dualarm.weights.margin_m", "dualarm.horizon", "dualarm.fine_factor"),

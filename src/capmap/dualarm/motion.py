@@ -14,11 +14,14 @@ import pandas as pd
 from capmap.dualarm.assembly import Assembly, clearance_at, warm_start
 from capmap.dualarm.evaluate import active_pairs, fine_grid, node_errors, safety
 from capmap.dualarm.robot import DualArm
+from capmap.dualarm.scene import Scene
 from capmap.dualarm.settings import ALSettings, Weights
 from capmap.dualarm.solver import initial_guess, solve
+from capmap.dualarm.torques import HeldPart, held_torques
 from capmap.errors import CapmapError
 
-__all__ = ["ACTIVE_WITHIN_M", "AssemblyMotion", "key_poses", "plan_assembly", "motion_tables", "motion_quantities"]
+__all__ = ["ACTIVE_WITHIN_M", "AssemblyMotion", "key_poses", "plan_assembly", "motion_tables", "motion_quantities",
+           "torque_table"]
 
 ACTIVE_WITHIN_M = 0.01  # a collision constraint is reported active within 1 cm
 
@@ -124,3 +127,34 @@ def motion_quantities(asm: Assembly, robot: DualArm, m: AssemblyMotion, weights:
         *((f"active within 1 cm: {name}", f"{1e3 * d:.1f} mm at {tm:.2f} s (within 1 cm {t0_:.2f}-{t1_:.2f} s)")
           for name, d, tm, t0_, t1_ in m.active),
     ]
+
+
+def torque_table(asm: Assembly, robot: DualArm, scene: Scene, m: AssemblyMotion) -> tuple[pd.DataFrame, list]:
+    """Joint torques by inverse dynamics with the panel held by both grippers (its mass and inertia from
+    the scene; :func:`capmap.dualarm.torques.held_torques`) at every node (the last at rest): one row per
+    node with ``tau_<joint>_nm`` (least-norm internal force), ``tau_best_<joint>_nm`` (the internal force
+    that minimises the peak |torque| / effort limit) and the panel's required force ``panel_force_n``;
+    and the summary's rows."""
+    xs, us, nq = m.sol.xs, m.sol.us, asm.model.nq
+    a = np.vstack([us, np.zeros((1, nq))])  # the final node: at rest, holding the panel
+    part = HeldPart(asm.task.panel, scene.panel.mass, np.zeros(3), np.diag(scene.panel.inertia))
+    effort = asm.model.effortLimit.copy()
+    ht = held_torques(asm.model, (asm.task.left, asm.task.right), part, xs[:, :nq], xs[:, nq:], a, effort)
+    k = np.arange(len(xs))
+    df = pd.DataFrame({"t_s": k * asm.task.dt, "node": k})
+    for c, j in enumerate(robot.joint_names):
+        df[f"tau_{j}_nm"] = ht.tau_least_norm_nm[:, c]
+    for c, j in enumerate(robot.joint_names):
+        df[f"tau_best_{j}_nm"] = ht.tau_nm[:, c]
+    df["panel_force_n"] = np.linalg.norm(ht.f_part[:, :3], axis=1)
+    ratio, best = np.abs(ht.tau_least_norm_nm) / effort, np.abs(ht.tau_nm) / effort
+    node, joint = np.unravel_index(int(ratio.argmax()), ratio.shape)
+    rows = [
+        ("panel mass [kg]", scene.panel.mass),
+        ("peak |torque| / effort limit, least-norm internal force [%]", 100 * float(ratio.max())),
+        ("joint at the peak (least-norm)", f"{robot.joint_names[joint]} at {node * asm.task.dt:.2f} s"),
+        ("peak |torque| / effort limit, best internal force [%]", 100 * float(best.max())),
+        ("within the effort limits (least-norm internal force)", bool(ratio.max() <= 1.0)),
+        ("max grasp-map residual [N, N m]", float(ht.residual.max())),
+    ]
+    return df, rows

@@ -8,7 +8,7 @@ of ``noise_m`` along each coordinate. Everything here is SI, in the robot's base
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -50,12 +50,15 @@ class Cylinder:
 @dataclass(frozen=True)
 class PanelSpec:
     """The held panel: size (3,) m along its x (thickness), y, z; hole positions (h, 2) panel-local
-    (y, z) m and radius; grasp points (2, 3) panel-local m of the left and right grippers."""
+    (y, z) m and radius; grasp points (2, 3) panel-local m of the left and right grippers; mass kg and
+    principal moments of inertia (3,) kg m^2 about its centre along its axes."""
 
     size: np.ndarray
     holes: np.ndarray
     hole_radius: float
     grasp: np.ndarray
+    mass: float = 0.0
+    inertia: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def corners(self) -> np.ndarray:
         """The face's four corners (4, 3) in the panel frame (its mid-plane x = 0), in order."""

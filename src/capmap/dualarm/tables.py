@@ -1,6 +1,6 @@
 """The dual-arm family's collision-model tables (column schemas, units in the names) and their
 readers: the fitted environment (swept triangles and capsules, each labelled with the nearest
-scene solid) and the robot's capsules with their coverage of the collision geometry."""
+scene solid) and the robot's capsules with their coverage of the visual and collision geometry."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 
 from capmap.dualarm.cloud import Envelope
-from capmap.dualarm.robot import DualArm, LinkCapsule
+from capmap.dualarm.robot import Covered, DualArm, LinkCapsule
 
 __all__ = ["envelope_table", "envelope_from", "capsule_table", "capsules_from"]
 
@@ -45,20 +45,26 @@ def envelope_from(df: pd.DataFrame) -> tuple[Envelope, tuple[np.ndarray, np.ndar
     return env, (tri.label.to_numpy(dtype=object), seg.label.to_numpy(dtype=object))
 
 
-def capsule_table(robot: DualArm, balls: dict[str, tuple[np.ndarray, np.ndarray]]) -> pd.DataFrame:
-    """One row per capsule: its segment a-b, radius and length [m], and how far the geometry it
-    covers (``balls``: centres (B, 3) m and radii (B,) m per capsule) sticks out of it,
-    ``max_excess_m`` (<= 0: covered)."""
+def capsule_table(robot: DualArm, covered: dict[str, Covered]) -> pd.DataFrame:
+    """One row per capsule: its segment a-b, radius and length [m], what it covers, and how far that
+    geometry sticks out of it: ``max_excess_m`` over the covered set (the robot file's ``cover``; <= 0:
+    covered), and per model ``visual_excess_m`` and ``collision_excess_m`` (NaN: none on this capsule)."""
     rows = []
+    cover = robot.description.cover
     for c in robot.capsules:
-        centres, radii = balls[c.name]
+        cov = covered[c.name]
         d = c.b - c.a
-        t = np.clip((centres - c.a) @ d / max(d @ d, 1e-300), 0, 1)
-        excess = float((np.linalg.norm(centres - c.a - np.outer(t, d), axis=1) + radii - c.r).max())
+        t = np.clip((cov.centres - c.a) @ d / max(d @ d, 1e-300), 0, 1)
+        excess = np.linalg.norm(cov.centres - c.a - np.outer(t, d), axis=1) + cov.radii - c.r
+        fit = np.isin(cov.source, cover)
+        per = {kind: float(excess[cov.source == kind].max()) if (cov.source == kind).any() else np.nan
+               for kind in ("visual", "collision")}
         rows.append({"name": c.name, "part": c.part, "order": c.order, "joint": c.joint,
                      **{f"a{x}_m": c.a[i] for i, x in enumerate("xyz")}, **{f"b{x}_m": c.b[i] for i, x in enumerate("xyz")},
-                     "radius_m": c.r, "length_m": float(np.linalg.norm(d)), "covered_balls": len(centres),
-                     "max_excess_m": excess})
+                     "radius_m": c.r, "length_m": float(np.linalg.norm(d)), "covered_balls": int(fit.sum()),
+                     "max_excess_m": float(excess[fit].max()),
+                     "visual_excess_m": per["visual"], "collision_excess_m": per["collision"],
+                     "covers": " ".join(cov.objects)})
     return pd.DataFrame(rows)
 
 

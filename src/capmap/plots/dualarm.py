@@ -1,5 +1,6 @@
 """Figures of the dual-arm assembly: task-constraint errors, safety distances, joints and their
-velocities against the limits, the solver's convergence, and the 3D animation."""
+velocities against the limits, the joint torques with the held panel against the effort limits, the
+solver's convergence, and the 3D animation."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import pandas as pd
 from capmap.plots.common import plt, save
 from capmap.plots.scene3d import cylinder, g, material, new_scene, write_html
 
-__all__ = ["constraint_errors", "distances", "joints", "convergence", "animation"]
+__all__ = ["constraint_errors", "distances", "joints", "torques", "convergence", "animation"]
 
 REQUIRED_M = 7e-7  # the paper's reported maximum closed-chain / path error
 
@@ -80,6 +81,36 @@ def joints(traj: pd.DataFrame, meta: dict, which: str, out_png: str | Path) -> N
         ax.set_xlabel("t [s]")
     fig.suptitle(f"Joint {'positions' if which == 'q' else 'velocities'} (left arm | right arm) and their limits "
                  "(red dotted)")
+    save(fig, out_png)
+
+
+def torques(tq: pd.DataFrame, meta: dict, t_pre: float, out_png: str | Path) -> None:
+    """Each joint's torque (least-norm internal force) in % of its effort limit, per arm, the limits
+    drawn; the peak with the best internal force in the title. ``meta``: the torques' provenance
+    (joints, effort_nm, panel_kg)."""
+    names, effort, panel_kg = meta["joints"], np.asarray(meta["effort_nm"]), meta["panel_kg"]
+    fig, axes = plt.subplots(2, 1, figsize=(11, 8), sharex=True)
+    peak_best = 0.0
+    for side, ax in zip(("left", "right"), axes):
+        cols = [c for c, n in enumerate(names) if n.startswith(side)]
+        for c in cols:
+            pct = 100 * tq[f"tau_{names[c]}_nm"] / effort[c]
+            ax.plot(tq.t_s, pct, lw=1.2, label=f"{names[c]} (limit {effort[c]:g} N m)")
+            peak_best = max(peak_best, float((100 * tq[f"tau_best_{names[c]}_nm"].abs() / effort[c]).max()))
+        for y in (-100, 100):
+            ax.axhline(y, color="tab:red", lw=1.2, ls="--")
+        ax.text(tq.t_s.iloc[0], 100, " effort limit", color="tab:red", va="bottom", fontsize=8)
+        ax.axvline(t_pre, color="0.5", lw=0.8, ls="--")
+        ax.set(ylabel=f"{side} arm: torque / effort limit [%]", ylim=(-115, 115))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, ncol=4, loc="upper right")
+    axes[-1].set_xlabel("t [s] (dashed grey: pre-insertion pose)")
+    ratio = np.array([[100 * abs(v) / effort[c] for v in tq[f"tau_{n}_nm"]] for c, n in enumerate(names)])
+    c, k = np.unravel_index(int(ratio.argmax()), ratio.shape)
+    over = ratio.max() > 100
+    fig.suptitle(f"Joint torques holding the {panel_kg:g} kg panel (inverse dynamics, least-norm internal force): "
+                 f"peak {ratio.max():.0f} % ({names[c]}, {tq.t_s.iloc[k]:.1f} s){' - EXCEEDS the limit' if over else ''}\n"
+                 f"the best internal force between the grippers brings the peak to {peak_best:.0f} %", fontsize=10)
     save(fig, out_png)
 
 

@@ -87,31 +87,44 @@ def _span(r: np.ndarray) -> str:
 
 
 def stage_dualarm_capsules(out: str, slice_json: str) -> None:
-    """A minimum-volume capsule per group of the robot's collision geometry; coverage checked."""
+    """A minimum-volume capsule per group over the robot's visual and/or collision geometry (the robot
+    file's ``cover``); coverage checked, the excess of a model left out reported."""
     sc = stage_config(slice_json)
     log = stage_logger(__name__, "dualarm capsules")
-    robot = _build(sc.run.dualarm.robot)
-    robot, balls = fit_capsules(robot)
-    df = capsule_table(robot, balls)
+    robot = _build(sc.run.dualarm.robot, sc.run.dualarm.scene)
+    try:
+        robot, covered = fit_capsules(robot)
+    except CapmapError as exc:
+        raise ConfigError(f"dualarm.robot = {sc.run.dualarm.robot!r}: {exc.in_terms(urdf='its URDF')}") from None
+    df = capsule_table(robot, covered)
     bad = df[df.max_excess_m > 1e-9]  # the first, in the capsules' order
     if len(bad):
         raise DataError(f"capsule {bad.name.iloc[0]} leaves its geometry uncovered by {bad.max_excess_m.iloc[0]:.3g} m")
-    datasets.write(df, out, datasets.provenance("dualarm_capsules", sc.doc, robot=robot.description.name))
-    log.info(f"{len(df)} capsules over {robot.description.name}'s collision geometry, every ball covered -> {out}")
+    cover = robot.description.cover
+    datasets.write(df, out, datasets.provenance("dualarm_capsules", sc.doc, robot=robot.description.name,
+                                                 cover=" ".join(cover)))
+    log.info(f"{len(df)} capsules over {robot.description.name}'s {' and '.join(cover)} geometry, every part covered "
+             f"(largest excess {1e3 * df.max_excess_m.max():.2g} mm) -> {out}")
+    for kind in ("visual", "collision"):
+        worst = df[f"{kind}_excess_m"].max()
+        if kind not in cover and worst > 0:
+            log.warning(f"the capsules leave the {kind} geometry uncovered by up to {1e3 * worst:.1f} mm "
+                        f"({df.name[df[f'{kind}_excess_m'].idxmax()]}): cover: {list(cover)} in {sc.run.dualarm.robot}")
 
 
-def _build(robot_file: str) -> DualArm:
+def _build(robot_file: str, scene_file: str) -> DualArm:
+    """The robot of ``robot_file``, its fingers closed on the thickness of the panel of ``scene_file``."""
     try:
-        return build_dual_arm(load_dual_arm_file(robot_file))
+        return build_dual_arm(load_dual_arm_file(robot_file), float(load_scene(scene_file).panel.size[0]))
     except ConfigError:
         raise
     except CapmapError as exc:
         raise ConfigError(f"dualarm.robot = {robot_file!r}: {exc.in_terms(urdf='its URDF')}") from None
 
 
-def robot_from(robot_file: str, capsules: pd.DataFrame) -> DualArm:
-    """The robot with its capsules read back from their dataset."""
-    robot = _build(robot_file)
+def robot_from(robot_file: str, scene_file: str, capsules: pd.DataFrame) -> DualArm:
+    """The robot (fingers closed on the scene's panel) with its capsules read back from their dataset."""
+    robot = _build(robot_file, scene_file)
     caps = capsules_from(capsules)
     return DualArm(robot.description, robot.model, robot.geometry, robot.gripper_frames, robot.q_lower, robot.q_upper,
-                   robot.v_max, caps)
+                   robot.v_max, caps, robot.visual)

@@ -15,6 +15,7 @@ from capmap.plots.dualarm import (
     convergence,
     distances,
     joints,
+    torques,
 )
 from capmap.stages.common import stage_config
 from capmap.stages.dualarm_solve import setup
@@ -22,18 +23,22 @@ from capmap.stages.dualarm_solve import setup
 __all__ = ["stage_dualarm_plots", "stage_dualarm_animation"]
 
 
-def stage_dualarm_plots(trajectory: str, fine: str, outer: str, out_errors: str, out_distances: str, out_joints: str,
-                        out_velocities: str, out_convergence: str) -> None:
-    """Constraint errors, safety distances, joints and velocities vs their limits, convergence."""
+def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: str, out_errors: str, out_distances: str,
+                        out_joints: str, out_velocities: str, out_torques: str, out_convergence: str) -> None:
+    """Constraint errors, safety distances, joints and velocities vs their limits, torques vs the
+    effort limits, convergence."""
     traj, fine_df, outer_df = datasets.read(trajectory), datasets.read(fine), datasets.read(outer)
+    tq = datasets.read(torques_file)
     meta = traj.attrs["capmap"]
     constraint_errors(traj, out_errors)
     distances(traj, fine_df, meta["margin_m"], meta["active"], out_distances)
     joints(traj, meta, "q", out_joints)
     joints(traj, meta, "qd", out_velocities)
+    t_pre = float(traj.t_s[traj.phase == "pre_insertion"].iloc[0])
+    torques(tq, tq.attrs["capmap"], t_pre, out_torques)
     convergence(outer_df, out_convergence)
     stage_logger(__name__, "dualarm plots").info(f"-> {out_errors}, {out_distances}, {out_joints}, {out_velocities}, "
-                                                 f"{out_convergence}")
+                                                 f"{out_torques}, {out_convergence}")
 
 
 def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, out_html: str, slice_json: str) -> None:

@@ -14,7 +14,7 @@ from capmap.config.dualarm import DualArmConfig, Horizon
 from capmap.config.scene_file import load_scene
 from capmap.dualarm.assembly import assemble, warm_start
 from capmap.dualarm.evaluate import node_errors
-from capmap.dualarm.motion import motion_quantities, motion_tables, plan_assembly
+from capmap.dualarm.motion import motion_quantities, motion_tables, plan_assembly, torque_table
 from capmap.dualarm.settings import Weights
 from capmap.dualarm.solver import equality_cost, initial_guess, solve, solve_csqp
 from capmap.dualarm.tables import envelope_from
@@ -30,16 +30,17 @@ __all__ = ["setup", "stage_dualarm_optimise", "stage_dualarm_check"]
 
 def setup(da: DualArmConfig, environment: str, capsules: str, h: Horizon):
     """(robot, assembly) of a dual-arm job on horizon ``h``: ``da`` names the robot and scene files."""
-    robot = robot_from(da.robot, datasets.read(capsules))
+    robot = robot_from(da.robot, da.scene, datasets.read(capsules))
     env, labels = envelope_from(datasets.read(environment))
     return robot, assemble(robot, load_scene(da.scene), env, labels, h.nodes, h.dt_s, h.pre_insertion_node)
 
 
 def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str, out_fine: str, out_outer: str,
-                           out_csv: str, out_md: str, slice_json: str) -> None:
+                           out_torques: str, out_csv: str, out_md: str, slice_json: str) -> None:
     """The satellite-panel assembly by augmented-Lagrangian DDP, then checked on a finer grid
-    (:func:`capmap.dualarm.motion.plan_assembly`); the start within the joint limits is checked
-    before any job."""
+    (:func:`capmap.dualarm.motion.plan_assembly`) and by inverse dynamics with the held panel against
+    the effort limits (:func:`capmap.dualarm.motion.torque_table`); the start within the joint limits
+    is checked before any job."""
     sc = stage_config(slice_json)
     da = sc.run.dualarm
     log = stage_logger(__name__, "dualarm optimise")
@@ -50,6 +51,7 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
         raise ConfigError(exc.in_terms(scene=f"dualarm.scene = {da.scene!r}")) from None
     traj, fine_df, outer = motion_tables(asm, robot, m)
     sol, err = m.sol, m.errors
+    torques, torque_rows = torque_table(asm, robot, load_scene(da.scene), m)
     prov = datasets.provenance("dualarm_optimise", sc.doc, converged=sol.converged, message=sol.message,
                                joints=list(robot.joint_names), q_lower=robot.q_lower.tolist(),
                                q_upper=robot.q_upper.tolist(), v_max=robot.v_max.tolist(), margin_m=da.weights.margin_m,
@@ -57,12 +59,24 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
     datasets.write(traj, out_trajectory, prov)
     datasets.write(fine_df, out_fine, prov)
     datasets.write(outer, out_outer, prov)
-    write_quantities(motion_quantities(asm, robot, m, da.weights), out_csv, out_md)
+    datasets.write(torques, out_torques, datasets.provenance(
+        "dualarm_optimise", sc.doc, joints=list(robot.joint_names), effort_nm=asm.model.effortLimit.tolist(),
+        panel_kg=load_scene(da.scene).panel.mass))
+    write_quantities(motion_quantities(asm, robot, m, da.weights) + torque_rows, out_csv, out_md)
     log.info(f"{'converged' if sol.converged else 'NOT converged: ' + sol.message}; {len(sol.stats)} outer / "
              f"{int(outer.inner_iterations.sum())} FDDP iterations in {m.solve_s:.1f} s; closed chain "
              f"{err.closed_chain_pos.max():.1e} m; path {err.path_pos.max():.1e} m; min distance "
              f"{1e3 * m.fine.min_distance.min():.2f} mm on the finer grid; active: "
              f"{', '.join(a[0] for a in m.active) or 'none'}")
+    peak = dict(torque_rows)
+    line = (f"joint torques with the {load_scene(da.scene).panel.mass:g} kg panel: peak "
+            f"{peak['peak |torque| / effort limit, least-norm internal force [%]']:.0f} % of the effort limit "
+            f"({peak['joint at the peak (least-norm)']}), {peak['peak |torque| / effort limit, best internal force [%]']:.0f} % "
+            "with the best internal force")
+    if peak["within the effort limits (least-norm internal force)"]:
+        log.info(line)
+    else:
+        log.warning(line + ": the motion EXCEEDS the effort limits (torque limits are not in the optimisation)")
 
 
 def stage_dualarm_check(environment: str, capsules: str, out_csv: str, out_md: str, slice_json: str) -> None:

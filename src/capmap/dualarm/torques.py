@@ -1,0 +1,115 @@
+"""Joint torques of a dual-arm motion that holds a rigid part in both grippers: inverse dynamics with
+the part's inertia and weight and the internal force of the closed chain.
+
+At each node, with the arms' q, v, a (the optimiser's input is the acceleration; the held part's
+weight and the internal force are not in its model, so the torques are checked here, afterwards):
+
+1. the part's motion from the left arm (the closed chain holds to ~1e-8 m): its spatial velocity v_P
+   and acceleration a_P in its own frame, and the wrench the grippers must apply to it,
+   f_P = I (a_P - g_P) + v_P x* (I v_P)  (g_P: gravity as a base acceleration, in the part's frame);
+2. the grippers' wrenches W = [w_L; w_R] (each the wrench a gripper applies to the part, in the
+   gripper's frame) satisfy the grasp map G W = f_P, G = [X_L*, X_R*] (the dual action matrices
+   that carry a wrench from a gripper's frame to the part's): six equations for twelve unknowns,
+   the other six the internal (squeezing and twisting) wrench of the closed chain;
+3. joint torques tau = RNEA(q, v, a) + J_L' w_L + J_R' w_R (frame Jacobians in the grippers' own
+   frames: the part pushes back on each gripper with -w).
+
+The internal wrench is the one a torque-sharing controller would apply: W = W_0 + N z with W_0 =
+G^+ f_P (the least-norm distribution) and N a basis of G's null space, z minimising the largest
+torque relative to its limit, max_j |tau_j| / limit_j (a linear programme in z and the bound: the
+smallest peak any internal wrench allows at that node). The least-norm distribution's torques are
+returned as well (what a controller that ignores the internal force would see)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.optimize import linprog
+
+__all__ = ["HeldPart", "HeldTorques", "held_torques", "part_wrench"]
+
+
+@dataclass(frozen=True)
+class HeldPart:
+    """The held part: its frame id in the model, mass kg, centre of mass (3,) m and inertia (3, 3)
+    kg m^2 about it, both in the part's frame."""
+
+    frame: int
+    mass_kg: float
+    com_m: np.ndarray
+    inertia_kgm2: np.ndarray
+
+    def inertia(self) -> pin.Inertia:
+        return pin.Inertia(self.mass_kg, np.asarray(self.com_m, float), np.asarray(self.inertia_kgm2, float))
+
+
+@dataclass(frozen=True)
+class HeldTorques:
+    """Per node (K nodes, nv joints): tau_nm (K, nv) with the peak-minimising internal wrench and
+    tau_least_norm_nm (K, nv) with the least-norm one; the grippers' wrenches on the part w_left,
+    w_right (K, 6) [force N; moment N m] in their frames; the part's required wrench f_part (K, 6)
+    in its frame; the grasp-map residual |G W - f_P| (K,)."""
+
+    tau_nm: np.ndarray
+    tau_least_norm_nm: np.ndarray
+    w_left: np.ndarray
+    w_right: np.ndarray
+    f_part: np.ndarray
+    residual: np.ndarray
+
+
+def part_wrench(model: pin.Model, data: pin.Data, part: HeldPart) -> np.ndarray:
+    """The wrench (6,) [f; n] in the part's frame that moves it as the model's kinematics (already
+    computed with q, v, a: :func:`pinocchio.forwardKinematics`) say, against gravity."""
+    vP = pin.getFrameVelocity(model, data, part.frame, pin.ReferenceFrame.LOCAL)
+    aP = pin.getFrameAcceleration(model, data, part.frame, pin.ReferenceFrame.LOCAL)
+    R = data.oMf[part.frame].rotation
+    a = aP - pin.Motion(R.T @ model.gravity.linear, np.zeros(3))
+    inertia = part.inertia()
+    return (inertia * a + vP.cross(inertia * vP)).vector
+
+
+def _minimax(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """z minimising max |A z + b| (A (n, m), b (n,)): the linear programme min t s.t. -t <= A z + b <= t
+    (HiGHS); z = 0 if it fails (the least-norm distribution)."""
+    n, m = A.shape
+    c = np.zeros(m + 1)
+    c[-1] = 1.0
+    ones = np.ones((n, 1))
+    res = linprog(c, A_ub=np.block([[A, -ones], [-A, -ones]]), b_ub=np.concatenate([-b, b]),
+                  bounds=[(None, None)] * m + [(0, None)], method="highs")
+    return res.x[:m] if res.status == 0 else np.zeros(m)
+
+
+def held_torques(model: pin.Model, grippers: tuple[int, int], part: HeldPart, q: np.ndarray, v: np.ndarray,
+                 a: np.ndarray, effort_nm: np.ndarray) -> HeldTorques:
+    """Joint torques (see the module docstring) of K nodes q, v, a (K, nv) rad, rad/s, rad/s^2;
+    ``grippers``: the left and right gripper frame ids; ``effort_nm`` (nv,) the limits that weight
+    the internal wrench's choice."""
+    q, v, a = (np.atleast_2d(x) for x in (q, v, a))
+    K, nv = v.shape
+    data = model.createData()
+    D = 1.0 / np.asarray(effort_nm, float)
+    out = {k: np.zeros((K, nv)) for k in ("tau", "tau0")}
+    wl, wr, fp, res = np.zeros((K, 6)), np.zeros((K, 6)), np.zeros((K, 6)), np.zeros(K)
+    for k in range(K):
+        pin.forwardKinematics(model, data, q[k], v[k], a[k])
+        pin.updateFramePlacements(model, data)
+        pin.computeJointJacobians(model, data, q[k])
+        tau0 = pin.rnea(model, data, q[k], v[k], a[k]).copy()
+        f = part_wrench(model, data, part)
+        oMp = data.oMf[part.frame]
+        G = np.hstack([oMp.actInv(data.oMf[g]).toDualActionMatrix() for g in grippers])  # (6, 12)
+        JT = np.hstack([pin.getFrameJacobian(model, data, g, pin.ReferenceFrame.LOCAL).T for g in grippers])  # (nv, 12)
+        U, s, Vt = np.linalg.svd(G)
+        W0 = Vt[:6].T @ ((U.T @ f) / s)  # least norm: G has full row rank (the grippers are distinct frames)
+        N = Vt[6:].T  # (12, 6) the internal wrenches
+        base = tau0 + JT @ W0
+        W = W0 + N @ _minimax(D[:, None] * (JT @ N), D * base)
+        out["tau"][k] = tau0 + JT @ W
+        out["tau0"][k] = base
+        wl[k], wr[k], fp[k] = W[:6], W[6:], f
+        res[k] = float(np.linalg.norm(G @ W - f))
+    return HeldTorques(out["tau"], out["tau0"], wl, wr, fp, res)

@@ -1,0 +1,133 @@
+"""Joint torques of the held panel (capmap.dualarm.torques) against independent computations: the
+panel's wrench against the finite-difference rate of its momentum, the torques against a second
+formulation (the panel's inertia appended to the left arm, the right gripper's wrench as an external
+force, Pinocchio's own RNEA), the least-norm distribution against numpy's minimum-norm solution, and the
+peak-minimising one against random internal wrenches."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from capmap.dualarm.torques import HeldPart, held_torques, part_wrench
+
+
+@pytest.fixture(scope="module")
+def setting(make_assembly, scene):
+    asm = make_assembly(nodes=20, dt=0.05, pre=14)
+    rng = np.random.default_rng(3)
+    nv = asm.model.nv
+    K = 6
+    q = asm.q_start + rng.uniform(-0.3, 0.3, (K, nv))
+    v = rng.uniform(-0.8, 0.8, (K, nv))
+    a = rng.uniform(-2.0, 2.0, (K, nv))
+    com = np.array([0.002, -0.01, 0.015])  # off-centre, so that every inertia term matters
+    Ic = np.diag(scene.panel.inertia) + np.array([[0, 0.001, 0], [0.001, 0, -0.002], [0, -0.002, 0]])
+    part = HeldPart(asm.task.panel, scene.panel.mass, com, Ic)
+    return asm, part, q, v, a
+
+
+def test_part_wrench_is_the_rate_of_its_momentum(setting):
+    """f (world, about the origin) = d/dt (the panel's spatial momentum, world) - m g: central differences
+    along q(t) = q + v t + a t^2 / 2."""
+    asm, part, q, v, a = setting
+    model, data = asm.model, asm.model.createData()
+    inertia = part.inertia()
+
+    def momentum(t, k):
+        qt = pin.integrate(model, q[k], v[k] * t + 0.5 * a[k] * t * t)
+        vt = v[k] + a[k] * t
+        pin.forwardKinematics(model, data, qt, vt)
+        pin.updateFramePlacements(model, data)
+        vP = pin.getFrameVelocity(model, data, part.frame, pin.ReferenceFrame.LOCAL)
+        return data.oMf[part.frame].act(inertia * vP).vector
+
+    h = 1e-5
+    for k in range(len(q)):
+        pin.forwardKinematics(model, data, q[k], v[k], a[k])
+        pin.updateFramePlacements(model, data)
+        f_local = pin.Force(part_wrench(model, data, part))
+        oMp = data.oMf[part.frame].copy()
+        f_world = oMp.act(f_local).vector
+        rate = (momentum(h, k) - momentum(-h, k)) / (2 * h)
+        weight = pin.Force(model.gravity.linear * part.mass_kg, np.zeros(3))  # at the com, world axes
+        weight_at_origin = pin.SE3(np.eye(3), oMp.act(part.com_m)).act(weight).vector
+        expected = rate - weight_at_origin
+        # central differences: O(h^2) truncation (~1e-8 here) and eps |h| / h rounding (~1e-10)
+        assert np.allclose(f_world, expected, atol=1e-7 * (1 + np.abs(expected).max())), (k, f_world, expected)
+
+
+def _appended(asm, part):
+    """The model with the panel's inertia on the left gripper's joint (rigidly held by the left arm)."""
+    model = asm.model.copy()
+    fr = model.frames[part.frame]
+    model.inertias[fr.parentJoint] = model.inertias[fr.parentJoint] + fr.placement.act(part.inertia())
+    return model
+
+
+def test_torques_equal_the_appended_body_formulation(setting):
+    """Panel on the left arm's last body, the right gripper's wrench on the panel w_R as external forces
+    (+w_R on the panel, -w_R on the right gripper): Pinocchio's RNEA gives the same torques (the left
+    gripper's wrench then follows from the panel's motion alone)."""
+    asm, part, q, v, a = setting
+    model = asm.model
+    effort = model.effortLimit.copy()
+    out = held_torques(model, (asm.task.left, asm.task.right), part, q, v, a, effort)
+    m2 = _appended(asm, part)
+    d2 = m2.createData()
+    fr = m2.frames[asm.task.right]
+    for k in range(len(q)):
+        pin.framesForwardKinematics(m2, d2, q[k])
+        jl = m2.frames[part.frame].parentJoint
+        fext = [pin.Force.Zero() for _ in range(m2.njoints)]
+        fext[fr.parentJoint] = fr.placement.act(pin.Force(-out.w_right[k]))  # the panel pushes the right gripper
+        fext[jl] = d2.oMi[jl].actInv(d2.oMf[asm.task.right]).act(pin.Force(out.w_right[k]))  # and is pushed by it
+        ref = pin.rnea(m2, d2, q[k], v[k], a[k], fext)
+        assert np.allclose(out.tau_nm[k], ref, atol=1e-9 * (1 + np.abs(ref).max())), (k, out.tau_nm[k] - ref)
+    assert out.residual.max() < 1e-9 * (1 + np.abs(out.f_part).max())
+
+
+def test_least_norm_distribution_is_numpys_minimum_norm_solution(setting):
+    asm, part, q, v, a = setting
+    model = asm.model
+    data = model.createData()
+    out = held_torques(model, (asm.task.left, asm.task.right), part, q, v, a, model.effortLimit)
+    for k in range(len(q)):
+        pin.forwardKinematics(model, data, q[k], v[k], a[k])
+        pin.updateFramePlacements(model, data)
+        pin.computeJointJacobians(model, data, q[k])
+        oMp = data.oMf[part.frame]
+        G = np.hstack([oMp.actInv(data.oMf[g]).toDualActionMatrix() for g in (asm.task.left, asm.task.right)])
+        W0 = np.linalg.lstsq(G, part_wrench(model, data, part), rcond=None)[0]
+        JT = np.hstack([pin.getFrameJacobian(model, data, g, pin.ReferenceFrame.LOCAL).T
+                        for g in (asm.task.left, asm.task.right)])
+        ref = pin.rnea(model, data, q[k], v[k], a[k]) + JT @ W0
+        assert np.allclose(out.tau_least_norm_nm[k], ref, atol=1e-9 * (1 + np.abs(ref).max()))
+
+
+def test_peak_minimising_distribution_beats_random_internal_wrenches(setting):
+    """No internal wrench (null-space direction of the grasp map) tried at random gives a smaller peak of
+    |tau| / limit than the linear programme's, and the least-norm one is never better."""
+    asm, part, q, v, a = setting
+    model = asm.model
+    data = model.createData()
+    effort = model.effortLimit
+    out = held_torques(model, (asm.task.left, asm.task.right), part, q, v, a, effort)
+    rng = np.random.default_rng(5)
+    for k in range(len(q)):
+        pin.forwardKinematics(model, data, q[k], v[k], a[k])
+        pin.updateFramePlacements(model, data)
+        pin.computeJointJacobians(model, data, q[k])
+        oMp = data.oMf[part.frame]
+        G = np.hstack([oMp.actInv(data.oMf[g]).toDualActionMatrix() for g in (asm.task.left, asm.task.right)])
+        N = np.linalg.svd(G)[2][6:].T
+        JT = np.hstack([pin.getFrameJacobian(model, data, g, pin.ReferenceFrame.LOCAL).T
+                        for g in (asm.task.left, asm.task.right)])
+        best = np.abs(out.tau_nm[k] / effort).max()
+        assert best <= np.abs(out.tau_least_norm_nm[k] / effort).max() + 1e-9
+        W = np.concatenate([out.w_left[k], out.w_right[k]])
+        for scale in (1e-3, 1e-1, 10.0):
+            trial = out.tau_nm[k][None, :] + (JT @ N @ rng.normal(0, scale, (6, 200))).T
+            assert (np.abs(trial / effort).max(axis=1) >= best - 1e-7).all()
+        assert np.allclose(G @ W, out.f_part[k], atol=1e-9 * (1 + np.abs(out.f_part[k]).max()))
