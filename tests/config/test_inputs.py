@@ -20,11 +20,11 @@ def test_what_the_check_accepts_the_job_reads(tmp_path):
                        ("crlf.csv", b"x_m,y_m,z_m\r\n0,0,1\r\n")):
         path = _write(tmp_path, name, data)
         check_cloud_file(path)
-        assert _read_cloud(path).tolist() == [[0.0, 0.0, 1.0]]
+        assert _read_cloud(path, 1)[0].tolist() == [[0.0, 0.0, 1.0]]
     upper = str(tmp_path / "scan.PARQUET")
     pd.DataFrame({"x_m": [0.0], "y_m": [0.0], "z_m": [1.0]}).to_parquet(upper)
     check_cloud_file(upper)
-    assert _read_cloud(upper).tolist() == [[0.0, 0.0, 1.0]]
+    assert _read_cloud(upper, 1)[0].tolist() == [[0.0, 0.0, 1.0]]
 
 
 def test_what_the_job_could_not_read_is_refused_by_the_check(tmp_path):
@@ -32,4 +32,4 @@ def test_what_the_job_could_not_read_is_refused_by_the_check(tmp_path):
     with pytest.raises(ConfigError, match="no column y_m"):
         check_cloud_file(path)
     with pytest.raises(ConfigError, match="no column y_m"):
-        _read_cloud(path)
+        _read_cloud(path, 1)

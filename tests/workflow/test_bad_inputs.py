@@ -27,6 +27,8 @@ NAN, INF = math.nan, math.inf
 _TASK = {"name": "t", "start_m": [0.379, 4.8432, 1.8878], "goal_m": [2.625, 1.875, 4.875], "payload_kg": 100,
          "q_start_deg": [100, 0, 0, 0, 0, 0, 0]}
 
+ONE_VIEW = [[0, 0, 1]]  # a user cloud's viewpoints
+
 CONFIG_CASES = [
     ({"limts": 3}, "unknown key limts"),
     ({"tasks": [{**_TASK, "start_m": [30, 0, 0]}]}, "tasks[0] (t).start_m = [30, 0, 0] is not reachable"),
@@ -62,7 +64,10 @@ CONFIG_CASES = [
     ({"reconfig.configuration_deg.arm1": [0, 0, 0, 0, 0, 0]}, "reconfig.configuration_deg does not close capture"),
     ({"reconfig.joint_rate_limit_deg_s": [1, 2]}, "reconfig.joint_rate_limit_deg_s has 2 values; give one or 10"),
     ({"dualarm.horizon.pre_insertion_node": 100}, "dualarm.horizon.pre_insertion_node = 100 must lie between 0 and"),
-    ({"dualarm.cloud.file": "scan.csv"}, "dualarm.cloud: give either file or a synthetic scan"),
+    ({"dualarm.cloud.file": "scan.csv"}, "dualarm.cloud: give either file (and the viewpoints_m"),
+    ({"dualarm.cloud": {"file": "scan.csv"}}, "dualarm.cloud.viewpoints_m is required with dualarm.cloud.file"),
+    ({"dualarm.unknown.work_volume_m.x_m": [1.0, 0.0]}, "dualarm.unknown.work_volume_m"),
+    ({"dualarm.unknown.voxel_m": 1e-4}, "dualarm.unknown.voxel_m: a carving grid"),
     ({"dualarm.weights.mass": 1}, "unknown key"),
     ({"dualarm.scene": "nowhere.yaml"}, "nowhere.yaml"),
     # numbers that are not numbers
@@ -126,9 +131,9 @@ NEW_CONFIG_CASES = [
     ({"dualarm.check.nodes": 10_000_000}, "dualarm.check.nodes: an optimal control problem"),
     ({"dualarm.fine_factor": 1_000_000}, "dualarm.fine_factor: the re-check"),
     ({"dualarm.cloud.spacing_m": 1e-5}, "dualarm.cloud.spacing_m: a synthetic scan"),
-    ({"dualarm.cloud": {"file": "missing.csv"}}, "dualarm.cloud.file = missing.csv: no such file"),
-    ({"dualarm.cloud": {"file": "/etc/shadow"}}, "dualarm.cloud.file = /etc/shadow: not a cloud file"),
-    ({"dualarm.cloud": {"file": "/dev/null.csv"}}, "dualarm.cloud.file = /dev/null.csv: no such file"),
+    ({"dualarm.cloud": {"file": "missing.csv", "viewpoints_m": ONE_VIEW}}, "dualarm.cloud.file = missing.csv: no such file"),
+    ({"dualarm.cloud": {"file": "/etc/shadow", "viewpoints_m": ONE_VIEW}}, "dualarm.cloud.file = /etc/shadow: not a cloud file"),
+    ({"dualarm.cloud": {"file": "/dev/null.csv", "viewpoints_m": ONE_VIEW}}, "dualarm.cloud.file = /dev/null.csv: no such file"),
     ({"dualarm.scene": "/dev/zero"}, "/dev/zero: is a character device"),
     ({"robot": "/dev/zero"}, "/dev/zero: is a character device"),
     ({"follow.ground.robot": "/etc"}, "/etc: is a directory"),
@@ -288,7 +293,8 @@ def _jobs(tmp_path: Path) -> list[tuple[Path, str, str | None, str]]:
         jobs.append((config_file(tmp_path, robot=robot), expect, Path(robot).name, f"robot file {Path(robot).name}"))
     for make, expect in CLOUD_CASES:
         cloud = make(tmp_path)
-        jobs.append((config_file(tmp_path, **{"dualarm.cloud": {"file": cloud}}), expect, "dualarm.cloud.file",
+        jobs.append((config_file(tmp_path, **{"dualarm.cloud": {"file": cloud, "viewpoints_m": [[0, 0, 1]]}}), expect,
+                     "dualarm.cloud.file",
                      f"cloud file {Path(cloud).name}"))
     assert len(NEW_CONFIG_CASES) + len(NEW_ROBOT_CASES) + len(CLOUD_CASES) >= 40
     assert len(jobs) >= 100

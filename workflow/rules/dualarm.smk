@@ -35,6 +35,23 @@ rule dualarm_envelope:
         "../scripts/dualarm_envelope.py"
 
 
+rule dualarm_unknown:
+    """The space no viewpoint observed inside the work volume (occupied, as boxes)."""
+    input:
+        cloud=out("dualarm/cloud.parquet"),
+        environment=out("dualarm/environment.parquet"),
+    output:
+        out("dualarm/unknown.parquet"),
+    params:
+        slice=lambda w: params("dualarm_unknown", "dualarm_unknown"),
+    log:
+        out("logs/dualarm/unknown.log"),
+    conda:
+        "../envs/capmap.yaml"
+    script:
+        "../scripts/dualarm_unknown.py"
+
+
 rule dualarm_capsules:
     """Minimum-volume capsules over the robot's visual and collision geometry, fingers closed on the
     scene's panel (coverage checked)."""
@@ -53,10 +70,11 @@ rule dualarm_capsules:
 
 
 rule dualarm_optimise:
-    """Augmented-Lagrangian DDP of the panel assembly; errors and safety on a finer grid; joint torques
-    with the held panel by inverse dynamics."""
+    """Augmented-Lagrangian DDP of the panel assembly; errors and safety on a finer grid (against the
+    unknown space too); joint torques with the held panel by inverse dynamics."""
     input:
         environment=out("dualarm/environment.parquet"),
+        unknown=out("dualarm/unknown.parquet"),
         capsules=out("dualarm/robot_capsules.parquet"),
         files=dualarm_files("scene", "robot"),
     output:

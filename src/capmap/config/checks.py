@@ -257,13 +257,17 @@ def check_dualarm(cfg: RunConfig, source: str = "config") -> None:
 def _dualarm_sizes(da, scene) -> None:
     """The user's cloud file readable; the horizons, the re-check grid and the synthetic scan fit."""
     if da.cloud_file is not None:
-        check_cloud_file(da.cloud_file)
+        check_cloud_file(da.cloud_file, viewpoints=len(da.scan.viewpoints))
+    u = da.unknown
+    n_vox = float(np.prod(np.ceil((u.work_upper - u.work_lower) / u.voxel_m)))
+    check_steps(n_vox, "dualarm.unknown.voxel_m", f"a carving grid of {n_vox:.3g} voxels of {u.voxel_m:g} m over "
+                "dualarm.unknown.work_volume_m", "raise")
     for key, h in (("dualarm.horizon.nodes", da.horizon), ("dualarm.check.nodes", da.check.horizon)):
         check_steps(h.nodes * 100, key, f"an optimal control problem of {h.nodes:,} nodes (~100 steps of work each)",
                     "lower")
     check_steps(da.horizon.nodes * da.fine_factor, "dualarm.fine_factor",
                 f"the re-check on a {da.fine_factor}x finer grid of {da.horizon.nodes:,} nodes", "lower")
-    if da.scan is not None:
+    if da.cloud_file is None:
         coarse = 0.05  # points scale with 1 / spacing^2: count them at a coarse spacing
         n = len(surface_points(scene, coarse)[0]) * (coarse / min(da.scan.spacing_m, coarse)) ** 2
         check_steps(n, "dualarm.cloud.spacing_m", f"a synthetic scan at dualarm.cloud.spacing_m = {da.scan.spacing_m:g} m "

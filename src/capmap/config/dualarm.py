@@ -21,9 +21,11 @@ from capmap.dualarm.cloud import FitSettings
 from capmap.dualarm.robot import CapsuleGroup, DualArmDescription
 from capmap.dualarm.scene import ScanSettings
 from capmap.dualarm.settings import ALSettings, Weights
+from capmap.dualarm.unknown import UnknownSettings
 from capmap.errors import ConfigError
 
 __all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "CheckSettings",
+           "unknown_settings",
            "check_settings",
            "weights"]
 
@@ -61,7 +63,7 @@ class DualArmConfig:
     robot: str = field(metadata=FILE)
     scene: str = field(metadata=FILE)
     cloud_file: str | None = field(metadata=FILE)
-    scan: ScanSettings | None
+    scan: ScanSettings | None  # a user's cloud: its viewpoints here too (spacing and noise unused)
     scan_seed: int
     fit: FitSettings
     fit_seed: int
@@ -69,6 +71,7 @@ class DualArmConfig:
     weights: Weights
     solver: ALSettings
     check: CheckSettings
+    unknown: UnknownSettings
     fine_factor: int = 5  # the defaults of dualarm.fine_factor and dualarm.animation_fps
     animation_fps: float = 25.0
 
@@ -79,25 +82,40 @@ class DualArmConfig:
         fit, fit_seed = fit_settings(d)
         return cls(robot=d["robot"], scene=d["scene"], cloud_file=cloud_file, scan=scan, scan_seed=scan_seed, fit=fit,
                    fit_seed=fit_seed, horizon=horizon(d), weights=weights(d), solver=ALSettings(**d["solver"]),
-                   check=check_settings(d), **{k: d[k] for k in ("fine_factor", "animation_fps") if k in d})
+                   check=check_settings(d), unknown=unknown_settings(d),
+                   **{k: d[k] for k in ("fine_factor", "animation_fps") if k in d})
 
 
 # --------------------------------------------------------------------------- the section's pieces (from the YAML)
 
 
 def cloud_source(d: dict) -> tuple[str | None, ScanSettings | None, int]:
-    """``dualarm.cloud``: (the user's file, None, 0) or (None, the scan's settings, its seed)."""
+    """``dualarm.cloud``: (the user's file, its viewpoints (spacing and noise 0), 0) or (None, the scan's
+    settings, its seed)."""
     cloud = d["cloud"]
     if "file" in cloud:
-        if len(cloud) > 1:
-            raise ConfigError(f"dualarm.cloud: give either file or a synthetic scan (viewpoints_m, spacing_m, noise_m, "
-                              f"seed), not both (found {sorted(cloud)})")
-        return cloud["file"], None, 0
+        extra = sorted(set(cloud) - {"file", "viewpoints_m"})
+        if extra:
+            raise ConfigError(f"dualarm.cloud: give either file (and the viewpoints_m it was taken from) or a synthetic "
+                              f"scan (viewpoints_m, spacing_m, noise_m, seed), not both (found {extra[0]} with file)")
+        if "viewpoints_m" not in cloud:
+            raise ConfigError("dualarm.cloud.viewpoints_m is required with dualarm.cloud.file: the cameras' positions "
+                              "tell observed free space from space no camera saw (which is taken as occupied)")
+        return cloud["file"], ScanSettings(np.asarray(cloud["viewpoints_m"], float), 0.0, 0.0), 0
     missing = [k for k in ("viewpoints_m", "spacing_m", "noise_m", "seed") if k not in cloud]
     if missing:
         raise ConfigError(f"dualarm.cloud.{missing[0]} is required for a synthetic scan (or give dualarm.cloud.file)")
     scan = ScanSettings(np.asarray(cloud["viewpoints_m"], float), float(cloud["spacing_m"]), float(cloud["noise_m"]))
     return None, scan, int(cloud["seed"])
+
+
+def unknown_settings(d: dict) -> UnknownSettings:
+    """``dualarm.unknown``."""
+    u = d["unknown"]
+    box = np.array([u["work_volume_m"][ax] for ax in ("x_m", "y_m", "z_m")], dtype=float)
+    if not (box[:, 0] < box[:, 1]).all():
+        raise ConfigError(f"dualarm.unknown.work_volume_m = {u['work_volume_m']}: each lower bound must be < its upper")
+    return UnknownSettings(box[:, 0], box[:, 1], **{k: float(u[k]) for k in ("voxel_m", "near_m") if k in u})
 
 
 def fit_settings(d: dict) -> tuple[FitSettings, int]:

@@ -34,9 +34,11 @@ def _regular(path: str, key: str, limit: int) -> os.stat_result:
     return st
 
 
-def check_cloud_file(path: str, key: str = "dualarm.cloud.file", limit: int = MAX_CLOUD_BYTES) -> None:
+def check_cloud_file(path: str, key: str = "dualarm.cloud.file", limit: int = MAX_CLOUD_BYTES,
+                     viewpoints: int = 1) -> None:
     """A cloud file (CSV with a header line, or Parquet) that exists, is a regular readable file of
-    at most ``limit`` bytes and has the columns x_m, y_m, z_m; else one ConfigError line naming
+    at most ``limit`` bytes and has the columns x_m, y_m, z_m (and ``viewpoint``, the index of the
+    camera that saw each point, when there are several ``viewpoints``); else one ConfigError line naming
     ``key``. Only the header (CSV) or the schema (Parquet) is read: the values are the scan job's."""
     suffix = Path(path).suffix.lower()
     if suffix not in CLOUD_SUFFIXES:
@@ -62,3 +64,6 @@ def check_cloud_file(path: str, key: str = "dualarm.cloud.file", limit: int = MA
     if missing:
         raise ConfigError(f"{key} = {shown(path)}: no column {missing[0]} (need a header with "
                           f"{', '.join(CLOUD_COLUMNS)})")
+    if viewpoints > 1 and "viewpoint" not in columns:
+        raise ConfigError(f"{key} = {shown(path)}: no column viewpoint (the index into dualarm.cloud.viewpoints_m of "
+                          f"the camera that saw each point: there are {viewpoints} viewpoints)")

@@ -101,8 +101,9 @@ STAGES: dict[str, Stage] = {
     "dualarm_capsules": Stage(("dualarm.robot", "dualarm.scene")),  # the fingers close on the scene's panel
     "dualarm_problem": Stage(tuple(f"dualarm.{k}" for k in ("weights.control", "weights.velocity", "weights.panel",
                                                              "solver")), ("dualarm_envelope", "dualarm_capsules")),
-    "dualarm_optimise": Stage(("dualarm.weights.margin_m", "dualarm.horizon", "dualarm.fine_factor"),
-                              ("dualarm_problem",)),
+    "dualarm_unknown": Stage(("dualarm.unknown",), ("dualarm_envelope",)),
+    "dualarm_optimise": Stage(("dualarm.weights.margin_m", "dualarm.horizon", "dualarm.fine_factor", "dualarm.unknown"),
+                              ("dualarm_problem", "dualarm_unknown")),
     "dualarm_check": Stage(("dualarm.check",), ("dualarm_problem",)),
     "dualarm_animation": Stage(("dualarm.animation_fps",), ("dualarm_optimise",)),
 }

@@ -27,14 +27,17 @@ from scipy.spatial import ConvexHull, QhullError, cKDTree
 from capmap.dualarm.distance import segment_segment, segment_triangle
 from capmap.errors import CapmapError
 
-__all__ = ["FitSettings", "Envelope", "fit_envelope", "normals", "min_area_rectangle", "uncovered"]
+__all__ = ["FitSettings", "Envelope", "fit_envelope", "grow_to_cover", "normals", "min_area_rectangle", "uncovered",
+           "depth"]
 
 
 @dataclass(frozen=True)
 class FitSettings:
     """Fitting parameters (see the module docstring); ``min_patch_points``: the smallest plane patch;
     ``min_width_m``: the narrowest face (narrower strips are left to capsules); ``absorb``: the
-    band, in plane tolerances, within which unclaimed points over a face join it."""
+    band, in plane tolerances, within which unclaimed points over a face join it; ``thin_m``: the fit
+    sees one point per cell of this size (a multi-camera cloud holds a surface once per camera), then
+    every volume's radius grows to hold the points it is nearest to that it left out."""
 
     plane_tol_m: float = 0.02
     normal_tol_deg: float = 25.0
@@ -47,6 +50,7 @@ class FitSettings:
     margin_m: float = 0.002
     max_capsule_radius_m: float = 0.04
     ransac_iterations: int = 400
+    thin_m: float = 0.015
 
 
 @dataclass(frozen=True)
@@ -147,10 +151,42 @@ def _capsules(p: np.ndarray, st: FitSettings, rng) -> list[tuple[np.ndarray, np.
 
 
 def fit_envelope(points: np.ndarray, st: FitSettings, rng: np.random.Generator) -> Envelope:
-    """Swept triangles and capsules covering every point of a cloud (P, 3) m."""
+    """Swept triangles and capsules covering every point of a cloud (P, 3) m: fitted to one point per
+    cell of ``st.thin_m``, then grown to hold them all (:func:`grow_to_cover`)."""
     points = np.asarray(points, dtype=float)
     if points.ndim != 2 or points.shape[1] != 3 or len(points) < 10:
         raise CapmapError(f"a cloud needs at least 10 points of shape (n, 3), got {points.shape}")
+    _, first = np.unique(np.floor(points / st.thin_m).astype(np.int64), axis=0, return_index=True)
+    kept = points[np.sort(first)]
+    return grow_to_cover(_fit(kept if len(kept) >= 10 else points, st, rng), points)
+
+
+def grow_to_cover(env: Envelope, points: np.ndarray) -> Envelope:
+    """The envelope with each volume's radius grown to hold the points (P, 3) m it is nearest to and does
+    not hold (a face's two triangles together)."""
+    left = uncovered(points, env)
+    if not len(left):
+        return env
+    p = points[left]
+    d = np.full((len(p), len(env.tri) + len(env.seg)), np.inf)
+    for k in range(len(env.tri)):
+        v = np.broadcast_to(env.tri[k], (len(p), 3, 3))
+        d[:, k] = segment_triangle(p, p, v[:, 0], v[:, 1], v[:, 2]).distance
+    for k in range(len(env.seg)):
+        sg = np.broadcast_to(env.seg[k], (len(p), 2, 3))
+        d[:, len(env.tri) + k] = segment_segment(p, p, sg[:, 0], sg[:, 1]).distance
+    radius = np.concatenate([env.tri_radius, env.seg_radius])
+    best = np.argmin(d - radius, axis=1)
+    grow = radius.copy()
+    np.maximum.at(grow, best, d[np.arange(len(p)), best] + 1e-9)
+    tri_r = grow[:len(env.tri)]
+    for patch in np.unique(env.tri_patch):  # a face's triangles keep one radius
+        sel = env.tri_patch == patch
+        tri_r[sel] = tri_r[sel].max()
+    return Envelope(env.tri, tri_r, env.tri_patch, env.seg, grow[len(env.tri):], env.patch_points, env.seg_points)
+
+
+def _fit(points: np.ndarray, st: FitSettings, rng: np.random.Generator) -> Envelope:
     nrm = normals(points, st.neighbours)
     left = np.ones(len(points), dtype=bool)
     plane_ok = np.ones(len(points), dtype=bool)  # points a plane may still take
@@ -221,6 +257,12 @@ def _rectangle_distance(xy: np.ndarray, h: np.ndarray, corners: np.ndarray) -> n
 
 def uncovered(points: np.ndarray, env: Envelope, tol: float = 1e-9) -> np.ndarray:
     """Indices of the points (P, 3) inside no volume of the envelope (empty when all are covered)."""
+    return np.flatnonzero(depth(points, env) > tol)
+
+
+def depth(points: np.ndarray, env: Envelope) -> np.ndarray:
+    """min over the envelope's volumes of (distance to the core - radius) (P,) m: <= 0 inside one, and a
+    ball of radius rho about the point is inside one when <= -rho."""
     P = len(points)
     margin = np.full(P, np.inf)  # min over volumes of (distance to core - radius)
     for k in range(len(env.tri)):
@@ -231,4 +273,4 @@ def uncovered(points: np.ndarray, env: Envelope, tol: float = 1e-9) -> np.ndarra
         s = np.broadcast_to(env.seg[k], (P, 2, 3))
         d = segment_segment(points, points, s[:, 0], s[:, 1]).distance - env.seg_radius[k]
         np.minimum(margin, d, out=margin)
-    return np.flatnonzero(margin > tol)
+    return margin

@@ -151,9 +151,9 @@ def torque_table(asm: Assembly, robot: DualArm, scene: Scene, m: AssemblyMotion)
     node, joint = np.unravel_index(int(ratio.argmax()), ratio.shape)
     rows = [
         ("panel mass [kg]", scene.panel.mass),
-        ("peak |torque| / effort limit, least-norm internal force [%]", 100 * float(ratio.max())),
+        ("peak torque / effort limit, least-norm internal force [%]", 100 * float(ratio.max())),
         ("joint at the peak (least-norm)", f"{robot.joint_names[joint]} at {node * asm.task.dt:.2f} s"),
-        ("peak |torque| / effort limit, best internal force [%]", 100 * float(best.max())),
+        ("peak torque / effort limit, best internal force [%]", 100 * float(best.max())),
         ("within the effort limits (least-norm internal force)", bool(ratio.max() <= 1.0)),
         ("max grasp-map residual [N, N m]", float(ht.residual.max())),
     ]

@@ -162,13 +162,15 @@ def _axis_of(jm) -> np.ndarray:
     return np.asarray(jm.extract().axis, dtype=float)
 
 
-def build_dual_arm(desc: DualArmDescription, hold_thickness_m: float | None = None) -> DualArm:
+def build_dual_arm(desc: DualArmDescription, hold_thickness_m: float | None = None, visual: bool = True) -> DualArm:
     """The reduced model and geometry (no capsules yet: see :func:`fit_capsules`); with
-    ``hold_thickness_m``, the fingers of ``desc.fingers`` closed on a part that thick."""
+    ``hold_thickness_m``, the fingers of ``desc.fingers`` closed on a part that thick; ``visual=False``:
+    the visual meshes are not loaded (a robot whose capsules and finger values are known already)."""
     try:
         model = pin.buildModelFromUrdf(str(desc.urdf))
         geom = pin.buildGeomFromUrdf(model, str(desc.urdf), pin.GeometryType.COLLISION, package_dirs=[str(desc.package_dir)])
-        vis = pin.buildGeomFromUrdf(model, str(desc.urdf), pin.GeometryType.VISUAL, package_dirs=[str(desc.package_dir)])
+        vis = (pin.buildGeomFromUrdf(model, str(desc.urdf), pin.GeometryType.VISUAL, package_dirs=[str(desc.package_dir)])
+               if visual else pin.GeometryModel())
     except Exception as exc:  # Pinocchio raises bare errors from C++
         raise CapmapError(f"{{urdf}} {desc.urdf}: cannot be loaded ({str(exc).splitlines()[0] if str(exc) else exc})",
                           urdf="URDF") from None

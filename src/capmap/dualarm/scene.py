@@ -159,20 +159,19 @@ def _blocked_by_boxes(p: np.ndarray, v: np.ndarray, boxes: tuple[Box, ...], owne
 
 
 def scan(scene: Scene, settings: ScanSettings, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """A noisy partial scan: points (P, 3) m and the first viewpoint that saw each (P,)."""
+    """A noisy partial scan, each camera's own: points (P, 3) m and the viewpoint that took each (P,) (a
+    surface two cameras see is in the cloud twice, once from each, as a multi-camera scan has it)."""
     p, n, owner = surface_points(scene, settings.spacing_m)
-    seen_by = np.full(len(p), -1)
+    out, seen_by = [], []
     for k, v in enumerate(np.atleast_2d(settings.viewpoints)):
         to_v = v - p
         dist = np.linalg.norm(to_v, axis=1)
-        facing = np.einsum("ij,ij->i", n, to_v) > 0
-        ok = facing & (dist <= settings.max_range_m) & (seen_by < 0)
+        ok = (np.einsum("ij,ij->i", n, to_v) > 0) & (dist <= settings.max_range_m)
         idx = np.flatnonzero(ok)
         ok[idx] &= ~_blocked_by_boxes(p[idx], v, scene.boxes, owner[idx])
-        seen_by[ok] = k
-    keep = seen_by >= 0
-    noisy = p[keep] + rng.normal(0.0, settings.noise_m, size=(int(keep.sum()), 3))
-    return noisy, seen_by[keep]
+        out.append(p[ok] + rng.normal(0.0, settings.noise_m, size=(int(ok.sum()), 3)))
+        seen_by.append(np.full(int(ok.sum()), k))
+    return np.concatenate(out), np.concatenate(seen_by)
 
 
 def nearest_solid(scene: Scene, points: np.ndarray, spacing: float = 0.02, within_m: float = 0.1) -> np.ndarray:

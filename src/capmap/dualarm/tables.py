@@ -9,8 +9,9 @@ import pandas as pd
 
 from capmap.dualarm.cloud import Envelope
 from capmap.dualarm.robot import Covered, DualArm, LinkCapsule
+from capmap.dualarm.unknown import UnknownSpace
 
-__all__ = ["envelope_table", "envelope_from", "capsule_table", "capsules_from"]
+__all__ = ["envelope_table", "envelope_from", "capsule_table", "capsules_from", "unknown_table", "unknown_boxes"]
 
 
 def _vertices(v: np.ndarray) -> dict:
@@ -73,3 +74,17 @@ def capsules_from(df: pd.DataFrame) -> tuple[LinkCapsule, ...]:
     return tuple(LinkCapsule(r["name"], r["part"], int(r["order"]), r["joint"],
                              np.array([r["ax_m"], r["ay_m"], r["az_m"]]), np.array([r["bx_m"], r["by_m"], r["bz_m"]]),
                              float(r["radius_m"])) for _, r in df.iterrows())
+
+
+def unknown_table(space: UnknownSpace) -> pd.DataFrame:
+    """One row per box of unknown space: its lower and upper corners [m] and its voxels."""
+    b = space.boxes
+    cols = {f"{s}{x}_m": b[:, k, i] for k, s in enumerate(("lo_", "hi_")) for i, x in enumerate("xyz")}
+    return pd.DataFrame({**cols, "voxels": np.round(np.prod(b[:, 1] - b[:, 0], axis=1) / space.grid.voxel**3).astype(int)})
+
+
+def unknown_boxes(df: pd.DataFrame) -> np.ndarray:
+    """The boxes (B, 2, 3) m back from their table."""
+    lo = df[["lo_x_m", "lo_y_m", "lo_z_m"]].to_numpy()
+    hi = df[["hi_x_m", "hi_y_m", "hi_z_m"]].to_numpy()
+    return np.stack([lo, hi], axis=1)

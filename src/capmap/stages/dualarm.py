@@ -1,29 +1,35 @@
 """Stages of the dual-arm family, the collision model: dualarm_scan (the scene's point cloud) ->
-dualarm_envelope (swept volumes fitted to it) and dualarm_capsules (the robot's capsules)."""
+dualarm_envelope (swept volumes fitted to it) -> dualarm_unknown (the space no camera observed), and
+dualarm_capsules (the robot's capsules)."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
 from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.scene_file import load_scene
-from capmap.dualarm.cloud import fit_envelope, uncovered
+from capmap.dualarm.cloud import depth, fit_envelope, uncovered
 from capmap.dualarm.robot import DualArm, build_dual_arm, fit_capsules
 from capmap.dualarm.scene import nearest_solid, scan
-from capmap.dualarm.tables import capsule_table, capsules_from, envelope_table
+from capmap.dualarm.tables import capsule_table, capsules_from, envelope_from, envelope_table, unknown_table
+from capmap.dualarm.unknown import Grid, unknown_space
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.stages.common import stage_config
 
-__all__ = ["stage_dualarm_scan", "stage_dualarm_envelope", "stage_dualarm_capsules", "robot_from", "XYZ"]
+__all__ = ["stage_dualarm_scan", "stage_dualarm_envelope", "stage_dualarm_unknown", "stage_dualarm_capsules",
+           "robot_from", "XYZ"]
 
 XYZ = ["x_m", "y_m", "z_m"]
 
 
-def _read_cloud(path: str) -> np.ndarray:
-    """A user's cloud file: CSV or Parquet with columns x_m, y_m, z_m (base frame)."""
+def _read_cloud(path: str, viewpoints: int) -> tuple[np.ndarray, np.ndarray]:
+    """A user's cloud file: CSV or Parquet with columns x_m, y_m, z_m (base frame) and, with several
+    viewpoints, the index of the one that saw each point (``viewpoint``): (points (P, 3), index (P,))."""
     try:
         df = pd.read_parquet(path) if str(path).lower().endswith(".parquet") else pd.read_csv(path)
     except (OSError, ValueError, UnicodeDecodeError) as exc:
@@ -40,7 +46,14 @@ def _read_cloud(path: str) -> np.ndarray:
     if not np.isfinite(pts).all():
         raise ConfigError(f"dualarm.cloud.file = {path!r}: {int((~np.isfinite(pts)).any(axis=1).sum())} points are "
                           "not finite")
-    return pts
+    if "viewpoint" not in df.columns:
+        return pts, np.zeros(len(pts), dtype=int)  # one viewpoint (checked before the run)
+    view = pd.to_numeric(df["viewpoint"], errors="coerce").to_numpy()
+    bad = ~((view >= 0) & (view < viewpoints) & (view == np.round(view)))
+    if bad.any():
+        raise ConfigError(f"dualarm.cloud.file = {path!r}: column viewpoint must index dualarm.cloud.viewpoints_m "
+                          f"(0..{viewpoints - 1}); {int(bad.sum())} rows do not")
+    return pts, view.astype(int)
 
 
 def stage_dualarm_scan(out: str, slice_json: str) -> None:
@@ -50,9 +63,8 @@ def stage_dualarm_scan(out: str, slice_json: str) -> None:
     da = sc.run.dualarm
     cloud_file, settings, seed = da.cloud_file, da.scan, da.scan_seed
     if cloud_file is not None:
-        pts = _read_cloud(cloud_file)
-        view = np.full(len(pts), -1)
-        source = f"file {cloud_file}"
+        pts, view = _read_cloud(cloud_file, len(settings.viewpoints))
+        source = f"file {cloud_file}, {len(settings.viewpoints)} viewpoints"
     else:
         pts, view = scan(load_scene(da.scene), settings, np.random.default_rng(seed))
         source = f"synthetic scan from {len(settings.viewpoints)} viewpoints, noise {settings.noise_m:g} m"
@@ -82,6 +94,34 @@ def stage_dualarm_envelope(cloud: str, out: str, slice_json: str) -> None:
              f"{len(env.seg)} capsules (radius {_span(env.seg_radius)}); all {len(pts)} points covered -> {out}")
 
 
+def stage_dualarm_unknown(cloud: str, environment: str, out: str, slice_json: str) -> None:
+    """The unknown space of the work volume (:func:`capmap.dualarm.unknown.unknown_space`): what no
+    viewpoint's rays crossed and no fitted volume holds, as boxes (one row each); checked that every
+    cloud point lies outside the observed-free voxels."""
+    sc = stage_config(slice_json)
+    log = stage_logger(__name__, "dualarm unknown")
+    da = sc.run.dualarm
+    df = datasets.read(cloud)
+    pts, view = df[XYZ].to_numpy(), df["viewpoint"].to_numpy()
+    env, _ = envelope_from(datasets.read(environment))
+    u = da.unknown
+    grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
+    space = unknown_space(grid, pts, da.scan.viewpoints[view], stop_m=stop_distance(da),
+                          covered=lambda c, r: depth(c, env) <= -r)
+    table = unknown_table(space)
+    datasets.write(table, out, datasets.provenance("dualarm_unknown", sc.doc, voxels=int(np.prod(grid.shape)),
+                                                   free_voxels=int(space.free.sum()),
+                                                   unknown_voxels=int(space.unknown.sum())))
+    log.info(f"{int(space.free.sum()):,} of {int(np.prod(grid.shape)):,} voxels of {u.voxel_m:g} m observed free; "
+             f"{int(space.unknown.sum()):,} unknown and not inside a fitted volume, as {len(table)} boxes -> {out}")
+
+
+def stop_distance(da) -> float:
+    """How far short of each point a ray's free part stops: three noise sigmas (a user's cloud: its noise
+    unknown, taken as 1 cm)."""
+    return 3 * (da.scan.noise_m if da.cloud_file is None else 0.01)
+
+
 def _span(r: np.ndarray) -> str:
     return f"{1e3 * r.min():.0f}-{1e3 * r.max():.0f} mm" if len(r) else "-"
 
@@ -102,7 +142,7 @@ def stage_dualarm_capsules(out: str, slice_json: str) -> None:
         raise DataError(f"capsule {bad.name.iloc[0]} leaves its geometry uncovered by {bad.max_excess_m.iloc[0]:.3g} m")
     cover = robot.description.cover
     datasets.write(df, out, datasets.provenance("dualarm_capsules", sc.doc, robot=robot.description.name,
-                                                 cover=" ".join(cover)))
+                                                 cover=" ".join(cover), locked=robot.description.locked))
     log.info(f"{len(df)} capsules over {robot.description.name}'s {' and '.join(cover)} geometry, every part covered "
              f"(largest excess {1e3 * df.max_excess_m.max():.2g} mm) -> {out}")
     for kind in ("visual", "collision"):
@@ -122,9 +162,16 @@ def _build(robot_file: str, scene_file: str) -> DualArm:
         raise ConfigError(f"dualarm.robot = {robot_file!r}: {exc.in_terms(urdf='its URDF')}") from None
 
 
-def robot_from(robot_file: str, scene_file: str, capsules: pd.DataFrame) -> DualArm:
-    """The robot (fingers closed on the scene's panel) with its capsules read back from their dataset."""
-    robot = _build(robot_file, scene_file)
+def robot_from(robot_file: str, capsules: pd.DataFrame) -> DualArm:
+    """The robot with its capsules read back from their dataset, its locked joints (the fingers closed on
+    the scene's panel) as the capsules were fitted with (their provenance); the visual meshes not loaded."""
+    try:
+        desc = replace(load_dual_arm_file(robot_file), locked=capsules.attrs["capmap"]["locked"], fingers={})
+        robot = build_dual_arm(desc, visual=False)
+    except ConfigError:
+        raise
+    except CapmapError as exc:
+        raise ConfigError(f"dualarm.robot = {robot_file!r}: {exc.in_terms(urdf='its URDF')}") from None
     caps = capsules_from(capsules)
     return DualArm(robot.description, robot.model, robot.geometry, robot.gripper_frames, robot.q_lower, robot.q_upper,
                    robot.v_max, caps, robot.visual)

@@ -13,12 +13,14 @@ import pandas as pd
 from capmap.config.dualarm import DualArmConfig, Horizon
 from capmap.config.scene_file import load_scene
 from capmap.dualarm.assembly import assemble, warm_start
-from capmap.dualarm.evaluate import node_errors
+from capmap.dualarm.evaluate import fine_grid, node_errors
 from capmap.dualarm.motion import motion_quantities, motion_tables, plan_assembly, torque_table
 from capmap.dualarm.settings import Weights
 from capmap.dualarm.solver import equality_cost, initial_guess, solve, solve_csqp
-from capmap.dualarm.tables import envelope_from
-from capmap.errors import CapmapError, ConfigError
+from capmap.dualarm.tables import envelope_from, unknown_boxes
+from capmap.dualarm.unknown import Grid, near_boxes, with_boxes
+from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check
+from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities, write_table
@@ -28,15 +30,49 @@ from capmap.stages.dualarm import robot_from
 __all__ = ["setup", "stage_dualarm_optimise", "stage_dualarm_check"]
 
 
-def setup(da: DualArmConfig, environment: str, capsules: str, h: Horizon):
-    """(robot, assembly) of a dual-arm job on horizon ``h``: ``da`` names the robot and scene files."""
-    robot = robot_from(da.robot, da.scene, datasets.read(capsules))
+def setup(da: DualArmConfig, environment: str, capsules: str, h: Horizon, boxes: np.ndarray | None = None):
+    """(robot, assembly) of a dual-arm job on horizon ``h``: ``da`` names the robot and scene files;
+    ``boxes`` (B, 2, 3) m of unknown space join the environment."""
+    robot = robot_from(da.robot, datasets.read(capsules))
     env, labels = envelope_from(datasets.read(environment))
+    if boxes is not None and len(boxes):
+        env, labels = with_boxes(env, labels, boxes, da.unknown.voxel_m)
     return robot, assemble(robot, load_scene(da.scene), env, labels, h.nodes, h.dt_s, h.pre_insertion_node)
 
 
-def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str, out_fine: str, out_outer: str,
-                           out_torques: str, out_csv: str, out_md: str, slice_json: str) -> None:
+def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, unknown: str, log):
+    """Plan with the unknown boxes near the motion in the environment: first those within ``near_m``
+    of the warm start; after each solve the motion (finer grid) is checked against every unknown voxel
+    and the boxes near it are added, up to three solves. Returns (robot, assembly, motion, the check,
+    boxes used, boxes in all)."""
+    u = da.unknown
+    boxes = unknown_boxes(datasets.read(unknown))
+    grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
+    mask = unknown_mask(grid, boxes)
+    corners = load_scene(da.scene).panel.corners()
+    robot, asm = setup(da, environment, capsules, da.horizon)
+    qs = warm_start(asm)[::5]
+    balls, radii, names = swept_balls(asm, robot, corners, qs)
+    use = near_boxes(boxes, balls.reshape(-1, 3), np.tile(radii, len(qs)), u.near_m)
+    for attempt in range(3):
+        log.info(f"unknown space: {int(use.sum())} of {len(boxes)} boxes near the motion go to the optimiser")
+        robot, asm = setup(da, environment, capsules, da.horizon, boxes[use])
+        m = plan_assembly(asm, robot, da.weights, da.solver, da.fine_factor, log.info)
+        balls, radii, names = swept_balls(asm, robot, corners, fine_grid(m.sol.xs, m.sol.us, asm.task.dt,
+                                                                          da.fine_factor)[1])
+        check = unobserved_check(balls, radii, names, grid, mask)
+        if check.distance >= 0:
+            break
+        more = near_boxes(boxes, balls[::da.fine_factor].reshape(-1, 3), np.tile(radii, len(balls[::da.fine_factor])),
+                          u.near_m) & ~use
+        if not more.any():
+            break
+        use |= more
+    return robot, asm, m, check, int(use.sum()), len(boxes)
+
+
+def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_trajectory: str, out_fine: str,
+                           out_outer: str, out_torques: str, out_csv: str, out_md: str, slice_json: str) -> None:
     """The satellite-panel assembly by augmented-Lagrangian DDP, then checked on a finer grid
     (:func:`capmap.dualarm.motion.plan_assembly`) and by inverse dynamics with the held panel against
     the effort limits (:func:`capmap.dualarm.motion.torque_table`); the start within the joint limits
@@ -44,11 +80,18 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
     sc = stage_config(slice_json)
     da = sc.run.dualarm
     log = stage_logger(__name__, "dualarm optimise")
-    robot, asm = setup(da, environment, capsules, da.horizon)
     try:
-        m = plan_assembly(asm, robot, da.weights, da.solver, da.fine_factor, log.info)
-    except CapmapError as exc:  # a key pose in collision: the scene's
-        raise ConfigError(exc.in_terms(scene=f"dualarm.scene = {da.scene!r}")) from None
+        robot, asm, m, check, used, n_boxes = _plan_outside_unknown(da, environment, capsules, unknown, log)
+    except CapmapError as exc:  # a key pose in collision: the scene's, or the cameras' (unknown space)
+        msg = exc.in_terms(scene=f"dualarm.scene = {da.scene!r}")
+        if "unknown [" in msg:
+            msg += ("; that region (x, y, z ranges in m) was observed by no viewpoint of dualarm.cloud.viewpoints_m: "
+                    "add one with a line of sight to it, or move the task away from it")
+        raise ConfigError(msg) from None
+    if check.distance < 0:
+        raise DataError(f"the optimised motion reaches {1e3 * -check.distance:.1f} mm into space no camera observed "
+                        f"({check.body} near {np.round(check.voxel_centre, 2).tolist()} m) after three solves with the "
+                        f"unknown boxes near it; add a viewpoint of dualarm.cloud.viewpoints_m that sees that region")
     traj, fine_df, outer = motion_tables(asm, robot, m)
     sol, err = m.sol, m.errors
     torques, torque_rows = torque_table(asm, robot, load_scene(da.scene), m)
@@ -62,7 +105,10 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
     datasets.write(torques, out_torques, datasets.provenance(
         "dualarm_optimise", sc.doc, joints=list(robot.joint_names), effort_nm=asm.model.effortLimit.tolist(),
         panel_kg=load_scene(da.scene).panel.mass))
-    write_quantities(motion_quantities(asm, robot, m, da.weights) + torque_rows, out_csv, out_md)
+    unknown_rows = [("unknown-space boxes given to the optimiser", f"{used} of {n_boxes}"),
+                    ("min distance to unknown space, finer grid [m]", check.distance),
+                    ("body nearest unknown space", check.body)]
+    write_quantities(motion_quantities(asm, robot, m, da.weights) + unknown_rows + torque_rows, out_csv, out_md)
     log.info(f"{'converged' if sol.converged else 'NOT converged: ' + sol.message}; {len(sol.stats)} outer / "
              f"{int(outer.inner_iterations.sum())} FDDP iterations in {m.solve_s:.1f} s; closed chain "
              f"{err.closed_chain_pos.max():.1e} m; path {err.path_pos.max():.1e} m; min distance "
@@ -70,8 +116,8 @@ def stage_dualarm_optimise(environment: str, capsules: str, out_trajectory: str,
              f"{', '.join(a[0] for a in m.active) or 'none'}")
     peak = dict(torque_rows)
     line = (f"joint torques with the {load_scene(da.scene).panel.mass:g} kg panel: peak "
-            f"{peak['peak |torque| / effort limit, least-norm internal force [%]']:.0f} % of the effort limit "
-            f"({peak['joint at the peak (least-norm)']}), {peak['peak |torque| / effort limit, best internal force [%]']:.0f} % "
+            f"{peak['peak torque / effort limit, least-norm internal force [%]']:.0f} % of the effort limit "
+            f"({peak['joint at the peak (least-norm)']}), {peak['peak torque / effort limit, best internal force [%]']:.0f} % "
             "with the best internal force")
     if peak["within the effort limits (least-norm internal force)"]:
         log.info(line)

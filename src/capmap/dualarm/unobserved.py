@@ -1,0 +1,114 @@
+"""The motion against the space no camera observed (:mod:`capmap.dualarm.unknown`): which unknown boxes
+the optimiser must see (those near the moving volumes), and the check afterwards against all of them.
+
+The moving volumes (every arm capsule and the held panel) are sampled as balls: each capsule at
+``spacing`` along its segment (a ball chain under-reaches its capsule by at most spacing^2 / (8 r)),
+the panel's rectangle on a grid of ``spacing`` with its half-thickness as radius (under-reaching by at
+most spacing^2 / (4 r_panel), reported with the check)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.ndimage import distance_transform_edt
+
+from capmap.dualarm.assembly import Assembly
+from capmap.dualarm.robot import DualArm
+from capmap.dualarm.unknown import Grid
+
+__all__ = ["swept_balls", "UnobservedCheck", "unobserved_check", "unknown_mask"]
+
+
+def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np.ndarray,
+                spacing: float = 0.02) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Balls covering (up to the sampling, see the module docstring) the arms' capsules and the panel at
+    configurations qs (K, nq): centres (K, n, 3) m, radii (n,) m and their bodies' names (n,)."""
+    model = asm.model
+    data = model.createData()
+    caps = [c for c in robot.capsules if c.part != "body"]
+    local, radii, names, joints = [], [], [], []
+    for c in caps:
+        n = max(2, int(np.ceil(np.linalg.norm(c.b - c.a) / spacing)) + 1)
+        t = np.linspace(0, 1, n)[:, None]
+        local.append(c.a + t * (c.b - c.a))
+        radii += [c.r] * n
+        names += [c.name] * n
+        joints += [model.getJointId(c.joint)] * n
+    fp = model.frames[asm.task.panel]
+    a, b = panel_corners[1] - panel_corners[0], panel_corners[3] - panel_corners[0]
+    nu, nv = (max(2, int(np.ceil(np.linalg.norm(x) / spacing)) + 1) for x in (a, b))
+    u, v = np.meshgrid(np.linspace(0, 1, nu), np.linspace(0, 1, nv), indexing="ij")
+    grid = panel_corners[0] + u.reshape(-1, 1) * a + v.reshape(-1, 1) * b  # panel frame
+    local.append(grid @ fp.placement.rotation.T + fp.placement.translation)  # its joint's frame
+    radii += [asm.panel_radius] * len(grid)
+    names += ["panel"] * len(grid)
+    joints += [fp.parentJoint] * len(grid)
+    local, joints = np.concatenate(local), np.asarray(joints)
+    out = np.zeros((len(qs), len(local), 3))
+    for k, q in enumerate(qs):
+        pin.forwardKinematics(model, data, q)
+        for j in np.unique(joints):
+            M = data.oMi[int(j)]
+            sel = joints == j
+            out[k, sel] = local[sel] @ M.rotation.T + M.translation
+    return out, np.asarray(radii), np.asarray(names, dtype=object)
+
+
+def unknown_mask(grid: Grid, boxes: np.ndarray) -> np.ndarray:
+    """The voxels (nx, ny, nz) bool of ``grid`` that boxes (B, 2, 3) m (made of its voxels) fill."""
+    mask = np.zeros(grid.shape, dtype=bool)
+    for lo, hi in boxes:
+        a = np.round((lo - grid.lower) / grid.voxel).astype(int)
+        b = np.round((hi - grid.lower) / grid.voxel).astype(int)
+        mask[a[0]:b[0], a[1]:b[1], a[2]:b[2]] = True
+    return mask
+
+
+@dataclass(frozen=True)
+class UnobservedCheck:
+    """The smallest distance (m) from the moving volumes to unknown space over the samples (a voxel taken
+    as its circumscribed ball: conservative by up to half a voxel diagonal), where (sample index), which
+    body, and the unknown voxel's centre (3,) m (sample -1: none nearer than the bound reported)."""
+
+    distance: float
+    sample: int
+    body: str
+    voxel_centre: np.ndarray
+
+
+def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, grid: Grid, mask: np.ndarray,
+                     beyond_m: float = 0.3) -> UnobservedCheck:
+    """:class:`UnobservedCheck` of balls (K, n, 3) m with radii (n,) against the unknown voxels ``mask`` of
+    ``grid``: the Euclidean distance transform gives each voxel's distance to the nearest unknown voxel
+    centre; a ball centre lies within half a voxel diagonal of its voxel's centre and an unknown voxel
+    reaches half a diagonal beyond its own, so the gap is at least that distance - a diagonal - the
+    radius; where that bound is under 1 cm, the exact distance from the ball to the unknown cubes around
+    it is taken. Distances of ``beyond_m`` or more are reported as beyond_m; outside the grid (the work
+    volume) nothing is modelled."""
+    if not mask.any():
+        return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))
+    edt, nearest = distance_transform_edt(~mask, return_indices=True)
+    ijk, inside = grid.index(balls.reshape(-1, 3))
+    ijk = np.clip(ijk, 0, np.array(grid.shape) - 1)
+    gap = edt[tuple(ijk.T)] * grid.voxel - grid.voxel * np.sqrt(3) - np.tile(radii, len(balls))
+    gap = np.where(inside, np.minimum(gap, beyond_m), beyond_m)
+    # where the bound is small, the exact distance to the unknown voxels (cubes) around the ball
+    r_all = np.tile(radii, len(balls))
+    pts = balls.reshape(-1, 3)
+    for c in np.flatnonzero(gap < 0.01):
+        reach = int(np.ceil((r_all[c] + 0.01) / grid.voxel)) + 1
+        lo = np.maximum(ijk[c] - reach, 0)
+        hi = np.minimum(ijk[c] + reach + 1, np.array(grid.shape))
+        local = np.argwhere(mask[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]]) + lo
+        if not len(local):
+            gap[c] = min(0.01, beyond_m)
+            continue
+        out = np.maximum(np.abs(pts[c] - grid.centres(local)) - grid.voxel / 2, 0.0)
+        gap[c] = float(np.sqrt((out * out).sum(axis=1)).min()) - r_all[c]
+    i = int(np.argmin(gap))
+    if not gap[i] < beyond_m:
+        return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))
+    at = tuple(nearest[(slice(None), *ijk[i])])
+    return UnobservedCheck(float(gap[i]), i // balls.shape[1], str(names[i % balls.shape[1]]), grid.centres(np.array(at)))
