@@ -62,7 +62,8 @@ rule all:
         [out(f"reconfig/{name}") for name in ("summary.csv", "manipulability.png", "joint_rates.png",
                                                  "passive_joint.png", "animation.html")] if RECONFIG_METHODS else [],
         [out(f"dualarm/{name}") for name in ("summary.csv", "csqp_check.csv", "constraint_errors.png", "distances.png",
-                                                "joints.png", "velocities.png", "convergence.png", "animation.html")]
+                                                "joints.png", "velocities.png", "torques.png", "convergence.png",
+                                                "animation.html")]
         if DUALARM else [],
         out("catalogue.parquet"),
         list(TABLE_PAGES.values()),

@@ -94,7 +94,7 @@ def test_swept_rectangles_hold_their_boxes():
     voxel = 0.02
     boxes = np.array([[[0, 0, 0], [0.2, 0.1, 0.04]], [[0.1, -0.3, 0.2], [0.3, -0.1, 0.6]], [[0, 0, 0], [0.02, 0.02, 0.02]]])
     for box in boxes:
-        tri, r = box_rectangles(box[None], voxel)
+        tri, r, _ = box_rectangles(box[None], voxel)
         pts = box[0] + rng.random((3000, 3)) * (box[1] - box[0])
         if (box[1] - box[0]).min() > 2 * voxel:  # a shell: test the surface
             axis = rng.integers(0, 3, len(pts))

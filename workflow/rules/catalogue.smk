@@ -13,8 +13,8 @@ DATASETS = [
     *expand(out("verify/payload_{payload}kg/{name}.parquet"), payload=PAYLOADS, name=["timeseries", "segments"]),
     *expand(out("follow/{case}/{name}.parquet"), case=FOLLOW_CASES, name=["timeseries", "toppra"]),
     *expand(out("reconfig/{method}.parquet"), method=RECONFIG_METHODS),
-    *([out(f"dualarm/{name}.parquet") for name in ("cloud", "environment", "robot_capsules", "trajectory", "fine",
-                                                       "outer")] if DUALARM else []),
+    *([out(f"dualarm/{name}.parquet") for name in ("cloud", "environment", "unknown", "robot_capsules", "trajectory",
+                                                       "fine", "outer", "torques")] if DUALARM else []),
 ]
 
 # outputs an earlier config of this run left behind (a payload, task, case or family since removed):

@@ -56,7 +56,7 @@ rule dualarm_capsules:
     """Minimum-volume capsules over the robot's visual and collision geometry, fingers closed on the
     scene's panel (coverage checked)."""
     input:
-        dualarm_files("robot", "scene"),
+        dualarm_files("robot") + ([RUN.dualarm.scene] if DUALARM else []),  # the scene's panel: the fingers close on it
     output:
         out("dualarm/robot_capsules.parquet"),
     params:

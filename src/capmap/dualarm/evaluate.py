@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.dualarm.assembly import Assembly
+from capmap.dualarm.chain import batch_distances, pack
 from capmap.dualarm.task import node_constraints
 
 __all__ = ["NodeErrors", "node_errors", "fine_grid", "Safety", "safety", "active_pairs"]
@@ -81,8 +82,21 @@ class Safety:
         return self.names[self.distance.argmin(axis=1)]
 
 
-def safety(asm: Assembly, qs: np.ndarray) -> Safety:
-    """Every candidate pair at every configuration qs (M, nq)."""
+def safety(asm: Assembly, qs: np.ndarray, cutoff_m: float = 0.2) -> Safety:
+    """Every candidate pair at every configuration qs (M, nq): with the chain packed
+    (:func:`capmap.dualarm.chain.batch_distances`, equal to Pinocchio's placements to 1e-12 in the tests),
+    a pair whose bounding spheres are farther apart than ``cutoff_m`` gets inf (its distance is above it);
+    else on Pinocchio's kinematics, every pair exactly."""
+    t = asm.task
+    packed = pack(asm.model, (t.left, t.right, t.panel), asm.collision.prims)
+    if not isinstance(packed, str):
+        D = batch_distances(packed, qs, asm.pairs, cutoff=cutoff_m)
+        P = asm.collision.prims
+        i, k, tt = asm.pairs.ss, asm.pairs.st[:, 0], asm.pairs.st[:, 1]
+        names = np.array([f"{a} vs {b}" for a, b in zip(np.concatenate([P.seg_body[i[:, 0]], P.seg_body[k]]),
+                                                         np.concatenate([P.seg_body[i[:, 1]], P.tri_body[tt]]))],
+                         dtype=object)
+        return Safety(D, names)
     data = asm.model.createData()
     D = np.empty((len(qs), len(asm.pairs)))
     names = None

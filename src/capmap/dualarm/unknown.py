@@ -138,25 +138,38 @@ def _rectangle(lo: np.ndarray, hi: np.ndarray, axis: int, at: float) -> np.ndarr
     return np.array([corners[[0, 1, 2]], corners[[0, 2, 3]]])
 
 
-def box_rectangles(boxes: np.ndarray, voxel: float) -> tuple[np.ndarray, np.ndarray]:
-    """Swept rectangles for boxes (B, 2, 3) m: triangles (T, 3, 3) m and radii (T,) m. A box at most two
+def box_rectangles(boxes: np.ndarray, voxel: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Swept rectangles for boxes (B, 2, 3) m: triangles (T, 3, 3) m, radii (T,) m and the box of each
+    (T,). A box at most two
     voxels thick is one rectangle at mid-thickness across its thinnest side, dilated by half that
     thickness (it contains the box, reaching at most a voxel beyond its edges); a thicker box is its six
     faces, each dilated by half a voxel (a shell: a motion that starts outside cannot enter without
-    crossing it, and the check afterwards is against every unknown voxel)."""
-    tris, radii = [], []
-    for lo, hi in boxes:
+    crossing it, and the check afterwards is against every unknown voxel), but for faces wholly against
+    other boxes of the same call (inside their union)."""
+    tris, radii, owner = [], [], []
+    origin = boxes.reshape(-1, 3).min(axis=0) - voxel if len(boxes) else np.zeros(3)
+    cells = [(np.round((lo - origin) / voxel).astype(int), np.round((hi - origin) / voxel).astype(int)) for lo, hi in boxes]
+    filled = np.zeros(np.max([b for _, b in cells], axis=0) + 1 if cells else (1, 1, 1), dtype=bool)
+    for a, b in cells:
+        filled[a[0]:b[0], a[1]:b[1], a[2]:b[2]] = True
+    for k, ((lo, hi), (a, b)) in enumerate(zip(boxes, cells)):
         size = hi - lo
         thin = int(np.argmin(size))
         if size[thin] <= 2 * voxel + 1e-12:
             tris.append(_rectangle(lo, hi, thin, (lo[thin] + hi[thin]) / 2))
             radii += [size[thin] / 2] * 2
+            owner += [k, k]
             continue
         for axis in range(3):
-            for at in (lo[axis], hi[axis]):
+            for side, at in ((0, lo[axis]), (1, hi[axis])):
+                layer = [slice(a[i], b[i]) for i in range(3)]  # the cells just outside this face
+                layer[axis] = slice(a[axis] - 1, a[axis]) if side == 0 else slice(b[axis], b[axis] + 1)
+                if filled[tuple(layer)].all():
+                    continue  # inside the union of the boxes: never the first thing a motion from outside meets
                 tris.append(_rectangle(lo, hi, axis, at))
                 radii += [voxel / 2] * 2
-    return np.concatenate(tris) if tris else np.zeros((0, 3, 3)), np.array(radii)
+                owner += [k, k]
+    return np.concatenate(tris) if tris else np.zeros((0, 3, 3)), np.array(radii), np.array(owner, dtype=int)
 
 
 def unknown_space(grid: Grid, points: np.ndarray, seen_from: np.ndarray, stop_m: float, covered) -> UnknownSpace:
@@ -198,18 +211,10 @@ def with_boxes(env: Envelope, labels: tuple[np.ndarray, np.ndarray], boxes: np.n
     """The envelope (:class:`capmap.dualarm.cloud.Envelope`) and its labels with boxes (B, 2, 3) m of
     ``voxel`` m voxels added as swept rectangles (:func:`box_rectangles`), labelled
     'unknown [x0 x1, y0 y1, z0 z1]'."""
-    names, patch = [], []
-    tri, r = [], []
-    first = env.tri_patch.max() + 1 if len(env.tri_patch) else 0
-    for k, (lo, hi) in enumerate(boxes):
-        t, rk = box_rectangles(boxes[k:k + 1], voxel)
-        tri.append(t)
-        r.append(rk)
-        names += [f"unknown [{lo[0]:.2f} {hi[0]:.2f}, {lo[1]:.2f} {hi[1]:.2f}, {lo[2]:.2f} {hi[2]:.2f}]"] * len(t)
-        patch += [first + k] * len(t)
-    tri = np.concatenate(tri) if tri else np.zeros((0, 3, 3))
-    r = np.concatenate(r) if r else np.zeros(0)
-    names, patch = np.array(names, dtype=object), np.array(patch, dtype=int)
+    tri, r, owner = box_rectangles(boxes, voxel)
+    names = np.array([f"unknown [{lo[0]:.2f} {hi[0]:.2f}, {lo[1]:.2f} {hi[1]:.2f}, {lo[2]:.2f} {hi[2]:.2f}]"
+                      for lo, hi in boxes], dtype=object)[owner]
+    patch = owner + (env.tri_patch.max() + 1 if len(env.tri_patch) else 0)
     out = Envelope(np.concatenate([env.tri, tri]), np.concatenate([env.tri_radius, r]),
                    np.concatenate([env.tri_patch, patch]).astype(int), env.seg, env.seg_radius,
                    np.concatenate([env.patch_points, np.zeros(len(boxes), int)]), env.seg_points)

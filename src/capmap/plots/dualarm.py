@@ -48,11 +48,11 @@ def distances(traj: pd.DataFrame, fine: pd.DataFrame, margin_m: float, active: l
     ax.plot(traj.t_s, 1e3 * traj.min_distance_m, ".", color="black", ms=1.5, label="nodes")
     ax.axhline(1e3 * margin_m, color="tab:orange", ls="--", label=f"margin kept at the nodes ({1e3 * margin_m:g} mm)")
     ax.axhline(0.0, color="tab:red", lw=1, label="contact")
-    for name, d, tm, *_ in active[:3]:
-        left = tm > 0.6 * fine.t_s.iloc[-1]  # keep the label inside the axes
-        ax.annotate(f"{name}\n{1e3 * d:.1f} mm", (tm, 1e3 * d), xytext=(-20 if left else 20, 30),
+    for i, (name, d, tm, *_) in enumerate(sorted(active[:3], key=lambda a: a[2])):
+        left = tm > 0.6 * fine.t_s.iloc[-1]  # keep the label inside the axes; stagger them in height
+        ax.annotate(f"{name}\n{1e3 * d:.1f} mm", (tm, 1e3 * d), xytext=(-20 if left else 20, 28 + 30 * i),
                     textcoords="offset points", fontsize=8, ha="right" if left else "left",
-                    arrowprops={"arrowstyle": "->", "lw": 0.6})
+                    arrowprops={"arrowstyle": "->", "lw": 0.6}, bbox={"fc": "white", "ec": "none", "alpha": 0.8})
     ax.set(xlabel="t [s]", ylabel="smallest safety distance [mm]",
            title="Closest pair of swept volumes (cores' distance minus radii) over the motion",
            ylim=(min(-1.0, 1e3 * fine.min_distance_m.min() - 1), 1e3 * min(fine.min_distance_m.max(), 0.2) + 5))
