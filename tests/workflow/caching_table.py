@@ -60,6 +60,8 @@ ROWS = [
     ("`dualarm.weights.*`, `dualarm.solver.*`", "dualarm.weights.control = 2.0"),
     ("`dualarm.horizon.*`, `dualarm.margin_m`", "dualarm.margin_m = 0.006"),
     ("`dualarm.check.*`", "dualarm.check.max_iterations = 90"),
+    ("`dualarm.unknown.voxel_m`, `dualarm.unknown.work_volume_m`", "dualarm.unknown.voxel_m = 0.025"),
+    ("`dualarm.unknown.near_m`", "dualarm.unknown.near_m = 0.12"),
     ("`dualarm.animation_fps`", "dualarm.animation_fps = 20"),
     ("`atlas.angles_deg` (an angle added)", "atlas.angles_deg = [-120, 0, 120, 60]"),
     ("`atlas.directions.*`", "atlas.directions.n = 50"),
@@ -147,7 +149,7 @@ def cell(jobs: dict[str, int]) -> str:
 _ORDER = {r: i for i, r in enumerate(
     "model sample capacity voxels refine voxel_map summary capacity_3d plan plan_gain verify verify_plots "
     "verify_summary plan_task verify_task verify_task_plots follow follow_plots follow_summary reconfig "
-    "reconfig_summary reconfig_plots reconfig_animation dualarm_scan dualarm_envelope dualarm_capsules "
+    "reconfig_summary reconfig_plots reconfig_animation dualarm_scan dualarm_envelope dualarm_unknown dualarm_capsules "
     "dualarm_optimise dualarm_check dualarm_plots dualarm_animation atlas_map atlas_tables atlas_catalogue "
     "baseline_shard baseline_map baseline_figure baseline_catalogue "
     "catalogue report_tables".split())}

@@ -101,7 +101,8 @@ STAGES: dict[str, Stage] = {
     "dualarm_capsules": Stage(("dualarm.robot", "dualarm.scene")),  # the fingers close on the scene's panel
     "dualarm_problem": Stage(tuple(f"dualarm.{k}" for k in ("weights.control", "weights.velocity", "weights.panel",
                                                              "solver")), ("dualarm_envelope", "dualarm_capsules")),
-    "dualarm_unknown": Stage(("dualarm.unknown",), ("dualarm_envelope",)),
+    "dualarm_unknown": Stage(tuple(f"dualarm.unknown.{k}" for k in ("work_lower", "work_upper", "voxel_m")),
+                             ("dualarm_envelope",)),
     "dualarm_optimise": Stage(("dualarm.weights.margin_m", "dualarm.horizon", "dualarm.fine_factor", "dualarm.unknown"),
                               ("dualarm_problem", "dualarm_unknown")),
     "dualarm_check": Stage(("dualarm.check",), ("dualarm_problem",)),
