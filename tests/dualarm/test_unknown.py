@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from capmap.config.dualarm import cloud_source, fit_settings, unknown_settings
@@ -15,7 +16,7 @@ from capmap.dualarm.cloud import depth, fit_envelope
 from capmap.dualarm.distance import segment_triangle
 from capmap.dualarm.scene import Box, scan, surface_points
 from capmap.dualarm.unknown import Grid, box_rectangles, merge_boxes, unknown_space
-from capmap.dualarm.unobserved import unknown_mask, unobserved_check
+from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check
 from tests.dualarm.conftest import SECTION
 
 HIDDEN = Box("shelf", np.array([0.60, 0.30, 0.45]), np.array([0.70, 0.40, 0.50]))  # under the bulkhead: its top
@@ -121,3 +122,33 @@ def test_the_motion_check_is_a_lower_bound_of_the_brute_force_distance():
     assert check.distance >= brute - 0.02 * np.sqrt(3) - 1e-12  # at most a voxel diagonal below
     if brute < 0.01:
         assert check.distance == pytest.approx(brute, abs=1e-12)  # exact where it matters
+
+
+def test_swept_balls_with_their_slack_hold_the_whole_volumes(robot, scene, make_assembly):
+    """Points drawn inside every arm capsule and inside the panel's slab, at a random configuration, each
+    lie within radius + slack of some ball: the check's distances bound the volumes, not only the balls."""
+    asm = make_assembly(20, 0.05, 14)
+    rng = np.random.default_rng(8)
+    q = asm.q_start + rng.uniform(-0.2, 0.2, asm.model.nq)
+    balls, radii, names, slack = swept_balls(asm, robot, scene.panel.corners(), q[None])
+    data = asm.model.createData()
+    pin.forwardKinematics(asm.model, data, q)
+    pin.updateFramePlacements(asm.model, data)
+    pts = []
+    for c in robot.capsules:
+        if c.part == "body":
+            continue
+        M = data.oMi[asm.model.getJointId(c.joint)]
+        t = rng.random(300)[:, None]
+        d = rng.normal(size=(300, 3))
+        d *= (c.r * rng.random(300) ** (1 / 3) / np.linalg.norm(d, axis=1))[:, None]
+        pts.append((c.a + t * (c.b - c.a) + d) @ M.rotation.T + M.translation)
+    corners = scene.panel.corners()
+    u, v, w = rng.random((3, 2000))
+    local = corners[0] + u[:, None] * (corners[1] - corners[0]) + v[:, None] * (corners[3] - corners[0])
+    local[:, 0] += (2 * w - 1) * asm.panel_radius  # through the panel's thickness
+    Mp = data.oMf[asm.task.panel]
+    pts.append(local @ Mp.rotation.T + Mp.translation)
+    pts = np.concatenate(pts)
+    reach = np.linalg.norm(pts[:, None, :] - balls[0][None], axis=2) - (radii + slack)[None]
+    assert reach.min(axis=1).max() <= 1e-12

@@ -2,9 +2,10 @@
 the optimiser must see (those near the moving volumes), and the check afterwards against all of them.
 
 The moving volumes (every arm capsule and the held panel) are sampled as balls: each capsule at
-``spacing`` along its segment (a ball chain under-reaches its capsule by at most spacing^2 / (8 r)),
-the panel's rectangle on a grid of ``spacing`` with its half-thickness as radius (under-reaching by at
-most spacing^2 / (4 r_panel), reported with the check)."""
+``spacing`` along its segment, the panel's rectangle on a grid of ``spacing`` with its half-thickness as
+radius. A point of a volume lies within sqrt(h^2 + r^2) of a ball's centre (h: half the samples' spacing
+along a segment, half their diagonal on the panel), so each ball carries the slack sqrt(h^2 + r^2) - r
+that the check subtracts: its distances are lower bounds for the whole volumes, not only the balls."""
 
 from __future__ import annotations
 
@@ -22,20 +23,23 @@ __all__ = ["swept_balls", "UnobservedCheck", "unobserved_check", "unknown_mask"]
 
 
 def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np.ndarray,
-                spacing: float = 0.02) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Balls covering (up to the sampling, see the module docstring) the arms' capsules and the panel at
-    configurations qs (K, nq): centres (K, n, 3) m, radii (n,) m and their bodies' names (n,)."""
+                spacing: float = 0.02) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Balls sampling the arms' capsules and the panel at configurations qs (K, nq): centres (K, n, 3) m,
+    radii (n,) m, their bodies' names (n,) and each ball's slack (n,) m (see the module docstring)."""
     model = asm.model
     data = model.createData()
     caps = [c for c in robot.capsules if c.part != "body"]
-    local, radii, names, joints = [], [], [], []
+    local, radii, names, joints, slack = [], [], [], [], []
     for c in caps:
-        n = max(2, int(np.ceil(np.linalg.norm(c.b - c.a) / spacing)) + 1)
+        length = float(np.linalg.norm(c.b - c.a))
+        n = max(2, int(np.ceil(length / spacing)) + 1)
         t = np.linspace(0, 1, n)[:, None]
         local.append(c.a + t * (c.b - c.a))
         radii += [c.r] * n
         names += [c.name] * n
         joints += [model.getJointId(c.joint)] * n
+        h = length / (n - 1) / 2
+        slack += [np.hypot(h, c.r) - c.r] * n
     fp = model.frames[asm.task.panel]
     a, b = panel_corners[1] - panel_corners[0], panel_corners[3] - panel_corners[0]
     nu, nv = (max(2, int(np.ceil(np.linalg.norm(x) / spacing)) + 1) for x in (a, b))
@@ -45,6 +49,8 @@ def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np
     radii += [asm.panel_radius] * len(grid)
     names += ["panel"] * len(grid)
     joints += [fp.parentJoint] * len(grid)
+    h = 0.5 * np.hypot(np.linalg.norm(a) / (nu - 1), np.linalg.norm(b) / (nv - 1))
+    slack += [np.hypot(h, asm.panel_radius) - asm.panel_radius] * len(grid)
     local, joints = np.concatenate(local), np.asarray(joints)
     out = np.zeros((len(qs), len(local), 3))
     for k, q in enumerate(qs):
@@ -53,7 +59,7 @@ def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np
             M = data.oMi[int(j)]
             sel = joints == j
             out[k, sel] = local[sel] @ M.rotation.T + M.translation
-    return out, np.asarray(radii), np.asarray(names, dtype=object)
+    return out, np.asarray(radii), np.asarray(names, dtype=object), np.asarray(slack)
 
 
 def unknown_mask(grid: Grid, boxes: np.ndarray) -> np.ndarray:
@@ -79,14 +85,14 @@ class UnobservedCheck:
 
 
 def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, grid: Grid, mask: np.ndarray,
-                     beyond_m: float = 0.3) -> UnobservedCheck:
+                     beyond_m: float = 0.3, slack: np.ndarray | None = None) -> UnobservedCheck:
     """:class:`UnobservedCheck` of balls (K, n, 3) m with radii (n,) against the unknown voxels ``mask`` of
     ``grid``: the Euclidean distance transform gives each voxel's distance to the nearest unknown voxel
     centre; a ball centre lies within half a voxel diagonal of its voxel's centre and an unknown voxel
     reaches half a diagonal beyond its own, so the gap is at least that distance - a diagonal - the
     radius; where that bound is under 1 cm, the exact distance from the ball to the unknown cubes around
     it is taken. Distances of ``beyond_m`` or more are reported as beyond_m; outside the grid (the work
-    volume) nothing is modelled."""
+    volume) nothing is modelled. ``slack`` (n,): each ball's, subtracted (:func:`swept_balls`)."""
     if not mask.any():
         return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))
     edt, nearest = distance_transform_edt(~mask, return_indices=True)
@@ -97,6 +103,8 @@ def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, gr
     # where the bound is small, the exact distance to the unknown voxels (cubes) around the ball
     r_all = np.tile(radii, len(balls))
     pts = balls.reshape(-1, 3)
+    if slack is not None:  # the volumes between the balls (module docstring)
+        gap -= np.tile(slack, len(balls))
     for c in np.flatnonzero(gap < 0.01):
         reach = int(np.ceil((r_all[c] + 0.01) / grid.voxel)) + 1
         lo = np.maximum(ijk[c] - reach, 0)
@@ -106,7 +114,8 @@ def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, gr
             gap[c] = min(0.01, beyond_m)
             continue
         out = np.maximum(np.abs(pts[c] - grid.centres(local)) - grid.voxel / 2, 0.0)
-        gap[c] = float(np.sqrt((out * out).sum(axis=1)).min()) - r_all[c]
+        gap[c] = float(np.sqrt((out * out).sum(axis=1)).min()) - r_all[c] - (0.0 if slack is None else
+                                                                             slack[c % balls.shape[1]])
     i = int(np.argmin(gap))
     if not gap[i] < beyond_m:
         return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))

@@ -52,19 +52,19 @@ def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, un
     corners = load_scene(da.scene).panel.corners()
     robot, asm = setup(da, environment, capsules, da.horizon)
     qs = warm_start(asm)[::5]
-    balls, radii, names = swept_balls(asm, robot, corners, qs)
-    use = near_boxes(boxes, balls.reshape(-1, 3), np.tile(radii, len(qs)), u.near_m)
+    balls, radii, _, slack = swept_balls(asm, robot, corners, qs)
+    use = near_boxes(boxes, balls.reshape(-1, 3), np.tile(radii + slack, len(qs)), u.near_m)
     for attempt in range(3):
         log.info(f"unknown space: {int(use.sum())} of {len(boxes)} boxes near the motion go to the optimiser")
         robot, asm = setup(da, environment, capsules, da.horizon, boxes[use])
         m = plan_assembly(asm, robot, da.weights, da.solver, da.fine_factor, log.info)
-        balls, radii, names = swept_balls(asm, robot, corners, fine_grid(m.sol.xs, m.sol.us, asm.task.dt,
-                                                                          da.fine_factor)[1])
-        check = unobserved_check(balls, radii, names, grid, mask)
+        balls, radii, names, slack = swept_balls(asm, robot, corners, fine_grid(m.sol.xs, m.sol.us, asm.task.dt,
+                                                                                 da.fine_factor)[1])
+        check = unobserved_check(balls, radii, names, grid, mask, slack=slack)
         if check.distance >= 0:
             break
-        more = near_boxes(boxes, balls[::da.fine_factor].reshape(-1, 3), np.tile(radii, len(balls[::da.fine_factor])),
-                          u.near_m) & ~use
+        every = balls[::da.fine_factor]
+        more = near_boxes(boxes, every.reshape(-1, 3), np.tile(radii + slack, len(every)), u.near_m) & ~use
         if not more.any():
             break
         use |= more
