@@ -66,8 +66,9 @@ def test_catalogue_lists_every_dataset(run_dir):
     cat = pd.read_parquet(tmp / "results/tiny/catalogue.parquet")
     assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "sampled", "voxels", "configurations",
                              "waypoints", "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud",
-                             "environment", "robot_capsules", "trajectory", "fine", "outer"}  # two 'points', three 'timeseries'
-    assert len(cat) == 23  # the plan-gain experiment is its own target (experiments), with its own catalogue
+                             "environment", "unknown", "robot_capsules", "trajectory", "fine", "outer",
+                             "torques"}  # two 'points', three 'timeseries'
+    assert len(cat) == 25  # the plan-gain experiment is its own target (experiments), with its own catalogue
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256
@@ -156,7 +157,7 @@ def test_caching_reruns_exactly_the_affected_stages(run_dir, tmp_path):
     jobs = run[18]
     assert set(jobs) == {"dualarm_animation", "all"}
     jobs = run[19]
-    assert set(jobs) == {"dualarm_scan", "dualarm_envelope"} | motion
+    assert set(jobs) == {"dualarm_scan", "dualarm_envelope", "dualarm_unknown"} | motion
 
 
 def test_changing_shard_count_recomputes_consistently(run_dir, tmp_path):
