@@ -85,8 +85,8 @@ def main():
 
 def _default_problem():
     d = yaml.safe_load(open(os.path.join(ROOT, "config", "config.yaml")))["dualarm"]
-    robot = fit_capsules(build_dual_arm(load_dual_arm_file(os.path.join(ROOT, d["robot"]))))[0]
     scene = load_scene(os.path.join(ROOT, d["scene"]))
+    robot = fit_capsules(build_dual_arm(load_dual_arm_file(os.path.join(ROOT, d["robot"])), float(scene.panel.size[0])))[0]
     _, settings, seed = cloud_source(d)
     fit, fit_seed = fit_settings(d)
     env = fit_envelope(scan(scene, settings, np.random.default_rng(seed))[0], fit, np.random.default_rng(fit_seed))
