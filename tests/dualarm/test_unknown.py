@@ -16,7 +16,7 @@ from capmap.dualarm.cloud import depth, fit_envelope
 from capmap.dualarm.distance import segment_triangle
 from capmap.dualarm.scene import Box, scan, surface_points
 from capmap.dualarm.unknown import Grid, box_rectangles, merge_boxes, unknown_space
-from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check
+from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check, viewpoints_that_see
 from tests.dualarm.conftest import SECTION
 
 HIDDEN = Box("shelf", np.array([0.60, 0.30, 0.45]), np.array([0.70, 0.40, 0.50]))  # under the bulkhead: its top
@@ -152,3 +152,26 @@ def test_swept_balls_with_their_slack_hold_the_whole_volumes(robot, scene, make_
     pts = np.concatenate(pts)
     reach = np.linalg.norm(pts[:, None, :] - balls[0][None], axis=2) - (radii + slack)[None]
     assert reach.min(axis=1).max() <= 1e-12
+
+
+def test_suggested_viewpoints_see_the_region_past_every_obstacle():
+    """An unknown box behind a wall (a fitted volume) and another unknown box: every suggested camera's
+    segment to the region's centre, sampled densely here, crosses no unknown voxel and no fitted volume
+    before it enters the region, and cameras behind the wall are not suggested."""
+    grid = Grid.over([0, 0, 0], [1, 1, 1], 0.02)
+    region = np.array([[0.7, 0.4, 0.4], [0.8, 0.6, 0.6]])
+    other = np.array([[0.3, 0.0, 0.0], [0.4, 1.0, 0.5]])  # an unknown slab across the lower half
+    mask = unknown_mask(grid, np.array([region, other]))
+
+    def depth_fn(p):  # a fitted wall x in [0.5, 0.52], y < 0.3 (a slab of radius 1 cm about x = 0.51)
+        return np.where(p[:, 1] < 0.3, np.abs(p[:, 0] - 0.51) - 0.01, 1.0)
+
+    seen = viewpoints_that_see(region, grid, mask, depth_fn, np.array([0.1, 0.5, 0.9]), n=600)
+    assert len(seen) > 5
+    target = region.mean(axis=0)
+    for c in seen:
+        t = np.linspace(0, 1, 2000)[:, None]
+        pts = c + t * (target - c)
+        pts = pts[~np.all((pts >= region[0]) & (pts <= region[1]), axis=1)]
+        assert (depth_fn(pts) > 0).all()
+        assert not np.any(np.all((pts >= other[0]) & (pts <= other[1]), axis=1))

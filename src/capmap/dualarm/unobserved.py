@@ -19,7 +19,7 @@ from capmap.dualarm.assembly import Assembly
 from capmap.dualarm.robot import DualArm
 from capmap.dualarm.unknown import Grid
 
-__all__ = ["swept_balls", "UnobservedCheck", "unobserved_check", "unknown_mask"]
+__all__ = ["swept_balls", "UnobservedCheck", "unobserved_check", "unknown_mask", "viewpoints_that_see"]
 
 
 def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np.ndarray,
@@ -121,3 +121,29 @@ def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, gr
         return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))
     at = tuple(nearest[(slice(None), *ijk[i])])
     return UnobservedCheck(float(gap[i]), i // balls.shape[1], str(names[i % balls.shape[1]]), grid.centres(np.array(at)))
+
+
+def viewpoints_that_see(region: np.ndarray, grid: Grid, mask: np.ndarray, depth_fn, around: np.ndarray,
+                        n: int = 400, rng: np.random.Generator | None = None) -> np.ndarray:
+    """Camera positions (k, 3) m, nearest ``around`` (3,) m first, from which the centre of an unknown
+    ``region`` (2, 3) m is in sight: every point of the segment before it enters the region lies in no
+    unknown voxel of ``mask`` and outside every fitted volume (``depth_fn``: points (m, 3) -> depth (m,),
+    > 0 outside). Candidates: ``n`` points of the work volume in the open (depth > 5 cm, not unknown)."""
+    rng = np.random.default_rng(0) if rng is None else rng
+    hi = grid.lower + np.array(grid.shape) * grid.voxel
+    cand = rng.uniform(grid.lower, hi, (n, 3))
+    ijk, _ = grid.index(cand)
+    ijk = np.clip(ijk, 0, np.array(grid.shape) - 1)
+    cand = cand[~mask[tuple(ijk.T)] & (depth_fn(cand) > 0.05)]
+    target = region.mean(axis=0)
+    ok = []
+    for c in cand:
+        d = target - c
+        pts = c + np.outer(np.arange(0.0, 1.0, grid.voxel / 2 / max(np.linalg.norm(d), 1e-9)), d)
+        pts = pts[~np.all((pts >= region[0]) & (pts <= region[1]), axis=1)]
+        ijk, inside = grid.index(pts)
+        if not inside.all() or mask[tuple(ijk.T)].any() or (depth_fn(pts) <= 0).any():
+            continue
+        ok.append(c)
+    ok = np.array(ok).reshape(-1, 3)
+    return ok[np.argsort(np.linalg.norm(ok - around, axis=1))]

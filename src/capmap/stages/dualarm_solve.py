@@ -4,6 +4,7 @@ problem by AL-FDDP and by mim-solvers CSQP)."""
 
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import replace
 
@@ -13,13 +14,14 @@ import pandas as pd
 from capmap.config.dualarm import DualArmConfig, Horizon
 from capmap.config.scene_file import load_scene
 from capmap.dualarm.assembly import assemble, warm_start
+from capmap.dualarm.cloud import depth
 from capmap.dualarm.evaluate import fine_grid, node_errors
 from capmap.dualarm.motion import motion_quantities, motion_tables, plan_assembly, torque_table
 from capmap.dualarm.settings import Weights
 from capmap.dualarm.solver import equality_cost, initial_guess, solve, solve_csqp
 from capmap.dualarm.tables import envelope_from, unknown_boxes
 from capmap.dualarm.unknown import Grid, near_boxes, with_boxes
-from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check
+from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check, viewpoints_that_see
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
@@ -71,6 +73,22 @@ def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, un
     return robot, asm, m, check, int(use.sum()), len(boxes)
 
 
+def _suggest(da: DualArmConfig, environment: str, unknown: str, msg: str) -> str:
+    """Where a camera would see the unknown region named in ``msg`` ('unknown [x0 x1, y0 y1, z0 z1]'):
+    the candidates nearest the configured viewpoints (:func:`capmap.dualarm.unobserved.viewpoints_that_see`)."""
+    x = [float(v) for v in re.search(r"unknown \[([-\d.]+) ([-\d.]+), ([-\d.]+) ([-\d.]+), ([-\d.]+) ([-\d.]+)\]",
+                                     msg).groups()]
+    region = np.array([[x[0], x[2], x[4]], [x[1], x[3], x[5]]])
+    u = da.unknown
+    grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
+    env, _ = envelope_from(datasets.read(environment))
+    seen = viewpoints_that_see(region, grid, unknown_mask(grid, unknown_boxes(datasets.read(unknown))),
+                               lambda p: depth(p, env), da.scan.viewpoints.mean(axis=0))
+    if not len(seen):
+        return "no point of the work volume in the open has a line of sight to it"
+    return "a camera at " + " or ".join(str(np.round(v, 2).tolist()) for v in seen[:2]) + " m would see it"
+
+
 def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_trajectory: str, out_fine: str,
                            out_outer: str, out_torques: str, out_csv: str, out_md: str, slice_json: str) -> None:
     """The satellite-panel assembly by augmented-Lagrangian DDP, then checked on a finer grid
@@ -86,7 +104,7 @@ def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_tr
         msg = exc.in_terms(scene=f"dualarm.scene = {da.scene!r}")
         if "unknown [" in msg:
             msg += ("; that region (x, y, z ranges in m) was observed by no viewpoint of dualarm.cloud.viewpoints_m: "
-                    "add one with a line of sight to it, or move the task away from it")
+                    f"{_suggest(da, environment, unknown, msg)}, or move the task away from it")
         raise ConfigError(msg) from None
     if check.distance < 0:
         raise DataError(f"the optimised motion reaches {1e3 * -check.distance:.1f} mm into space no camera observed "
