@@ -88,20 +88,27 @@ def test_torques_equal_the_appended_body_formulation(setting):
     assert out.residual.max() < 1e-9 * (1 + np.abs(out.f_part).max())
 
 
+def _grasp(asm, part, data, q, v, a):
+    """The grasp map G (6, 12) and the grippers' stacked transposed LOCAL Jacobians (nv, 12) at (q, v, a),
+    computed here from Pinocchio's placements (the kinematics left in ``data``)."""
+    model, grippers = asm.model, (asm.task.left, asm.task.right)
+    pin.forwardKinematics(model, data, q, v, a)
+    pin.updateFramePlacements(model, data)
+    pin.computeJointJacobians(model, data, q)
+    oMp = data.oMf[part.frame]
+    G = np.hstack([oMp.actInv(data.oMf[g]).toDualActionMatrix() for g in grippers])
+    JT = np.hstack([pin.getFrameJacobian(model, data, g, pin.ReferenceFrame.LOCAL).T for g in grippers])
+    return G, JT
+
+
 def test_least_norm_distribution_is_numpys_minimum_norm_solution(setting):
     asm, part, q, v, a = setting
     model = asm.model
     data = model.createData()
     out = held_torques(model, (asm.task.left, asm.task.right), part, q, v, a, model.effortLimit)
     for k in range(len(q)):
-        pin.forwardKinematics(model, data, q[k], v[k], a[k])
-        pin.updateFramePlacements(model, data)
-        pin.computeJointJacobians(model, data, q[k])
-        oMp = data.oMf[part.frame]
-        G = np.hstack([oMp.actInv(data.oMf[g]).toDualActionMatrix() for g in (asm.task.left, asm.task.right)])
+        G, JT = _grasp(asm, part, data, q[k], v[k], a[k])
         W0 = np.linalg.lstsq(G, part_wrench(model, data, part), rcond=None)[0]
-        JT = np.hstack([pin.getFrameJacobian(model, data, g, pin.ReferenceFrame.LOCAL).T
-                        for g in (asm.task.left, asm.task.right)])
         ref = pin.rnea(model, data, q[k], v[k], a[k]) + JT @ W0
         assert np.allclose(out.tau_least_norm_nm[k], ref, atol=1e-9 * (1 + np.abs(ref).max()))
 
@@ -116,14 +123,8 @@ def test_peak_minimising_distribution_beats_random_internal_wrenches(setting):
     out = held_torques(model, (asm.task.left, asm.task.right), part, q, v, a, effort)
     rng = np.random.default_rng(5)
     for k in range(len(q)):
-        pin.forwardKinematics(model, data, q[k], v[k], a[k])
-        pin.updateFramePlacements(model, data)
-        pin.computeJointJacobians(model, data, q[k])
-        oMp = data.oMf[part.frame]
-        G = np.hstack([oMp.actInv(data.oMf[g]).toDualActionMatrix() for g in (asm.task.left, asm.task.right)])
+        G, JT = _grasp(asm, part, data, q[k], v[k], a[k])
         N = np.linalg.svd(G)[2][6:].T
-        JT = np.hstack([pin.getFrameJacobian(model, data, g, pin.ReferenceFrame.LOCAL).T
-                        for g in (asm.task.left, asm.task.right)])
         best = np.abs(out.tau_nm[k] / effort).max()
         assert best <= np.abs(out.tau_least_norm_nm[k] / effort).max() + 1e-9
         W = np.concatenate([out.w_left[k], out.w_right[k]])
