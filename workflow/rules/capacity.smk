@@ -1,4 +1,6 @@
 # Method family 1: capacity map -> plan -> verify (one plan/verify job per payload).
+# priority 20: the capacity map's chain (model .. voxel_map) is the run's critical path, so it goes first;
+# 10: the long jobs of the other families (dual-arm envelope .. optimise, follow) start before the short ones.
 
 
 rule model:
@@ -11,6 +13,7 @@ rule model:
         slice=params("model", "model"),
     log:
         out("logs/model.log"),
+    priority: 20
     conda:
         "../envs/capmap.yaml"
     script:
@@ -27,6 +30,7 @@ rule sample:
         slice=params("sample", "sample"),
     log:
         out("logs/sample.log"),
+    priority: 20
     conda:
         "../envs/capmap.yaml"
     script:
@@ -46,6 +50,7 @@ rule capacity:
     wildcard_constraints:
         k=r"\d+",
         n=r"\d+",
+    priority: 20
     conda:
         "../envs/capmap.yaml"
     script:
@@ -63,6 +68,7 @@ rule voxels:
         slice=params("voxels", "voxels"),
     log:
         out("logs/voxels.log"),
+    priority: 20
     conda:
         "../envs/capmap.yaml"
     script:
@@ -84,6 +90,7 @@ rule refine:
     wildcard_constraints:
         k=r"\d+",
         n=r"\d+",
+    priority: 20
     conda:
         "../envs/capmap.yaml"
     script:
@@ -106,6 +113,7 @@ rule voxel_map:
         slice=params("refine", "voxel_map"),
     log:
         out("logs/voxel_map.log"),
+    priority: 20
     conda:
         "../envs/capmap.yaml"
     script:

@@ -12,6 +12,7 @@ rule dualarm_scan:
         slice=lambda w: params("dualarm_scan", "dualarm_scan"),
     log:
         out("logs/dualarm/scan.log"),
+    priority: 10
     conda:
         "../envs/capmap.yaml"
     script:
@@ -29,6 +30,7 @@ rule dualarm_envelope:
         slice=lambda w: params("dualarm_envelope", "dualarm_envelope"),
     log:
         out("logs/dualarm/envelope.log"),
+    priority: 10
     conda:
         "../envs/capmap.yaml"
     script:
@@ -46,6 +48,7 @@ rule dualarm_unknown:
         slice=lambda w: params("dualarm_unknown", "dualarm_unknown"),
     log:
         out("logs/dualarm/unknown.log"),
+    priority: 10
     conda:
         "../envs/capmap.yaml"
     script:
@@ -63,6 +66,7 @@ rule dualarm_capsules:
         slice=lambda w: params("dualarm_capsules", "dualarm_capsules"),
     log:
         out("logs/dualarm/capsules.log"),
+    priority: 10
     conda:
         "../envs/capmap.yaml"
     script:
@@ -88,6 +92,7 @@ rule dualarm_optimise:
         slice=lambda w: params("dualarm_optimise", "dualarm_optimise"),
     log:
         out("logs/dualarm/optimise.log"),
+    priority: 10
     conda:
         "../envs/capmap.yaml"
     script:

@@ -16,6 +16,7 @@ rule follow:
         out("logs/follow/{case}.log"),
     wildcard_constraints:
         case="space|ground",
+    priority: 10
     conda:
         "../envs/capmap.yaml"
     script:

@@ -143,6 +143,51 @@ def place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V):
 
 
 @_jit
+def plane_gap(A, B, s, V, t):
+    """A lower bound (m) of the distance from segment A[s] -> B[s] to triangle V[t]: the nearer end's
+    distance to the triangle's plane when both ends are on one side of it, else 0."""
+    e1x, e1y, e1z = V[t, 1, 0] - V[t, 0, 0], V[t, 1, 1] - V[t, 0, 1], V[t, 1, 2] - V[t, 0, 2]
+    e2x, e2y, e2z = V[t, 2, 0] - V[t, 0, 0], V[t, 2, 1] - V[t, 0, 1], V[t, 2, 2] - V[t, 0, 2]
+    nx, ny, nz = e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
+    nn = np.sqrt(nx * nx + ny * ny + nz * nz)
+    if nn == 0.0:
+        return 0.0
+    da = (nx * (A[s, 0] - V[t, 0, 0]) + ny * (A[s, 1] - V[t, 0, 1]) + nz * (A[s, 2] - V[t, 0, 2])) / nn
+    db = (nx * (B[s, 0] - V[t, 0, 0]) + ny * (B[s, 1] - V[t, 0, 1]) + nz * (B[s, 2] - V[t, 0, 2])) / nn
+    return min(abs(da), abs(db)) if da * db > 0.0 else 0.0
+
+
+@_jit
+def _point_segment(A, B, s, x, y, z):
+    """Distance (m) from the point (x, y, z) to segment A[s] -> B[s]."""
+    dx, dy, dz = B[s, 0] - A[s, 0], B[s, 1] - A[s, 1], B[s, 2] - A[s, 2]
+    ex, ey, ez = x - A[s, 0], y - A[s, 1], z - A[s, 2]
+    L2 = dx * dx + dy * dy + dz * dz
+    t = 0.0 if L2 == 0.0 else min(max((ex * dx + ey * dy + ez * dz) / L2, 0.0), 1.0)
+    ex, ey, ez = ex - t * dx, ey - t * dy, ez - t * dz
+    return np.sqrt(ex * ex + ey * ey + ez * ez)
+
+
+@_jit
+def lower_bound(A, B, V, kind, a, b):
+    """A lower bound (m) of the distance between primitives a and b of a pair row (kind 0: segments
+    A[a] -> B[a] and A[b] -> B[b]; 1: segment a and triangle V[b]), at a few dozen flops: the distance
+    from the first segment to the second primitive's centre less that primitive's reach from its
+    centre, and for a triangle also :func:`plane_gap`."""
+    if kind == 0:
+        cx, cy, cz = 0.5 * (A[b, 0] + B[b, 0]), 0.5 * (A[b, 1] + B[b, 1]), 0.5 * (A[b, 2] + B[b, 2])
+        reach = 0.5 * np.sqrt((B[b, 0] - A[b, 0]) ** 2 + (B[b, 1] - A[b, 1]) ** 2 + (B[b, 2] - A[b, 2]) ** 2)
+        return _point_segment(A, B, a, cx, cy, cz) - reach
+    cx = (V[b, 0, 0] + V[b, 1, 0] + V[b, 2, 0]) / 3.0
+    cy = (V[b, 0, 1] + V[b, 1, 1] + V[b, 2, 1]) / 3.0
+    cz = (V[b, 0, 2] + V[b, 1, 2] + V[b, 2, 2]) / 3.0
+    reach = 0.0
+    for m in range(3):
+        reach = max(reach, np.sqrt((V[b, m, 0] - cx) ** 2 + (V[b, m, 1] - cy) ** 2 + (V[b, m, 2] - cz) ** 2))
+    return max(_point_segment(A, B, a, cx, cy, cz) - reach, plane_gap(A, B, a, V, b))
+
+
+@_jit
 def distances(A, B, V, rows, rsum, d, P, Q):
     """Safety distances d (P,) of the pair rows (kind, first, second) with closest points P, Q."""
     for n in range(rows.shape[0]):
@@ -183,20 +228,9 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, cutoff,
             if gap - rad[a] - rad[b] - rsum[n] > cutoff:  # a lower bound of the distance above the cutoff
                 out[k, n] = np.inf
                 continue
-            if rows[n, 0] == 1:  # both ends on one side of the triangle's plane, farther than the cutoff
-                t, s = rows[n, 2], rows[n, 1]
-                e1 = (V[t, 1, 0] - V[t, 0, 0], V[t, 1, 1] - V[t, 0, 1], V[t, 1, 2] - V[t, 0, 2])
-                e2 = (V[t, 2, 0] - V[t, 0, 0], V[t, 2, 1] - V[t, 0, 1], V[t, 2, 2] - V[t, 0, 2])
-                nx = e1[1] * e2[2] - e1[2] * e2[1]
-                ny = e1[2] * e2[0] - e1[0] * e2[2]
-                nz = e1[0] * e2[1] - e1[1] * e2[0]
-                nn = np.sqrt(nx * nx + ny * ny + nz * nz)
-                if nn > 0.0:
-                    da = (nx * (A[s, 0] - V[t, 0, 0]) + ny * (A[s, 1] - V[t, 0, 1]) + nz * (A[s, 2] - V[t, 0, 2])) / nn
-                    db = (nx * (B[s, 0] - V[t, 0, 0]) + ny * (B[s, 1] - V[t, 0, 1]) + nz * (B[s, 2] - V[t, 0, 2])) / nn
-                    if da * db > 0.0 and min(abs(da), abs(db)) - rsum[n] > cutoff:
-                        out[k, n] = np.inf
-                        continue
+            if rows[n, 0] == 1 and plane_gap(A, B, rows[n, 1], V, rows[n, 2]) - rsum[n] > cutoff:
+                out[k, n] = np.inf  # both ends on one side of the triangle's plane, farther than the cutoff
+                continue
             if rows[n, 0] == 0:
                 out[k, n] = segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, 0) - rsum[n]
             else:

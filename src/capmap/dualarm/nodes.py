@@ -53,6 +53,21 @@ def node_targets(task, k: int) -> tuple[np.ndarray, np.ndarray]:
     return tg, np.vstack([task.axis_point, task.axis_across])
 
 
+def _compact(pk: Packed, rows: np.ndarray):
+    """(seg_f, seg_j, tri_f, tri_j, rows) with only the primitives that ``rows`` (P, 3) name, renumbered:
+    a node places the few its pairs use, not the whole scene's."""
+    seg = np.unique(np.concatenate([rows[:, 1], rows[rows[:, 0] == 0, 2]])).astype(np.int64)
+    tri = np.unique(rows[rows[:, 0] == 1, 2]).astype(np.int64)
+    seg_new, tri_new = np.zeros(len(pk.seg_f), np.int64), np.zeros(len(pk.tri_f), np.int64)
+    seg_new[seg], tri_new[tri] = np.arange(len(seg)), np.arange(len(tri))
+    out = rows.copy()
+    out[:, 1] = seg_new[rows[:, 1]]
+    ss = rows[:, 0] == 0
+    out[ss, 2], out[~ss, 2] = seg_new[rows[ss, 2]], tri_new[rows[~ss, 2]]
+    c = np.ascontiguousarray
+    return c(pk.seg_f[seg]), c(pk.seg_j[seg]), c(pk.tri_f[tri]), c(pk.tri_j[tri]), c(out)
+
+
 class CompiledNodeModel(crocoddyl.ActionModelAbstract):
     """Node k of the problem on the packed chain ``packed`` (same arguments and meaning as
     :class:`capmap.dualarm.ocp.NodeModel`; multipliers lam_eq, lam_in on the node)."""
@@ -75,7 +90,7 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
         w, dt = ctx.weights, task.dt
         self.par = np.array([dt, w.velocity, w.panel, w.margin_m, 1.0 if self.terminal else dt,
                              0.0 if self.terminal else 1.0, 1.0 if ctx.with_limits else 0.0,
-                             1.0 if mode == "al" else 0.0])
+                             1.0 if mode == "al" else 0.0, 1.0])
         self.lim = np.vstack([np.broadcast_to(np.asarray(w.control, float), (nq,)), ctx.q_lower, ctx.q_upper, ctx.v_max])
         I, Z = np.eye(nq), np.zeros((nq, nq))
         self.Fx = np.block([[I, dt * I], [Z, I]])
@@ -83,8 +98,12 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
         self._u0 = np.zeros(nq)
         self._vdata = None
         pk = packed
-        self._static = (pk.chain_f, pk.chain_i, pk.moves, pk.frame_f, pk.frame_j, pk.seg_f, pk.seg_j, pk.tri_f, pk.tri_j,
-                        self.rows, self.rsum, self.kind, self.tg, self.axis, self.par, self.lim)
+        seg_f, seg_j, tri_f, tri_j, rows = _compact(pk, self.rows)
+        self._static = (pk.chain_f, pk.chain_i, pk.moves, pk.frame_f, pk.frame_j, seg_f, seg_j, tri_f, tri_j,
+                        rows, self.rsum, self.kind, self.tg, self.axis, self.par, self.lim)
+        exact = self.par.copy()
+        exact[8] = 0.0  # values(): every pair's exact distance
+        self._static_exact = self._static[:14] + (exact, self.lim)
 
     def createData(self):
         d = crocoddyl.ActionDataAbstract(self)
@@ -102,16 +121,17 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
         d.out = (d.c, d.C, d.gv, d.Lx, d.Lxx, d.Lu, d.xnext)
         return d
 
-    def _eval(self, d, x, u, diff):
-        return node_eval(*self._static, self.lam_eq, self.lam_in if self.mode == "al" else d.gv, x,
-                         self._u0 if u is None else u, self.ctx.mu, diff, *d.out)
+    def _eval(self, d, x, u, diff, exact=False):
+        return node_eval(*(self._static_exact if exact else self._static), self.lam_eq,
+                         self.lam_in if self.mode == "al" else d.gv, x, self._u0 if u is None else u, self.ctx.mu, diff,
+                         *d.out)
 
     def values(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Equality values c (m,) and inequality values g (p,) at the state x (2 nq,)."""
         if self._vdata is None:
             self._vdata = self.createData()
         d = self._vdata
-        self._eval(d, np.ascontiguousarray(x, dtype=float), None, False)
+        self._eval(d, np.ascontiguousarray(x, dtype=float), None, False, exact=True)
         return d.c.copy(), d.gv.copy()
 
     def calc(self, data, x, u=None):
