@@ -57,7 +57,7 @@ rule capacity_map:
 rule all:
     input:
         CAPACITY_MAP,
-        expand(out("follow/{case}/{name}.png"), case=FOLLOW_CASES, name=["progress", "torques"]),
+        expand(out("follow/{case}/{name}.png"), case=FOLLOW_CASES, name=["progress", "torques", "torque_split"]),
         [out("follow/summary.csv")] if FOLLOW_CASES else [],
         [out(f"reconfig/{name}") for name in ("summary.csv", "manipulability.png", "joint_rates.png",
                                                  "passive_joint.png", "animation.html")] if RECONFIG_METHODS else [],

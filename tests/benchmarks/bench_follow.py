@@ -4,8 +4,8 @@
 
 Per period the follower reads the command, interpolates the path dynamics a, b, c at s,
 computes the admissible acceleration interval from the torque limits, applies the speed
-ceiling and the catch-up law, and integrates (capmap.following.follower.follow). Target (issue 5):
-well under 50 us per period. Prints its figures.
+ceiling and the catch-up law, and integrates (capmap.following.follower.follow); on drives also the
+friction at the current speed. Target (issue 5): well under 50 us per period. Prints its figures.
 """
 
 from __future__ import annotations
@@ -35,6 +35,9 @@ def cases():
     T0 = ur5.fk(q0[None])[0]
     yield ("UR5, 0.5 m line, shoulder pan limited to 14 N m", ur5, T0[:3, 3], T0[:3, 3] + [0, 0.5, 0], T0[:3, :3], q0,
            2.0, np.array([14, 150, 150, 28, 28, 28.0]), (1.0, 4.0, 40.0), 5.0)
+    drives = free(load(ROOT / "config/robots/ur5_drives.yaml"))  # the same line with the drives' terms (issue 28)
+    yield ("UR5 on drives (rotor inertia, friction), the same line", drives, T0[:3, 3], T0[:3, 3] + [0, 0.5, 0],
+           T0[:3, :3], q0, 2.0, np.array([14, 150, 150, 28, 28, 28.0]), (1.0, 4.0, 40.0), 5.0)
     ssrms = lock(load(ROOT / "config/robots/ssrms7.yaml"), 1, np.deg2rad(100))
     R = rotation_from_rpy([90, 0, 90])
     yield ("SSRMS joint 1 locked, 1.30 m segment, 1500 kg, 150 N m", ssrms, np.array([0.375, 4.875, 1.875]),

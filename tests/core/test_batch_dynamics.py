@@ -3,6 +3,8 @@ computation (ArmDynamics.coefficients) and the independent textbook Newton-Euler
 tests/reference, over random and near-singular configurations of the SSRMS (space, and on the
 ground with gravity and an offset base centre of mass), the UR5 (URDF) and a locked middle joint."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -10,6 +12,7 @@ from capmap.config.robot_file import load
 from capmap.core.batch_dynamics import BatchDynamics
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import free, lock
+from capmap.core.robot import Drive, build_robot
 from tests.reference.newton_euler import newton_euler
 from tests.scenario import SSRMS_YAML, UR5_YAML
 
@@ -21,7 +24,8 @@ def _arms(gravity_robot_yaml):
     return {"ssrms_j1": lock(load(SSRMS_YAML), 1, np.deg2rad(100)),
             "ssrms_j4": lock(load(SSRMS_YAML), 4, np.deg2rad(40)),
             "ground_j1": lock(load(gravity_robot_yaml), 1, np.deg2rad(100)),
-            "ur5": free(load(UR5_YAML))}
+            "ur5": free(load(UR5_YAML)),
+            "ssrms_j4_drives": lock(_with_armature(load(SSRMS_YAML), np.linspace(50.0, 5.0, 7)), 4, np.deg2rad(40))}
 
 
 def _near_singular(dyn, rng, n):
@@ -64,7 +68,7 @@ def _tolerance(dyn, q_active, scale):
     return K_BOUND * np.finfo(float).eps * np.linalg.cond(J) * T
 
 
-@pytest.mark.parametrize("name", ["ssrms_j1", "ssrms_j4", "ground_j1", "ur5"])
+@pytest.mark.parametrize("name", ["ssrms_j1", "ssrms_j4", "ground_j1", "ur5", "ssrms_j4_drives"])
 def test_batch_equals_pinocchio_per_configuration(gravity_robot_yaml, name):
     arm = _arms(gravity_robot_yaml)[name]
     dyn, bd = ArmDynamics(arm), BatchDynamics(arm)
@@ -92,10 +96,21 @@ def test_an_exactly_singular_configuration_is_flagged():
     assert BatchDynamics(arm).coefficients(qa).singular[0]
 
 
-def test_batch_polynomial_equals_independent_newton_euler(gravity_robot_yaml):
+def _with_armature(robot, armature):
+    """The robot rebuilt with drives of reflected rotor inertia ``armature`` (n,) kg m^2."""
+    desc = replace(robot.description, drives=tuple(Drive(i, armature_kgm2=float(a)) for i, a in enumerate(armature)))
+    return build_robot(desc)
+
+
+@pytest.mark.parametrize("armature", [False, True])
+def test_batch_polynomial_equals_independent_newton_euler(gravity_robot_yaml, armature):
+    """c0 + a L u + v^2 Q phi + m S (a u - g) against the textbook Newton-Euler of tests/reference, plus
+    with drives the rotor torques armature_j qdd_j added by hand (that reference has no drives)."""
     robot = load(gravity_robot_yaml)
+    arm_ref = lock(robot, 1, np.deg2rad(100))  # the motion (qd, qdd) does not depend on the drives
+    Ia = np.linspace(5.0, 0.5, robot.n_joints) if armature else np.zeros(robot.n_joints)  # of the order of the links'
+    robot = _with_armature(robot, Ia)
     arm = lock(robot, 1, np.deg2rad(100))
-    dyn = ArmDynamics(arm)
     rng = np.random.default_rng(6)
     qa = rng.uniform(-np.pi, np.pi, (8, 6))
     co = BatchDynamics(arm).coefficients(qa)
@@ -106,8 +121,8 @@ def test_batch_polynomial_equals_independent_newton_euler(gravity_robot_yaml):
         v, a, m = 0.15, 0.03, 800.0
         phi = np.array([u[0] ** 2, u[1] ** 2, u[2] ** 2, u[0] * u[1], u[0] * u[2], u[1] * u[2]])
         y = c0[i] + a * L[i] @ u + v**2 * Q[i] @ phi + m * S[i] @ (a * u - robot.gravity)
-        q, qd, qdd = dyn.motion(qa[i], v * u, a * u)
+        q, qd, qdd = ArmDynamics(arm_ref).motion(qa[i], v * u, a * u)
         tau, _, bf, bm = newton_euler(q, qd, qdd, robot.gravity, payload_kg=m, base_com=robot.base_com,
                                       path=gravity_robot_yaml)
-        expect = np.concatenate([tau[1:], bf, bm])
+        expect = np.concatenate([(tau + Ia * qdd)[1:], bf, bm])
         assert np.allclose(y, expect, rtol=1e-9, atol=1e-9 * np.abs(expect).max())

@@ -24,7 +24,8 @@ rule follow:
 
 
 rule follow_plots:
-    """Command vs followed vs TOPP-RA path coordinate, lag, deviation; torques before and after limiting."""
+    """Command vs followed vs TOPP-RA path coordinate, lag, deviation; torques before and after limiting; their
+    split into link dynamics, rotor inertia and friction."""
     input:
         timeseries=out("follow/{case}/timeseries.parquet"),
         toppra=out("follow/{case}/toppra.parquet"),
@@ -33,6 +34,8 @@ rule follow_plots:
                  caption="../report/follow_progress.rst"),
         torques=report(out("follow/{case}/torques.png"), category="Following", subcategory="{case}",
                        caption="../report/follow_torques.rst"),
+        split=report(out("follow/{case}/torque_split.png"), category="Following", subcategory="{case}",
+                     caption="../report/follow_torque_split.rst"),
     params:
         slice=lambda w: params(f"follow_{w.case}", "follow_plots", follow_job() if w.case == "space" else None),
     log:

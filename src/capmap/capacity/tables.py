@@ -27,7 +27,8 @@ AXIS_COLUMNS = [f"capacity_along_{label}_kg" for label in AXIS_LABELS]  # moves 
 
 
 def model_table(robot: Robot) -> pd.DataFrame:
-    """Joint/link table of a built robot (angles in deg)."""
+    """Joint/link table of a built robot (angles in deg), with each joint's drive: reflected rotor inertia
+    armature_kgm2 and friction coulomb_nm, viscous_nms."""
     m = robot.model
     rows = []
     for j in range(1, m.njoints):
@@ -43,7 +44,8 @@ def model_table(robot: Robot) -> pd.DataFrame:
             "placement_roll_deg": rpy[0], "placement_pitch_deg": rpy[1], "placement_yaw_deg": rpy[2],
             "mass_kg": inertia.mass, "com_x_m": inertia.lever[0], "com_y_m": inertia.lever[1], "com_z_m": inertia.lever[2],
             "ixx_kgm2": I[0, 0], "iyy_kgm2": I[1, 1], "izz_kgm2": I[2, 2], "ixy_kgm2": I[0, 1], "ixz_kgm2": I[0, 2],
-            "iyz_kgm2": I[1, 2],
+            "iyz_kgm2": I[1, 2], "armature_kgm2": m.armature[j - 1], "coulomb_nm": m.friction[j - 1],
+            "viscous_nms": m.damping[j - 1],
         })
     return pd.DataFrame(rows)
 

@@ -53,6 +53,9 @@ def parse_platform(doc: object, source: str) -> PlatformDescription:
     if "arms" not in doc or "dh" in doc or "urdf" in doc or "links" in doc:
         raise ConfigError(f"{source}: a platform robot is given by 'arms' (and 'captures'), without 'dh', 'urdf' "
                           "or 'links'")
+    if "drives" in doc:
+        raise ConfigError(f"{source}: drives: a platform's reconfiguration is kinematic (no drive model); drives are "
+                          "for a single arm given by 'dh' or 'urdf'")
     arms, seen = [], set()
     for a, arm in enumerate(doc["arms"]):
         if arm["name"] in seen:

@@ -21,7 +21,7 @@ import pinocchio as pin
 from capmap.config.validation import load_yaml, read_regular_file, validate
 from capmap.core.ik import classify
 from capmap.core.reduction import free, lock
-from capmap.core.robot import LinkInertia, Robot, RobotDescription, build_robot
+from capmap.core.robot import Drive, LinkInertia, Robot, RobotDescription, build_robot
 from capmap.errors import ConfigError
 
 __all__ = ["lock_classes", "parse_robot", "load_robot", "load", "package_file", "transform", "referenced_files", "check_urdf",
@@ -90,6 +90,40 @@ def check_urdf(path: Path, source: str) -> None:
         raise ConfigError(f"{source}: urdf {path}: not a URDF (root <{root.tag}>, needs <robot> with <link>s)")
 
 
+def _drive(entry: dict, joint: int | str, where: str) -> Drive:
+    """One ``drives`` entry (validated by the schema: non-negative finite numbers) -> :class:`Drive`."""
+    if "armature_kgm2" in entry and ("rotor_inertia_kgm2" in entry or "gear_ratio" in entry):
+        raise ConfigError(f"{where}: give armature_kgm2 or rotor_inertia_kgm2 with gear_ratio, not both")
+    if ("rotor_inertia_kgm2" in entry) != ("gear_ratio" in entry):
+        raise ConfigError(f"{where}: rotor_inertia_kgm2 and gear_ratio go together (armature = rotor inertia x "
+                          "gear ratio^2)")
+    armature = entry.get("armature_kgm2")
+    if "rotor_inertia_kgm2" in entry:
+        armature = float(entry["rotor_inertia_kgm2"]) * float(entry["gear_ratio"]) ** 2
+    friction = entry.get("friction", {})
+    return Drive(joint, None if armature is None else float(armature),
+                 None if "coulomb_nm" not in friction else float(friction["coulomb_nm"]),
+                 None if "viscous_nms" not in friction else float(friction["viscous_nms"]))
+
+
+def _drives(doc: dict, source: str, n: int | None) -> tuple[Drive, ...]:
+    """The ``drives`` of a robot document: a list of n for a DH robot (n joints), a mapping joint name ->
+    drive for a URDF robot (n None: the names are checked when the model is built)."""
+    if "drives" not in doc:
+        return ()
+    drives = doc["drives"]
+    if n is not None:
+        if not isinstance(drives, list):
+            raise ConfigError(f"{source}: drives: a DH robot's drives are a list, one per joint (a mapping by joint "
+                              "name is for URDF robots)")
+        if len(drives) != n:
+            raise ConfigError(f"{source}: drives has {len(drives)} entries but dh.rows has {n}")
+        return tuple(_drive(e, i, f"{source}: drives[{i}]") for i, e in enumerate(drives))
+    if not isinstance(drives, dict):
+        raise ConfigError(f"{source}: drives: a URDF robot's drives are a mapping joint name -> drive")
+    return tuple(_drive(e, str(k), f"{source}: drives.{k}") for k, e in drives.items())
+
+
 def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> RobotDescription:
     """Validate a robot document (already parsed YAML) and convert it to SI / radians."""
     if not isinstance(doc, dict):
@@ -138,7 +172,7 @@ def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> Robot
         return RobotDescription(convention=None, dh=None, links=(), joint_range_rad=ranges,
                                 urdf_path=path, urdf_ee_frame=doc["urdf"]["ee_frame"],
                                 urdf_locked=tuple((str(k), float(v)) for k, v in doc.get("locked", {}).items()),
-                                urdf_joints=joints, **common)
+                                urdf_joints=joints, drives=_drives(doc, source, None), **common)
     if "links" not in doc:
         raise ConfigError(f"{source}: a DH robot needs 'links' (mass, centre of mass, inertia per link)")
     rows = np.asarray(doc["dh"]["rows"], dtype=float)
@@ -160,7 +194,8 @@ def parse_robot(doc: object, source: str, base_dir: Path | None = None) -> Robot
         )
         for i, link in enumerate(doc["links"])
     )
-    return RobotDescription(convention=doc["dh"]["convention"], dh=dh, links=links, joint_range_rad=ranges, **common)
+    return RobotDescription(convention=doc["dh"]["convention"], dh=dh, links=links, joint_range_rad=ranges,
+                            drives=_drives(doc, source, n), **common)
 
 
 def load_robot(path: str | Path) -> RobotDescription:

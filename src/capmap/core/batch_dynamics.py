@@ -55,6 +55,7 @@ class BatchDynamics:
         self.mass = np.array([m.inertias[j].mass for j in range(1, n + 1)])
         self.com = np.array([m.inertias[j].lever for j in range(1, n + 1)])
         self.Ic = np.array([m.inertias[j].inertia for j in range(1, n + 1)])  # about the com
+        self.armature = np.asarray(m.armature, dtype=float).copy()  # (n,) the drives' reflected rotor inertia
         frame = m.frames[robot.ee_frame_id]
         self.ee_joint = int(frame.parentJoint) - 1  # 0-based
         self.ee_p = np.asarray(frame.placement.translation, dtype=float).copy()
@@ -84,6 +85,6 @@ class BatchDynamics:
         Q = np.zeros((B, self.n_out, 6))
         S = np.zeros((B, self.n_out, 3))
         singular = np.zeros(B, dtype=np.bool_)
-        batch_coefficients(self.R0, self.p0, self.axis, self.mass, self.com, self.Ic, self.ee_joint, self.ee_p, self.gravity,
-               self.base_com, self.active, q, c0, L, Q, S, singular)
+        batch_coefficients(self.R0, self.p0, self.axis, self.mass, self.com, self.Ic, self.armature, self.ee_joint,
+                           self.ee_p, self.gravity, self.base_com, self.active, q, c0, L, Q, S, singular)
         return Coefficients(c0, L, Q, S, singular)

@@ -17,9 +17,12 @@ _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the polarisation's 
 
 
 @_jit
-def batch_coefficients(R0, p0, axis, mass, com, Ic, ee_joint, ee_p, gravity, base_com, active, q, c0, L, Q, S, singular):
+def batch_coefficients(R0, p0, axis, mass, com, Ic, armature, ee_joint, ee_p, gravity, base_com, active, q, c0, L, Q, S,
+                       singular):
     """Fill c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6), S (B, n_out, 3) and singular (B,) for the
-    configurations q (B, n) rad (full joint vectors, the locked joint included).
+    configurations q (B, n) rad (full joint vectors, the locked joint included); armature (n,) kg m^2:
+    each joint's reflected rotor inertia, a torque armature_j qdd_j on its joint (Pinocchio's RNEA
+    likewise; the rotor's reaction on the base is not modelled, as there).
 
     Per configuration: one RNEA at rest on 7 right-hand sides (gravity alone: c0; qdd = J^-1 e_c for
     the six Cartesian accelerations c: L6, whose linear columns are L) and one RNEA with velocities on
@@ -90,6 +93,10 @@ def batch_coefficients(R0, p0, axis, mass, com, Ic, ee_joint, ee_p, gravity, bas
             for k in range(na):
                 qdd[active[k], 1 + c] = Jinv[k, c]
         rest_multi(Rl, p0, axis, mass, com, Ic, qdd, a0, tau7, f7, LW, TW)
+        for k in range(na):  # the drives' reflected rotor inertia: a joint torque armature_j qdd_j (no base wrench)
+            j = active[k]
+            for c in range(1, 7):
+                tau7[j, c] += armature[j] * qdd[j, c]
         outputs_multi(tau7, f7, R, p, base_com, active, y7)
         for k in range(na + 6):
             c0[i, k] = y7[k, 0]

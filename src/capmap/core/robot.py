@@ -25,7 +25,7 @@ import pinocchio as pin
 
 from capmap.errors import ConfigError
 
-__all__ = ["EE_FRAME", "LinkInertia", "RobotDescription", "Robot", "build_robot"]
+__all__ = ["EE_FRAME", "Drive", "LinkInertia", "RobotDescription", "Robot", "build_robot"]
 
 EE_FRAME = "ee"
 
@@ -37,6 +37,18 @@ class LinkInertia:
     mass_kg: float
     com_m: np.ndarray  # (3,)
     inertia_kgm2: np.ndarray  # (3, 3) about the centre of mass, link-frame axes
+
+
+@dataclass(frozen=True)
+class Drive:
+    """One joint's drive as a robot file states it (SI): the joint (0-based index of a DH robot, or a URDF
+    joint name), its reflected rotor inertia armature_kgm2 and its friction at the joint, Coulomb
+    coulomb_nm and viscous viscous_nms; None: not stated (a URDF's <dynamics>, else 0)."""
+
+    joint: int | str
+    armature_kgm2: float | None = None
+    coulomb_nm: float | None = None
+    viscous_nms: float | None = None
 
 
 @dataclass(frozen=True)
@@ -56,6 +68,7 @@ class RobotDescription:
     urdf_ee_frame: str | None = None
     urdf_locked: tuple[tuple[str, float], ...] = ()  # URDF joints held fixed: (name, value rad or m), file order
     urdf_joints: tuple[str, ...] | None = None  # the arm's joints as the file names them (None: every joint not locked)
+    drives: tuple[Drive, ...] = ()  # the robot file's drives (rotor inertia, friction), joints not named keep defaults
 
     @property
     def n_joints(self) -> int:
@@ -91,6 +104,25 @@ class Robot:
     @property
     def gravity(self) -> np.ndarray:
         return self.description.gravity_mps2
+
+    @property
+    def armature_kgm2(self) -> np.ndarray:
+        """(n,) each joint's reflected rotor inertia, kg m^2 (Pinocchio's ``model.armature``: in its RNEA and CRBA)."""
+        return np.asarray(self.model.armature, dtype=float).copy()
+
+    @property
+    def coulomb_nm(self) -> np.ndarray:
+        """(n,) each joint's Coulomb friction torque, N m (``model.friction``; a URDF's <dynamics friction>)."""
+        return np.asarray(self.model.friction, dtype=float).copy()
+
+    @property
+    def viscous_nms(self) -> np.ndarray:
+        """(n,) each joint's viscous friction, N m s/rad (``model.damping``; a URDF's <dynamics damping>)."""
+        return np.asarray(self.model.damping, dtype=float).copy()
+
+    @property
+    def has_friction(self) -> bool:
+        return bool(np.any(self.coulomb_nm > 0) or np.any(self.viscous_nms > 0))
 
     @property
     def base_com(self) -> np.ndarray:
@@ -267,6 +299,25 @@ def _build_urdf_model(desc: RobotDescription) -> tuple[pin.Model, np.ndarray]:
     return model, ranges
 
 
+def _apply_drives(desc: RobotDescription, model: pin.Model) -> None:
+    """Write the description's drives into Pinocchio's own fields (armature, friction: Coulomb, damping:
+    viscous), over a URDF's <dynamics> values; a joint the arm does not have is one line naming
+    ``drives.<joint>``."""
+    names = list(model.names[1:])
+    for d in desc.drives:
+        if isinstance(d.joint, str):
+            if d.joint not in names:
+                locked = " (it is locked)" if d.joint in dict(desc.urdf_locked) else ""
+                raise ConfigError(f"{desc.source}: drives.{d.joint}: not a joint of the arm{locked} "
+                                  f"(its joints: {', '.join(names)})")
+            i = names.index(d.joint)
+        else:
+            i = d.joint
+        for field_, value in (("armature", d.armature_kgm2), ("friction", d.coulomb_nm), ("damping", d.viscous_nms)):
+            if value is not None:
+                getattr(model, field_)[i] = value
+
+
 def build_robot(desc: RobotDescription) -> Robot:
     """Build the Pinocchio model(s) of a validated description (do this once per process)."""
     effort = None
@@ -280,6 +331,7 @@ def build_robot(desc: RobotDescription) -> Robot:
     else:
         model = _build_dh_model(desc)
         ranges = desc.joint_range_rad
+    _apply_drives(desc, model)
     model.gravity = pin.Motion(np.asarray(desc.gravity_mps2, dtype=float), np.zeros(3))
     model_ng = model.copy()
     model_ng.gravity = pin.Motion.Zero()

@@ -18,7 +18,8 @@ Each control period dt the follower
 3. keeps the next path speed in [0, ceiling], ceiling = min(v_max, the velocity limit
    curve, the braking curve that can still stop at the end using 90 % of the braking
    capability the torque limits leave), all precomputed along the path (:func:`.prepare`);
-4. clips to [lo, hi] from the torque limits at its current (s, sd): the path stays
+4. clips to [lo, hi] from the torque limits at its current (s, sd), the drives' friction at
+   that speed included (:mod:`.path_dynamics`): the path stays
    exact, only the timing yields; when the limit releases, step 2 catches up, and within
    1 nm and 1 nm/s of the command it rejoins it (step 1);
 5. integrates s, sd with that constant acceleration over the period.
@@ -34,8 +35,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
-from capmap.core.dynamics import torque_names
+from capmap.core.drives import friction_torque, path_motion
+from capmap.core.dynamics import payload_models, torque_names
 from capmap.core.kinematics import pose_error
 from capmap.core.limits import AffineLimits
 from capmap.core.profiles import SCurve, scurve
@@ -44,8 +47,8 @@ from capmap.errors import CapmapError, SolverFailed
 from capmap.following.path import JointPath, interpolate_q, line_path, path_at
 from capmap.following.path_dynamics import PreparedPath, path_dynamics, prepare
 
-__all__ = ["FollowResult", "follow", "FollowSettings", "FollowedSegment", "exact_torques", "follow_segment",
-           "SATURATED"]
+__all__ = ["FollowResult", "follow", "FollowSettings", "FollowedSegment", "ExactTorques", "exact_torques",
+           "follow_segment", "SATURATED"]
 
 END_TOL_M = 1e-6  # the follower has arrived within max(this, beta dt^2) of the end, at (almost) rest
 END_TOL_MPS = 1e-6
@@ -97,6 +100,9 @@ def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: fl
     n_cmd = math.ceil(command.duration_s / dt) + 2
     sc_all, sdc_all, sddc_all = (x.tolist() for x in command.evaluate(np.arange(n_cmd + 1) * dt))
     grid_a, grid_b, grid_c, h = pdyn.a, pdyn.b, pdyn.c, float(pdyn.s[1] - pdyn.s[0])
+    friction = pdyn.has_friction
+    if friction:
+        grid_dq, f_c, f_v = pdyn.dq, pdyn.coulomb_nm, pdyn.viscous_nms
     vlim2 = (prep.v_limit**2).tolist()  # interpolate squared speeds: exact on a constant-deceleration braking curve
     G = len(pdyn.s) - 1
     # a discrete follower braking at beta can stop only within ~beta dt^2 of the end
@@ -130,7 +136,11 @@ def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: fl
         a = grid_a[i] + f * (grid_a[i + 1] - grid_a[i])
         b = grid_b[i] + f * (grid_b[i + 1] - grid_b[i])
         c = grid_c[i] + f * (grid_c[i + 1] - grid_c[i])
-        lo, hi = limits.interval_one((b * (sd * sd) + c).tolist(), a.tolist())
+        y0 = b * (sd * sd) + c
+        if friction:  # moving forward (or starting to): F_v q' sd + F_c sign(q') at this s
+            dq = grid_dq[i] + f * (grid_dq[i + 1] - grid_dq[i])
+            y0 = y0 + f_v * dq * sd + f_c * np.sign(dq)
+        lo, hi = limits.interval_one(y0.tolist(), a.tolist())
         if in_sync and k + 1 < n_cmd:
             if lo <= sdd_c <= hi and sdc_all[k + 1] <= ceiling(sc_all[k + 1]) + 1e-12:
                 rows.append((k * dt, s_c, sd_c, sdd_c, s, sd, sdd_c, False, False))
@@ -171,8 +181,9 @@ def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: fl
 class FollowedSegment:
     """One straight segment followed: its grid table, prepared limits, command, the follower's
     run, and the exact evaluation at the follower's and the command's states:
-    tau (K, n), tau_cmd (K, n) N m; q (K, n) rad (exact path at the follower's s);
-    deviation_m (K,), deviation_rad (K,): pose error of the interpolated joint command."""
+    tau (K, n), tau_cmd (K, n) N m (motor torques: links, armature, friction); q (K, n) rad (exact
+    path at the follower's s); deviation_m (K,), deviation_rad (K,): pose error of the interpolated
+    joint command; tau_armature (K, n), tau_friction (K, n) N m: the drives' parts of tau."""
 
     table: JointPath
     prepared: PreparedPath
@@ -183,16 +194,38 @@ class FollowedSegment:
     q: np.ndarray
     deviation_m: np.ndarray
     deviation_rad: np.ndarray
+    tau_armature: np.ndarray
+    tau_friction: np.ndarray
+
+
+@dataclass(frozen=True)
+class ExactTorques:
+    """Torques at states on the exact path: tau (K, n) N m the motor's (links, payload, armature,
+    friction), its parts armature (K, n) and friction (K, n) N m, and the exact q (K, n) rad."""
+
+    tau: np.ndarray
+    armature: np.ndarray
+    friction: np.ndarray
+    q: np.ndarray
 
 
 def exact_torques(arm: LockedArm, table: JointPath, rotation: np.ndarray, payload_kg: float, s: np.ndarray,
-                  sd: np.ndarray, sdd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exact torques (K, n) at states (s, sd, sdd) (K,) on the exact path, and the exact q (K, n)."""
+                  sd: np.ndarray, sdd: np.ndarray) -> ExactTorques:
+    """Exact torques at states (s, sd, sdd) (K,) on the exact path (:class:`ExactTorques`), by inverse
+    dynamics in joint space, not through the follower's path tables: the path polished by Newton at
+    each s, joint velocities q' sd and accelerations q'' sd^2 + q' sdd, Pinocchio's RNEA there (payload
+    and armature included) and the drives' friction of :func:`capmap.core.drives.friction_torque`."""
     us, inv = np.unique(s, return_inverse=True)
     jp = path_at(arm, table, us, rotation)
-    exact = path_dynamics(arm, jp, payload_kg)
-    tau = exact.a[inv] * sdd[:, None] + exact.b[inv] * (sd**2)[:, None] + exact.c[inv]
-    return tau, jp.q[inv]
+    q = jp.q[inv]
+    qd, qdd = jp.dq[inv] * sd[:, None], jp.ddq[inv] * (sd**2)[:, None] + jp.dq[inv] * sdd[:, None]
+    model, _ = payload_models(arm, payload_kg)
+    data = model.createData()
+    robot, act = arm.robot, arm.active
+    rigid = np.array([pin.rnea(model, data, arm.full_q(q[k]), arm.full_v(qd[k]), arm.full_v(qdd[k]))[act]
+                      for k in range(len(q))]).reshape(len(q), len(act))
+    fric = friction_torque(rigid, qd, path_motion(jp.dq[inv], sd, sdd), robot.coulomb_nm[act], robot.viscous_nms[act])
+    return ExactTorques(rigid + fric, robot.armature_kgm2[act] * qdd, fric, q)
 
 
 @dataclass(frozen=True)
@@ -227,12 +260,12 @@ def follow_segment(arm: LockedArm, p0: np.ndarray, p1: np.ndarray, rotation: np.
     res = follow(prep, cmd, st.period_s, st.catch_up_hz)
     # follower and command states in one evaluation (in step, they share their s values)
     K = len(res.s)
-    tau_all, q_all = exact_torques(arm, table, rotation, st.payload_kg, np.concatenate([res.s, res.s_cmd]),
-                                   np.concatenate([res.sd, res.sd_cmd]), np.concatenate([res.sdd, res.sdd_cmd]))
-    tau, tau_cmd, q = tau_all[:K], tau_all[K:], q_all[:K]
+    ex = exact_torques(arm, table, rotation, st.payload_kg, np.concatenate([res.s, res.s_cmd]),
+                       np.concatenate([res.sd, res.sd_cmd]), np.concatenate([res.sdd, res.sdd_cmd]))
+    tau, tau_cmd, q = ex.tau[:K], ex.tau[K:], ex.q[:K]
     T = arm.fk(interpolate_q(table, res.s))
     T_line = np.zeros_like(T)
     T_line[:, :3, :3], T_line[:, :3, 3], T_line[:, 3, 3] = rotation, p0 + res.s[:, None] * (p1 - p0) / table.length_m, 1
     err = pose_error(T, T_line)
     return FollowedSegment(table, prep, cmd, res, tau, tau_cmd, q, np.linalg.norm(err[:, :3], axis=1),
-                           np.linalg.norm(err[:, 3:], axis=1))
+                           np.linalg.norm(err[:, 3:], axis=1), ex.armature[:K], ex.friction[:K])

@@ -1,14 +1,24 @@
-"""Joint torques along a fixed path, tau = a(s) sdd + b(s) sd^2 + c(s), and the speed ceiling.
+"""Joint torques along a fixed path, tau = a(s) sdd + b(s) sd^2 + c(s) + friction, and the speed ceiling.
 
 With q(s) the joint path, q' and q'' its derivatives by arc length s (:mod:`.path`):
 
     a = M(q) q',   b = M(q) q'' + C(q, q') q',   c = g(q)
 
-(the payload is a point mass at the end effector, appended to the last body). At a state
-(s, sd) each torque limit |tau_i| <= T_i is then a limit on outputs affine in the path
-acceleration sdd (y0 = b sd^2 + c, slope a: :class:`capmap.core.limits.AffineLimits`), and
-their intersection is the interval of admissible sdd (the decomposition of time-optimal
-path parametrisation: Bobrow et al. 1985, Shin & McKay 1985, Pfeiffer & Johanni 1987).
+with M including the drives' reflected rotor inertia (Pinocchio's armature: :mod:`capmap.core.drives`;
+the payload is a point mass at the end effector, appended to the last body), and the drives' friction
+
+    F_v q'(s) sd + F_c sign(q'(s) sd)
+
+The follower never reverses (sd >= 0), so while it moves the Coulomb term's sign is sign(q'(s)) and
+the whole friction is affine in sd: known at each state. At rest (sd = 0) it starts forward
+(sdd > 0): friction then opposes that motion, sign(q'(s)) again (breakaway); held at rest (sdd = 0)
+static friction is a band (:func:`capmap.core.drives.friction_torque`). At a state (s, sd) each
+torque limit |tau_i| <= T_i is then a limit on outputs affine in the path acceleration sdd
+(y0 = b sd^2 + c + friction(s, sd), slope a: :class:`capmap.core.limits.AffineLimits`), and their
+intersection is the interval of admissible sdd (the decomposition of time-optimal path
+parametrisation: Bobrow et al. 1985, Shin & McKay 1985, Pfeiffer & Johanni 1987). Friction always
+opposes the motion, so it helps braking: the braking curve counts on it (the same model as the
+follower's; its 90 % margin is what covers friction lower than stated).
 """
 
 from __future__ import annotations
@@ -19,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from capmap.core.drives import motor_torque, path_motion
 from capmap.core.dynamics import payload_models
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
@@ -30,28 +41,52 @@ __all__ = ["PathDynamics", "path_dynamics", "PreparedPath", "prepare"]
 
 @dataclass(frozen=True)
 class PathDynamics:
-    """tau = a sdd + b sd^2 + c on a uniform s grid: s (G,) m; a (G, n) N m s^2/m; b (G, n)
-    N m s^2/m^2; c (G, n) N m; for the n limited (active) joints."""
+    """tau = a sdd + b sd^2 + c + viscous dq sd + coulomb sign(dq sd) on a uniform s grid: s (G,) m;
+    a (G, n) N m s^2/m; b (G, n) N m s^2/m^2; c (G, n) N m; for the n limited (active) joints; the
+    drives' friction: dq (G, n) rad/m the joint path's q'(s), coulomb_nm (n,) N m, viscous_nms (n,)
+    N m s/rad (None: no friction)."""
 
     s: np.ndarray
     a: np.ndarray
     b: np.ndarray
     c: np.ndarray
+    dq: np.ndarray | None = None
+    coulomb_nm: np.ndarray | None = None
+    viscous_nms: np.ndarray | None = None
+
+    @property
+    def has_friction(self) -> bool:
+        return self.dq is not None and bool(np.any(self.coulomb_nm > 0) or np.any(self.viscous_nms > 0))
+
+    def friction(self, sd: np.ndarray) -> np.ndarray:
+        """Friction torques (G, n) N m on the grid moving forward at path speeds sd (G,) >= 0 m/s (at 0: starting
+        forward): viscous q' sd + coulomb sign(q')."""
+        if not self.has_friction:
+            return np.zeros_like(self.c)
+        sd = np.asarray(sd, dtype=float)[:, None]
+        return self.viscous_nms * self.dq * sd + self.coulomb_nm * np.sign(self.dq)
 
     def torques(self, s: np.ndarray, sd: np.ndarray, sdd: np.ndarray) -> np.ndarray:
-        """Torques (N, n) at states (N,) by linear interpolation of the tables."""
+        """Torques (N, n) at states (N,) by linear interpolation of the tables (friction at rest and not
+        accelerating: the static band, :func:`capmap.core.drives.friction_torque`)."""
         a, b, c = (np.stack([np.interp(s, self.s, t[:, i]) for i in range(t.shape[1])], axis=1)
                    for t in (self.a, self.b, self.c))
-        return a * sdd[:, None] + b * (sd**2)[:, None] + c
+        tau = a * sdd[:, None] + b * (sd**2)[:, None] + c
+        if not self.has_friction:
+            return tau
+        dq = np.stack([np.interp(s, self.s, self.dq[:, i]) for i in range(self.dq.shape[1])], axis=1)
+        return motor_torque(tau, dq * sd[:, None], path_motion(dq, sd, sdd), self.coulomb_nm, self.viscous_nms)
 
     def sdd_interval(self, limits: AffineLimits, sd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Admissible path accelerations [lo, hi] (each (G,)) at path speeds sd (G,) on the grid;
-        lo > hi where none is."""
-        return limits.interval(self.b * (np.asarray(sd, dtype=float) ** 2)[:, None] + self.c, self.a)
+        """Admissible path accelerations [lo, hi] (each (G,)) at path speeds sd (G,) >= 0 on the grid, moving
+        forward; lo > hi where none is."""
+        sd = np.asarray(sd, dtype=float)
+        return limits.interval(self.b * (sd**2)[:, None] + self.c + self.friction(sd), self.a)
 
 
 def path_dynamics(arm: LockedArm, path: JointPath, payload_kg: float) -> PathDynamics:
-    """Exact a, b, c at the path's grid points (three RNEA calls each, payload included)."""
+    """Exact a, b, c at the path's grid points (three RNEA calls each, payload and the drives' armature
+    included) and the drives' friction of the active joints (the robot's ``coulomb_nm``, ``viscous_nms``)."""
     model, model_ng = payload_models(arm, payload_kg)
     data, data_ng = model.createData(), model_ng.createData()
     zero = np.zeros(model.nv)
@@ -62,7 +97,10 @@ def path_dynamics(arm: LockedArm, path: JointPath, payload_kg: float) -> PathDyn
         a[i] = pin.rnea(model_ng, data_ng, q, zero, dq)[act]
         b[i] = pin.rnea(model_ng, data_ng, q, dq, ddq)[act]
         c[i] = pin.rnea(model, data, q, zero, zero)[act]
-    return PathDynamics(path.s.copy(), a, b, c)
+    robot = arm.robot
+    if not robot.has_friction:
+        return PathDynamics(path.s.copy(), a, b, c)
+    return PathDynamics(path.s.copy(), a, b, c, path.dq.copy(), robot.coulomb_nm[act], robot.viscous_nms[act])
 
 
 @dataclass(frozen=True)
@@ -84,16 +122,19 @@ def prepare(pdyn: PathDynamics, limits: AffineLimits, v_max_mps: float, brake_ma
     Velocity limit curve: the largest sd <= v_max with an admissible acceleration (bisection).
     Braking curve: integrated backwards from rest at the end with ``brake_margin`` x the
     largest admissible deceleration, so a follower under it can always stop in time.
-    Raises LimitInfeasible when the path cannot be held even at rest (static torques above limits).
+    Raises LimitInfeasible when the path cannot be held even at rest (static torques above limits), or
+    with friction cannot be crept along forward (gravity and friction against the motion above them).
     """
     G = len(pdyn.s)
     lo0, hi0 = pdyn.sdd_interval(limits, np.zeros(G))
     if (lo0 > hi0).any() or (lo0 > 0).any() or (hi0 < 0).any():
         k = int(np.argmax((lo0 > hi0) | (lo0 > 0) | (hi0 < 0)))
-        over = np.abs(pdyn.c[k]) / limits.limit
-        j = int(np.argmax(over))
-        raise LimitInfeasible(f"{limits.names[j]}: holding the path at rest at s = {pdyn.s[k]:.4f} m needs "
-                              f"{abs(pdyn.c[k, j]):.2f} N m, above its limit {limits.limit[j]:g} N m")
+        creep = pdyn.c[k] + pdyn.friction(np.zeros(G))[k]
+        j = int(np.argmax(np.abs(creep) / limits.limit))
+        hold = abs(pdyn.c[k, j]) > limits.limit[j]
+        what = "holding the path at rest" if hold or not pdyn.has_friction else "starting forward from rest (friction)"
+        raise LimitInfeasible(f"{limits.names[j]}: {what} at s = {pdyn.s[k]:.4f} m needs "
+                              f"{abs(pdyn.c[k, j] if hold else creep[j]):.2f} N m, above its limit {limits.limit[j]:g} N m")
     # velocity limit curve by bisection on sd in [0, v_max]
     lo_v, hi_v = np.zeros(G), np.full(G, float(v_max_mps))
     lo_m, hi_m = pdyn.sdd_interval(limits, hi_v)
@@ -119,4 +160,7 @@ def prepare(pdyn: PathDynamics, limits: AffineLimits, v_max_mps: float, brake_ma
 
 def _interval_at(pdyn: PathDynamics, limits: AffineLimits, i: int, sd: float) -> tuple[float, float]:
     """Admissible [lo, hi] at grid point i and path speed sd (Python floats)."""
-    return limits.interval_one((pdyn.b[i] * (sd * sd) + pdyn.c[i]).tolist(), pdyn.a[i].tolist())
+    y0 = pdyn.b[i] * (sd * sd) + pdyn.c[i]
+    if pdyn.has_friction:
+        y0 = y0 + pdyn.viscous_nms * pdyn.dq[i] * sd + pdyn.coulomb_nm * np.sign(pdyn.dq[i])
+    return limits.interval_one(y0.tolist(), pdyn.a[i].tolist())

@@ -5,7 +5,7 @@ series, TOPP-RA's, and the comparison row."""
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Callable
 
 import numpy as np
@@ -34,7 +34,9 @@ def follow_path(arm: LockedArm, waypoints: np.ndarray, rotation: np.ndarray, q_s
     """Follow waypoints (W, 3) m as straight segments at ``rotation`` (3, 3) from q_start
     (n_active,) rad, each segment continuing from the last one's final configuration."""
     limits = settings.torque_limits(arm)
-    followed, optimal = [], []
+    followed, optimal, no_viscous = [], [], []
+    viscous = bool(np.any(arm.robot.viscous_nms[arm.active] > 0))
+    arm_nv = _without_viscous(arm) if viscous else None
     q = q_start
     for k in range(len(waypoints) - 1):
         t0 = time.perf_counter()
@@ -42,6 +44,8 @@ def follow_path(arm: LockedArm, waypoints: np.ndarray, rotation: np.ndarray, q_s
         el = time.perf_counter() - t0
         top = time_optimal(arm, seg.table, settings.payload_kg, limits, settings.v_max_mps, settings.a_max_mps2,
                            sample_dt_s=settings.period_s)
+        if viscous:  # the model TOPP-RA has: like for like
+            no_viscous.append(follow_segment(arm_nv, waypoints[k], waypoints[k + 1], rotation, q, settings))
         r = seg.result
         followed.append(seg)
         optimal.append(top)
@@ -49,7 +53,16 @@ def follow_path(arm: LockedArm, waypoints: np.ndarray, rotation: np.ndarray, q_s
                  f"follower {r.duration_s:.3f} s ({int(r.limited.sum())} of {len(r.t_s)} periods limited), "
                  f"TOPP-RA {top.duration_s:.3f} s; {el:.2f} s wall incl. path preparation and exact evaluation")
         q = seg.q[-1]
-    return PathRun(followed, optimal, compare(followed, optimal, limits))
+    return PathRun(followed, optimal, compare(followed, optimal, limits, arm, no_viscous or None))
+
+
+def _without_viscous(arm: LockedArm) -> LockedArm:
+    """The same arm with its drives' viscous friction set to zero (models copied: the robot's stay as they are)."""
+    robot = arm.robot
+    model, model_ng = robot.model.copy(), robot.model_no_gravity.copy()
+    model.damping[:] = 0.0
+    model_ng.damping[:] = 0.0
+    return replace(arm, robot=replace(robot, model=model, model_no_gravity=model_ng))
 
 
 def follow_tables(case: str, arm: LockedArm, run: PathRun) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -65,7 +78,8 @@ def follow_tables(case: str, arm: LockedArm, run: PathRun) -> tuple[pd.DataFrame
                            "sd_cmd_mps": r.sd_cmd, "sdd_cmd_mps2": r.sdd_cmd, "s_m": s_off + r.s, "sd_mps": r.sd,
                            "sdd_mps2": r.sdd, "lag_m": r.s_cmd - r.s, "limited": r.limited,
                            "infeasible": r.infeasible})
-        for prefix, values in (("tau_cmd", seg.tau_cmd), ("tau", seg.tau)):
+        for prefix, values in (("tau_cmd", seg.tau_cmd), ("tau", seg.tau), ("tau_armature", seg.tau_armature),
+                               ("tau_friction", seg.tau_friction)):
             for c, jn in enumerate(joints):
                 df[f"{prefix}_j{jn}_nm"] = values[:, c]
         for c, jn in enumerate(joints):

@@ -4,9 +4,15 @@ The joint path is given to toppra as a cubic spline through the exact IK samples
 segment, extended by one virtual coordinate equal to the arc length s (its path
 derivative is 1, its second derivative 0), so that the task's path-speed and
 path-acceleration limits become toppra joint-velocity and joint-acceleration limits on
-that coordinate. Joint torques are limited through Pinocchio's RNEA (payload included)
-as toppra's ``JointTorqueConstraint`` inverse dynamics. The result is the time-optimal
-rest-to-rest motion without a jerk limit: a lower bound for any follower's duration.
+that coordinate. Joint torques are limited through Pinocchio's RNEA (payload and the drives'
+armature included) as toppra's ``JointTorqueConstraint`` inverse dynamics, with the drives' Coulomb
+friction as its dry-friction term (``fs_coef``: coulomb sign(q'(s)), the path's direction: a fixed
+sign along a rest-to-rest segment where q' keeps its sign). Viscous friction cannot enter: it makes
+TOPP-RA's problem non-convex (toppra issue #92); the torques of the result are reported both as
+TOPP-RA modelled them and with the full drive model (:func:`capmap.core.drives.friction_torque`), so
+what leaving viscous friction out costs is measured. The result is the time-optimal rest-to-rest
+motion without a jerk limit: a lower bound for any follower's duration (for the follower's full
+model, exactly so only without viscous friction).
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ import toppra as ta
 import toppra.algorithm as algo
 import toppra.constraint as constraint
 
+from capmap.core.drives import motor_torque, path_motion
 from capmap.core.dynamics import payload_models
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
@@ -33,13 +40,16 @@ _FREE = 1e9  # "no limit" for the real joints' velocity/acceleration and the vir
 @dataclass(frozen=True)
 class ToppraResult:
     """duration_s of the time-optimal motion; t_s (K,), s (K,) m, sd (K,) m/s sampled along it;
-    tau (K, n) N m: exact torques of the sampled motion (RNEA on the spline path)."""
+    tau (K, n) N m: exact torques of the sampled motion with the full drive model (RNEA on the spline
+    path, armature, Coulomb and viscous friction); tau_modelled (K, n) N m: the terms TOPP-RA had (no
+    viscous friction)."""
 
     duration_s: float
     t_s: np.ndarray
     s: np.ndarray
     sd: np.ndarray
     tau: np.ndarray
+    tau_modelled: np.ndarray
 
 
 def time_optimal(arm: LockedArm, path: JointPath, payload_kg: float, limits: AffineLimits, v_max_mps: float,
@@ -64,8 +74,9 @@ def time_optimal(arm: LockedArm, path: JointPath, payload_kg: float, limits: Aff
     vlim[n] = (-v_max_mps, v_max_mps)
     alim = vlim.copy()
     alim[n] = (-a_max_mps2, a_max_mps2)
+    coulomb, viscous = arm.robot.coulomb_nm[act], arm.robot.viscous_nms[act]
     cons = [constraint.JointVelocityConstraint(vlim), constraint.JointAccelerationConstraint(alim),
-            constraint.JointTorqueConstraint(inv_dyn, tau_lim, np.zeros(n + 1),
+            constraint.JointTorqueConstraint(inv_dyn, tau_lim, np.append(coulomb, 0.0),
                                              discretization_scheme=constraint.DiscretizationType.Interpolation)]
     instance = algo.TOPPRA(cons, spline, gridpoints=np.linspace(0, path.length_m, n_grid + 1),
                            parametrizer="ParametrizeConstAccel")
@@ -75,5 +86,8 @@ def time_optimal(arm: LockedArm, path: JointPath, payload_kg: float, limits: Aff
     t = np.arange(0.0, traj.duration, sample_dt_s)
     t = np.append(t, traj.duration)
     q, qd, qdd = traj(t), traj(t, 1), traj(t, 2)
-    tau = np.array([inv_dyn(q[k], qd[k], qdd[k])[:n] for k in range(len(t))])
-    return ToppraResult(float(traj.duration), t, q[:, n], qd[:, n], tau)
+    rigid = np.array([inv_dyn(q[k], qd[k], qdd[k])[:n] for k in range(len(t))])
+    motion = path_motion(spline(q[:, n], 1)[:, :n], qd[:, n], qdd[:, n])
+    modelled = motor_torque(rigid, qd[:, :n], motion, coulomb, np.zeros(n))
+    full = motor_torque(rigid, qd[:, :n], motion, coulomb, viscous)
+    return ToppraResult(float(traj.duration), t, q[:, n], qd[:, n], full, modelled)

@@ -23,7 +23,7 @@ __all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "wr
 
 UNITS = [("_deg", "deg"), ("_rad", "rad"), ("_kg", "kg"), ("_nm", "N m"), ("_n", "N"), ("_mps2", "m/s^2"),
          ("_mps", "m/s"), ("_m", "m"), ("_s", "s"), ("_pct", "%"), ("_rad_s", "rad/s"), ("_rad_s2", "rad/s^2"),
-         ("_deg_s", "deg/s"), ("_deg_s2", "deg/s^2")]
+         ("_deg_s", "deg/s"), ("_deg_s2", "deg/s^2"), ("_kgm2", "kg m^2"), ("_nms", "N m s/rad")]
 
 
 def column_unit(name: str) -> str:

@@ -9,7 +9,7 @@ import pandas as pd
 
 from capmap.plots.common import plt, save
 
-__all__ = ["follow_progress", "follow_torques"]
+__all__ = ["follow_progress", "follow_torques", "follow_torque_split"]
 
 
 def follow_progress(ts: pd.DataFrame, tp: pd.DataFrame, case: str, out_png: str | Path) -> None:
@@ -97,4 +97,40 @@ def follow_torques(ts: pd.DataFrame, limits: dict, case: str, out_png: str | Pat
         ax.set_xlabel("time t [s]")
     fig.suptitle(f"{case}: joint torques before and after limiting (grey lines: segment ends, where the arm rests "
                  f"at a waypoint)")
+    save(fig, out_png, rect=(0, 0.04, 1, 1))
+
+
+def follow_torque_split(ts: pd.DataFrame, limits: dict, case: str, terms: str, out_png: str | Path) -> None:
+    """Per joint, along the path: the follower's motor torque and its parts, the link dynamics (links and
+    payload: M q'' + C q' + g), the drives' reflected rotor inertia (armature q'') and their friction,
+    with the ±limit; ``terms`` names the model's terms (e.g. 'links+armature+coulomb+viscous')."""
+    cols = list(limits)
+    n = len(cols)
+    fig, axes = plt.subplots((n + 1) // 2, 2, figsize=(12, 2.7 * ((n + 1) // 2)), sharex=True, squeeze=False)
+    s = ts.s_m.to_numpy()
+    for ax, col in zip(axes.ravel(), cols):
+        lim = limits[col]
+        total = ts[col].to_numpy()
+        arm, fric = ts[col.replace("tau_", "tau_armature_")].to_numpy(), ts[col.replace("tau_", "tau_friction_")].to_numpy()
+        links = total - arm - fric
+        ax.plot(s, links, color="tab:blue", lw=1, label="link dynamics (links, payload)")
+        ax.plot(s, arm, color="tab:orange", lw=1, label="rotor inertia (armature q̈)")
+        ax.plot(s, fric, color="tab:green", lw=1, label="friction (Coulomb + viscous)")
+        ax.plot(s, total, color="black", lw=1.4, label="motor torque (their sum)")
+        ax.axhline(lim, color="tab:red", ls=":", lw=1.2, label="±limit")
+        ax.axhline(-lim, color="tab:red", ls=":", lw=1.2)
+        top = 1.15 * max(lim, np.abs(total).max(), np.abs(links).max())
+        ax.set_ylim(-top, top)
+        ax.set(ylabel="torque [N m]", title=f"joint {col.split('_')[1][1:]}: peak {np.abs(total).max():.3g} of ±{lim:g} "
+                                            f"N m (rotor ≤{np.abs(arm).max():.2g}, friction ≤{np.abs(fric).max():.2g})")
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, bbox_to_anchor=(0.5, 0.0))
+    for ax in axes[-1]:
+        ax.set_xlabel("path coordinate s [m]")
+    drives = terms != "links"
+    fig.suptitle(f"{case}: the follower's joint torques split by term along the path (model: {terms.replace('+', ' + ')})"
+                 + ("" if drives else "; the robot file states no drives"))
     save(fig, out_png, rect=(0, 0.04, 1, 1))

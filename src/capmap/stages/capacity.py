@@ -28,8 +28,15 @@ def stage_model(robot_yaml: str, out: str, slice_json: str) -> None:
     df = model_table(robot)
     datasets.write(df, out, datasets.provenance("model", sc.doc, robot=robot.name,
                                                  gravity_mps2=robot.gravity.tolist(), base_com_m=robot.base_com.tolist()))
-    stage_logger(__name__, "model").info(f"{robot.name}: {robot.n_joints} joints, total mass {df.mass_kg.sum():.1f} kg "
-                                         f"-> {out}")
+    log = stage_logger(__name__, "model")
+    log.info(f"{robot.name}: {robot.n_joints} joints, total mass {df.mass_kg.sum():.1f} kg "
+             + (f"(drives: rotor inertia {df.armature_kgm2.min():g}-{df.armature_kgm2.max():g} kg m^2, in the capacity "
+                "map) " if df.armature_kgm2.any() else "") + f"-> {out}")
+    if robot.has_friction:
+        log.warning(f"{robot.name}'s drives have friction (Coulomb up to {df.coulomb_nm.max():g} N m): the capacity map "
+                    "leaves it out (its sign follows each joint's direction of motion, which changes across the sphere "
+                    "of motion directions); for a map that holds with it, lower limits.joint_torque_nm by each joint's "
+                    "friction at the task's speed (Coulomb + viscous x joint speed)")
 
 
 # --------------------------------------------------------------------------- sample

@@ -75,11 +75,15 @@ def stage_follow(case: str, out_timeseries: str, out_toppra: str, out_csv: str, 
     ts, tp = follow_tables(case, fc.arm, run)
     limits, st, cmp = fc.settings.torque_limits(fc.arm), fc.settings, run.comparison
     prov = datasets.provenance("follow", sc.doc, case=case, torque_limits_nm=dict(zip(limits.names, limits.limit.tolist())),
-                               payload_kg=st.payload_kg)
+                               payload_kg=st.payload_kg, terms=cmp.follower_terms)
     datasets.write(ts, out_timeseries, prov)
     datasets.write(tp, out_toppra, prov)
     write_table(summary_row(case, fc.arm, fc.label, st, run), out_csv, out_md)
     log.info(f"{cmp.length_m:.3f} m in {cmp.follower_duration_s:.3f} s vs TOPP-RA {cmp.toppra_duration_s:.3f} s "
              f"(ratio {cmp.duration_ratio:.3f}); peak torque {cmp.follower_peak_torque_pct:.3f}% of limit "
              f"(TOPP-RA {cmp.toppra_peak_torque_pct:.3f}%); command would need {cmp.command_peak_torque_pct:.1f}%; "
-             f"max path deviation {cmp.max_deviation_m:.2e} m")
+             f"max path deviation {cmp.max_deviation_m:.2e} m; torque model {cmp.follower_terms}")
+    if cmp.follower_terms != cmp.toppra_terms:
+        log.info(f"TOPP-RA ({cmp.toppra_terms}, no viscous friction) peaks at {cmp.toppra_peak_torque_pct:.1f}% of the "
+                 f"limit with it; the follower without viscous friction (like for like): "
+                 f"{cmp.follower_no_viscous_duration_s:.3f} s, ratio {cmp.duration_ratio_no_viscous:.3f}")
