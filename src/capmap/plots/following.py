@@ -95,8 +95,8 @@ def follow_torques(ts: pd.DataFrame, limits: dict, case: str, out_png: str | Pat
     fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8, bbox_to_anchor=(0.5, 0.0))
     for ax in axes[-1]:
         ax.set_xlabel("time t [s]")
-    fig.suptitle(f"{case}: joint torques before and after limiting (grey lines: segment ends, where the arm rests "
-                 f"at a waypoint)")
+    fig.suptitle(f"{case}: joint torques before and after limiting"
+                 + (" (grey lines: segment ends, where the arm rests at a waypoint)" if len(ends) else ""))
     save(fig, out_png, rect=(0, 0.04, 1, 1))
 
 
