@@ -13,4 +13,5 @@ def run_dir(tmp_path_factory):
     cfg = config_file(tmp)
     res = snakemake_run(tmp, cfg)
     assert res.returncode == 0, res.stderr[-3000:]
+    (tmp / "snakemake_stderr.txt").write_text(res.stderr)  # the run's console, for the headline's test
     return tmp, cfg

@@ -1,4 +1,4 @@
-"""The README's caching table is what Snakemake does: each row's change, applied to the default config,
+"""The caching table (docs/configuration.md) is what Snakemake does: each row's change, applied to the default config,
 makes a dry run plan exactly the jobs the row lists (tests/workflow/caching_table.py builds the table
 from those dry runs; ~2 min, so it runs in .ci/run beside the default suite: CAPMAP_CACHING_TABLE=1)."""
 
@@ -17,6 +17,6 @@ pytestmark = pytest.mark.skipif(os.environ.get("CAPMAP_CACHING_TABLE") != "1",
 def test_the_readme_caching_table_is_what_snakemake_reruns(tmp_path):
     generated = table(tmp_path)
     held = readme_table(README.read_text())
-    diff = [f"README: {a}\n  dry runs: {b}" for a, b in zip(held.splitlines(), generated.splitlines()) if a != b]
-    assert held == generated, ("the README's caching table differs from the dry runs (regenerate it with python -m "
-                               "tests.workflow.caching_table --write):\n" + "\n".join(diff))
+    diff = [f"docs: {a}\n  dry runs: {b}" for a, b in zip(held.splitlines(), generated.splitlines()) if a != b]
+    assert held == generated, ("the caching table of docs/configuration.md differs from the dry runs (regenerate it "
+                               "with python -m tests.workflow.caching_table --write):\n" + "\n".join(diff))

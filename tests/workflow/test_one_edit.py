@@ -28,7 +28,7 @@ SMALL = {"sampling": {"mode": "voxel_fill", "n_points": 300, "jitter_per_voxel":
 
 def readme_lock_examples() -> list[dict]:
     """The ``lock:`` blocks of the README's section "The failure in one edit"."""
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "docs" / "capacity-map.md").read_text()
     section = text.split("## The failure in one edit", 1)[1].split("\n## ", 1)[0]
     blocks = [yaml.safe_load(b) for b in re.findall(r"```yaml\n(.*?)```", section, re.S)]
     return [b for b in blocks if isinstance(b, dict) and set(b) == {"lock"}]

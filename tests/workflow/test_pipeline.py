@@ -434,3 +434,23 @@ def test_experiments_target_is_off_the_default_path(run_dir, tmp_path):
                          text=True, timeout=300)
     assert chk.returncode == 0 and "gain_catalogue.parquet" in chk.stdout, chk.stderr[-2000:]
     assert planned_jobs(copy, cfg) == {}  # all is still complete: the experiment is beside it
+
+
+def test_the_run_ends_with_a_headline_of_what_it_found(run_dir):
+    """The console's last lines say per family what the run found, with numbers read here from the summary
+    tables independently of capmap.stages.headline, and where the report is made."""
+    tmp, _ = run_dir
+    err = (tmp / "snakemake_stderr.txt").read_text()
+    assert "capmap: what this run found:" in err
+    head = err.split("capmap: what this run found:", 1)[1]
+    out = tmp / "results" / "tiny"
+    cap = pd.read_csv(out / "summary" / "capacity_summary.csv").set_index("quantity")["value"]
+    assert f"capacity map: {int(float(cap['reachable voxels'])):,} reachable voxels" in head
+    ver = pd.read_csv(out / "verify" / "summary.csv")
+    for payload in ver.payload_kg.unique():
+        assert f"{payload:g} kg" in head
+    fol = pd.read_csv(out / "follow" / "summary.csv")
+    assert all(f"{c} ({r}) {d:.3g} s" in head for c, r, d in zip(fol.case, fol.robot, fol.follower_duration_s))
+    assert "reconfiguration: " in head and "dual-arm assembly: " in head
+    assert "snakemake --report results/tiny/report.html" in head
+    assert err.count("capmap: run 'tiny'") == 1  # the config's lines once

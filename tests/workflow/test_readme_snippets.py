@@ -1,5 +1,5 @@
-"""The README's Python snippets run: each ```python block is executed on the outputs of the shared
-tiny pipeline run, seen as results/default/ (the README's paths), and must not raise."""
+"""The Python snippets of the README and docs/ run: each ```python block is executed on the outputs of the
+shared tiny pipeline run, seen as results/default/ (the pages' paths), and must not raise."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import pytest
 
 from tests.scenario import ROOT
 
-BLOCKS = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+BLOCKS = [b for page in PAGES for b in re.findall(r"```python\n(.*?)```", page.read_text(), re.S)]
 
 
 def test_the_readme_has_python_snippets():

@@ -112,3 +112,12 @@ onstart:
         subprocess.run([sys.executable, "-m", "capmap.kernels", "--robot", str(Path(RUN.robot).resolve()), "--joint",
                         str(RUN.failure.joint), "--angle-deg", repr(RUN.failure.angle_deg)]
                        + (["--dualarm"] if RUN.dualarm else []), check=False)
+
+
+onsuccess:
+    # the run's headline: per family the answer in a line or two, from the summary tables (capmap.stages.headline)
+    from capmap.stages.headline import headline
+
+    _lines = headline(OUT)
+    if _lines:
+        print("capmap: what this run found:\n" + "\n".join(f"  {line}" for line in _lines), file=sys.stderr)

@@ -68,7 +68,9 @@ def _without_viscous(arm: LockedArm) -> LockedArm:
 def follow_tables(case: str, arm: LockedArm, run: PathRun) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The follower's time series (one row per control period: command, state, lag, torques,
     joints, deviation) and TOPP-RA's (its samples and torques), on path and time axes running on
-    across segments."""
+    across segments. Time, path coordinate, speed and acceleration are stored in float64; torques, joint
+    angles, lag and deviation in float32 (7 significant digits, for plots and reading: the summary's
+    figures come from the full-precision values), every control period kept."""
     joints = arm.active_joint_numbers
     parts, tparts = [], []
     t_off = t_off_topp = s_off = 0.0
@@ -86,16 +88,25 @@ def follow_tables(case: str, arm: LockedArm, run: PathRun) -> tuple[pd.DataFrame
             df[f"q_j{jn}_deg"] = np.rad2deg(seg.q[:, c])
         df["deviation_m"] = seg.deviation_m
         df["deviation_rad"] = seg.deviation_rad
-        parts.append(df)
+        parts.append(_compact(df))
         tdf = pd.DataFrame({"case": case, "segment": k, "t_s": t_off_topp + top.t_s, "s_m": s_off + top.s,
                             "sd_mps": top.sd})
         for c, jn in enumerate(joints):
             tdf[f"tau_j{jn}_nm"] = top.tau[:, c]
-        tparts.append(tdf)
+        tparts.append(_compact(tdf))
         t_off += r.duration_s
         t_off_topp += top.duration_s
         s_off += seg.table.length_m
     return pd.concat(parts, ignore_index=True), pd.concat(tparts, ignore_index=True)
+
+
+_EXACT = ("t_s", "s_cmd_m", "sd_cmd_mps", "sdd_cmd_mps2", "s_m", "sd_mps", "sdd_mps2")
+
+
+def _compact(df: pd.DataFrame) -> pd.DataFrame:
+    """The float columns not in _EXACT as float32 (halves a 1 ms series' size)."""
+    cols = [c for c in df.columns if df[c].dtype == np.float64 and c not in _EXACT]
+    return df.astype({c: np.float32 for c in cols})
 
 
 def summary_row(case: str, arm: LockedArm, label: str, settings: FollowSettings, run: PathRun) -> pd.DataFrame:

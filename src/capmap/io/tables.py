@@ -11,10 +11,31 @@ __all__ = ["fmt_value", "write_table", "write_quantities"]
 
 
 def fmt_value(v) -> str:
-    """A cell for people: floats to 4 significant digits (one decimal from 100), NaN and None empty."""
-    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (float, np.floating)):
+    """A cell for people: a whole number below 1e9 as an integer (a count: 70460, not 70460.0), a small or huge
+    number (an error, a bound: below 1e-3 or from 1e6) in scientific notation with 3 digits (1.62e-08),
+    others to 4 significant digits (one decimal from 100); NaN and None empty. Numbers written as text (a
+    quantity table's mixed value column read back from CSV) are formatted likewise; other text as it is."""
+    if isinstance(v, str):
+        try:
+            x = float(v)
+        except ValueError:
+            return v
+        if v.strip().lower() in ("nan", "inf", "-inf", "infinity", "-infinity") or not v.strip():
+            return v
+        v = x
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (float, np.floating, int, np.integer)):
         return "" if v is None else str(v)
-    return "" if np.isnan(v) else f"{v:.1f}" if 100 <= abs(v) < 1e6 else f"{v:.4g}"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if np.isnan(v):
+        return ""
+    if not np.isfinite(v):
+        return str(v)
+    if v.is_integer() and abs(v) < 1e9:  # a count; larger whole numbers are bounds (1e+11)
+        return str(int(v))
+    if abs(v) < 1e-3 or abs(v) >= 1e6:
+        return f"{v:.3g}"
+    return f"{v:.1f}" if abs(v) >= 100 else f"{v:.4g}"
 
 
 def write_table(df: pd.DataFrame, out_csv: str | Path, out_md: str | Path) -> None:

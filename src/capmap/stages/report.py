@@ -58,6 +58,9 @@ def stage_report_tables(tables: dict[str, str], outputs: dict[str, str], stale: 
         if name == "catalogue":
             df = df.drop(columns=["capmap_version"], errors="ignore")
             df["sha256"] = df.sha256.str[:12]
+            # one name per dataset: its path under the run's folder (verify/payload_1500kg/waypoints, not waypoints)
+            df["name"] = [str(Path(*Path(p).parts[2:]).with_suffix("")) if len(Path(p).parts) > 2 else n
+                          for n, p in zip(df.name, df.path)]
             extra = ("<h2>Not of this config</h2><p class='caption'>Left on disk by an earlier config of this run "
                      "(a payload, task, case or family since removed): not current, not in this report.</p><ul>"
                      + "".join(f"<li>{html.escape(p)}</li>" for p in stale) + "</ul>") if stale else ""
