@@ -118,7 +118,7 @@ def headline_block(results: Path) -> str:
     when = dt.datetime.fromtimestamp(max(p.stat().st_mtime for p in results.rglob("summary*.csv"))).strftime("%Y-%m-%d")
     lines = headline(results)[:-1]  # all but its last line (where the run's files are)
     return (f"Generated from the default run (`results/default/`, summaries of {when}; {machine()}); the report: "
-            "`snakemake --report results/default/report.html`.\n\n" + "\n".join(
+            "`snakemake --report results/default/report.zip`.\n\n" + "\n".join(
                 f"- {line.strip()}" if not line.startswith("  ") else f"  - {line.strip()}" for line in lines))
 
 

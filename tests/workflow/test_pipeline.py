@@ -452,5 +452,5 @@ def test_the_run_ends_with_a_headline_of_what_it_found(run_dir):
     fol = pd.read_csv(out / "follow" / "summary.csv")
     assert all(f"{c} ({r}) {d:.3g} s" in head for c, r, d in zip(fol.case, fol.robot, fol.follower_duration_s))
     assert "reconfiguration: " in head and "dual-arm assembly: " in head
-    assert "snakemake --report results/tiny/report.html" in head
+    assert "snakemake --report results/tiny/report.zip" in head
     assert err.count("capmap: run 'tiny'") == 1  # the config's lines once

@@ -61,9 +61,10 @@ def _reconfig(out: Path) -> list[str]:
 def _dualarm(out: Path) -> list[str]:
     s = _quantities(out / "dualarm" / "summary.csv")
     ok = str(s.get("converged")) == "True"
+    fine = next(k for k in s.index if k.startswith("min safety distance, ") and "finer grid" in k)  # 'Nx finer grid'
     line = (f"dual-arm assembly: {'converged' if ok else 'NOT converged'}, closed chain "
             f"{float(s['max closed-chain error at nodes [m]']):.1e} m, min safety distance "
-            f"{1e3 * float(s['min safety distance, 5x finer grid [m]']):.2f} mm on the finer grid")
+            f"{1e3 * float(s[fine]):.2f} mm on the {fine.split(', ')[1].removesuffix(' [m]')}")
     key = "peak torque / effort limit, least-norm internal force [%]"
     if key in s:
         line += f", peak torque {float(s[key]):.0f} % of the effort limits"
@@ -84,8 +85,8 @@ def headline(out: str | Path) -> list[str]:
             continue
         try:
             lines += part(out)
-        except (KeyError, ValueError, OSError, pd.errors.ParserError) as exc:
+        except (KeyError, ValueError, OSError, StopIteration, pd.errors.ParserError) as exc:
             lines.append(f"{rel}: cannot be summarised ({type(exc).__name__}: {exc})")
     if lines:
-        lines.append(f"tables and figures under {out}/; the report: snakemake --report {out}/report.html")
+        lines.append(f"tables and figures under {out}/; the report: snakemake --report {out}/report.zip")
     return lines
