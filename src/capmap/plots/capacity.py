@@ -177,16 +177,24 @@ def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_
                  f"its points and every motion direction; a path is verified along its own direction, and the states of "
                  f"the {' and the '.join(carried)} carry the payload.", fontsize=8.5, wrap=True)
     for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
-        axis.set_major_locator(plt.MaxNLocator(4))
+        axis.set_major_locator(plt.MaxNLocator(3))  # a short axis in perspective crowds more labels
     ax.set_box_aspect(hi - lo)
     ax.legend(loc="upper left", fontsize=7, bbox_to_anchor=(0.0, 1.0))
     ax2 = fig.add_subplot(1, 2, 2)
+    climb = float(np.ptp(ts.z_m.to_numpy())) if len(ts) else 0.0
+    if climb > dx:  # a path that leaves the goal's layer: the vertical section through start and goal shows it
+        _section_panel(ax2, fig, main, ts, first, last, payload_kg, vmax, which, no_path)
+        save(fig, out_png)
+        return
     img, extent, z = _layer(main, _layer_of(main, last.z_m))
     im = ax2.imshow(img, origin="lower", cmap="viridis", vmin=0, vmax=vmax, extent=extent, interpolation="nearest")
     has_edge = np.nanmin(img, initial=np.inf) < payload_kg <= np.nanmax(img, initial=-np.inf)
     if has_edge:
         ax2.contour(np.where(np.isnan(img), -1, img), levels=[payload_kg], colors="white", linewidths=1.2,
                     extent=extent, origin="lower")
+    layer = main[(main.k == _layer_of(main, last.z_m)) & (main.n_reachable > 0) & (main.capacity_kg == 0)]
+    if len(layer):  # 0 kg (a singular surface crosses the voxel) apart from the colour scale's low end
+        ax2.plot(layer.x_m, layer.y_m, "x", color="tab:red", ms=4, mew=1, label="0 kg (singular)")
     for name, g in ts.groupby("path", observed=True):
         ax2.plot(g.x_m, g.y_m, lw=1.5, **PATH_STYLE.get(name, {}))
     ax2.plot(last.x_m, last.y_m, "*", color="tab:orange", ms=12, label="goal")
@@ -202,6 +210,54 @@ def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_
         ax2.text(0.5, 0.97, f"no planned path: {_short(no_path)}", transform=ax2.transAxes, ha="center", va="top",
                  fontsize=8, bbox=dict(fc="white", ec="tab:red", alpha=0.9), wrap=True)
     save(fig, out_png)
+
+
+def _section_panel(ax, fig, main: pd.DataFrame, ts: pd.DataFrame, first, last, payload_kg: float, vmax: float,
+                   which: str, no_path: str) -> None:
+    """The voxels' capacity on the vertical plane through start and goal (abscissa: distance along the
+    start-goal line's horizontal direction, m; ordinate: z, m), the paths projected onto it: a path that
+    climbs over a singular slab shows its detour here, where a top view would flatten it."""
+    grid = main.attrs["capmap"]["grid"]
+    dx, lo, shape = grid["edge_m"], np.asarray(grid["lower_m"], float), np.asarray(grid["shape"])
+    a, b = np.array([first.x_m, first.y_m]), np.array([last.x_m, last.y_m])
+    d = b - a
+    d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-9 else np.array([1.0, 0.0])
+    u_path = (ts[["x_m", "y_m"]].to_numpy() - a) @ d
+    u = np.arange(u_path.min() - 4 * dx, u_path.max() + 4 * dx, dx / 2)
+    z = np.arange(lo[2], lo[2] + shape[2] * dx, dx / 2) + dx / 4
+    cap = np.full((shape[0], shape[1], shape[2]), np.nan)
+    reach = main[main.n_reachable > 0]
+    cap[reach.i.to_numpy(), reach.j.to_numpy(), reach.k.to_numpy()] = reach.capacity_kg.to_numpy()
+    U, Z = np.meshgrid(u, z)
+    P = a + U[..., None] * d
+    idx = np.floor((np.dstack([P, Z]) - lo) / dx).astype(int)
+    ok = np.all((idx >= 0) & (idx < shape), axis=-1)
+    img = np.full(U.shape, np.nan)
+    img[ok] = cap[idx[ok][:, 0], idx[ok][:, 1], idx[ok][:, 2]]
+    extent = [u[0] - dx / 4, u[-1] + dx / 4, z[0] - dx / 4, z[-1] + dx / 4]
+    im = ax.imshow(img, origin="lower", cmap="viridis", vmin=0, vmax=vmax, extent=extent, interpolation="nearest",
+                   aspect="equal")
+    zero = np.where(img == 0, 1.0, np.nan)
+    if np.isfinite(zero).any():
+        ax.contourf(U, Z, zero, levels=[0.5, 1.5], colors="none", hatches=["xx"], extent=extent)
+        ax.plot([], [], "s", mfc="none", mec="0.2", label="0 kg (singular), hatched")
+    if np.nanmin(img, initial=np.inf) < payload_kg <= np.nanmax(img, initial=-np.inf):
+        ax.contour(U, Z, np.where(np.isnan(img), -1, img), levels=[payload_kg], colors="white", linewidths=1.2)
+    for name, g in ts.groupby("path", observed=True):
+        ax.plot((g[["x_m", "y_m"]].to_numpy() - a) @ d, g.z_m, lw=1.5, **PATH_STYLE.get(name, {}))
+    ax.plot((b - a) @ d, last.z_m, "*", color="tab:orange", ms=12, label="goal")
+    ax.plot(0.0, first.z_m, "o", mfc="none", mec="tab:green", mew=2, ms=9, label="start")
+    zp = ts.z_m.to_numpy()
+    ax.set_ylim(max(extent[2], zp.min() - 4 * dx), min(extent[3], zp.max() + 4 * dx))
+    cb = fig.colorbar(im, ax=ax, label=f"voxel capacity [kg], {which} (white: not reached)")
+    cb.ax.axhline(payload_kg, color="k", lw=1.5)
+    ax.set(xlabel="distance along the start-goal direction (horizontal) [m]", ylabel="z [m]",
+           title=f"vertical section through start and goal, {which}\nwhite line: boundary of {payload_kg:g} kg")
+    ax.xaxis.set_major_locator(plt.MaxNLocator(6))
+    ax.legend(fontsize=8, loc="lower left")
+    if no_path:
+        ax.text(0.5, 0.97, f"no planned path: {_short(no_path)}", transform=ax.transAxes, ha="center", va="top",
+                fontsize=8, bbox=dict(fc="white", ec="tab:red", alpha=0.9), wrap=True)
 
 
 def _short(text: str, n: int = 90) -> str:
@@ -222,7 +278,10 @@ def load_label(column: str) -> str:
 
 def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, out_png: str | Path) -> None:
     """One panel per path: the given loads over time, each with its +-limit as dotted lines of its
-    own colour (one grey pair when all share one limit)."""
+    own colour (one grey pair when all share one limit). What breaks a limit is shaded red and named in
+    the panel's title; where tracking was lost (``tracked`` false) the trace ends, a line marks the
+    moment and the title says so; a spike far above the limits is drawn off scale (the axis keeps the
+    limits readable) with its peak written where it leaves the panel."""
     paths = list(ts.path.cat.categories if hasattr(ts.path, "cat") else ts.path.unique())
     quantity, unit = next(v for k, v in QUANTITY.items() if columns[0].startswith(k))
     fig, axes = plt.subplots(len(paths), 1, figsize=(11, 3.6 * len(paths)), squeeze=False, sharex=True)
@@ -230,21 +289,46 @@ def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, 
     same = len({limits[k] for k in columns}) == 1  # one pair of grey lines serves all
     for ax, name in zip(axes[:, 0], paths):
         g = ts[ts.path == name]
+        t = g.t_s.to_numpy()
+        lost = np.flatnonzero(~g.tracked.to_numpy(dtype=bool)) if "tracked" in g else np.array([], int)
+        t_lost = t[lost[0]] if len(lost) else None
+        lim_max = max(limits[c] for c in columns)
+        over = np.zeros(len(g), bool)
         for n, col in enumerate(columns):
             c = colors[n % len(colors)]
-            ax.plot(g.t_s, g[col], color=c, lw=1.2, label=load_label(col))
+            y = g[col].to_numpy(dtype=float)
+            ax.plot(t, y, color=c, lw=1.2, label=load_label(col))
+            over |= np.abs(np.nan_to_num(y)) > limits[col]
             if not same or n == 0:
                 lim = limits[col]
                 ax.axhline(lim, color="0.3" if same else c, ls=":", lw=1.2)
                 ax.axhline(-lim, color="0.3" if same else c, ls=":", lw=1.2)
-        peak = max(np.nanmax(np.abs(g[c]) / limits[c]) for c in columns)
-        top = 1.4 * max(max(limits[c] for c in columns), max(np.nanmax(np.abs(g[c])) for c in columns))
-        ax.set_ylim(-top, top)  # room for the legend above the limit lines
+        ratios = [np.nanmax(np.abs(g[c]) / limits[c]) for c in columns if np.isfinite(g[c]).any()]
+        peak = max(ratios) if ratios else 0.0
+        big = max((np.nanmax(np.abs(g[c])) for c in columns if np.isfinite(g[c]).any()), default=0.0)
+        top = 1.4 * max(lim_max, big) if big <= 3 * lim_max else 2.5 * lim_max  # a spike beyond 3x: off scale
+        ax.set_ylim(-top, top)
+        if over.any():
+            ax.fill_between(t, -top, top, where=over, color="tab:red", alpha=0.15, step="mid", lw=0,
+                            label="over its limit")
+        if big > top:
+            k = int(np.nanargmax(np.max([np.abs(g[c].to_numpy(dtype=float)) for c in columns], axis=0)))
+            ax.annotate(f"off scale: {100 * peak:.0f}% of its limit at t = {t[k]:.1f} s", xy=(t[k], np.sign(
+                np.nansum([g[c].to_numpy(dtype=float)[k] for c in columns])) * top * 0.97), xytext=(10, 0),
+                textcoords="offset points", fontsize=8, color="tab:red", va="center")
+        if t_lost is not None:
+            ax.axvline(t_lost, color="black", lw=1.5)
+            ax.axvspan(t_lost, t[-1], color="0.85", alpha=0.6, lw=0)
+            ax.text(t_lost, 0.5 * top, f"  tracking lost at {t_lost:.1f} s:\n  no motion after it", fontsize=9,
+                    va="center")
         lim_note = (f"dotted grey: ±{limits[columns[0]]:g} {unit}" if same else "dotted: ±limit, colour of its load")
-        ax.set(ylabel=f"{quantity} [{unit}]",
-               title=f"{PATH_STYLE.get(name, {}).get('label', name)}: peak {100 * peak:.0f}% of its limit ({lim_note})")
+        label = PATH_STYLE.get(name, {}).get("label", name)
+        verdict = (f"tracking lost at {t_lost:.1f} s; before it, peak {100 * peak:.0f}% of its limit" if t_lost is not None
+                   else f"EXCEEDS its limit: peak {100 * peak:.1f}%" if peak > 1 else f"peak {100 * peak:.0f}% of its limit")
+        ax.set(ylabel=f"{quantity} [{unit}]", title=f"{label}: {verdict} ({lim_note})")
+        ax.title.set_color("tab:red" if peak > 1 or t_lost is not None else "black")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, ncol=len(columns), loc="upper right")
+        ax.legend(fontsize=8, ncol=len(columns) + over.any(), loc="upper right")
     axes[-1, 0].set_xlabel("time t [s]")
     fig.suptitle(title + ("" if "planned" in paths else " (no planned path at this payload: see the summary)"))
     save(fig, out_png)

@@ -62,25 +62,44 @@ def distances(traj: pd.DataFrame, fine: pd.DataFrame, margin_m: float, active: l
 
 
 def joints(traj: pd.DataFrame, meta: dict, which: str, out_png: str | Path) -> None:
-    """Each joint's position (which='q', rad) or velocity (which='qd', rad/s) with its limits."""
+    """Each joint's position (which='q') as % of its range, or velocity (which='qd') as % of its limit,
+    one panel per arm with the limits drawn (0 / 100 % of the range, ±100 % of the velocity limit); the
+    joint that comes closest to a limit is marked there and named with its margin (rad, rad/s)."""
     names = meta["joints"]
     lo = np.asarray(meta["q_lower"]) if which == "q" else -np.asarray(meta["v_max"])
     hi = np.asarray(meta["q_upper"]) if which == "q" else np.asarray(meta["v_max"])
     unit = "rad" if which == "q" else "rad_s"
-    fig, axes = plt.subplots(7, 2, figsize=(12, 14), sharex=True)
-    for c, name in enumerate(names):
-        ax = axes[c % 7, c // 7]
-        ax.plot(traj.t_s, traj[f"{which}_{name}_{unit}"], lw=1.2, color="tab:blue")
-        ax.axhline(lo[c], color="tab:red", ls=":", lw=1)
-        ax.axhline(hi[c], color="tab:red", ls=":", lw=1)
-        span = hi[c] - lo[c]
-        ax.set_ylim(lo[c] - 0.08 * span, hi[c] + 0.08 * span)
-        ax.set_ylabel(f"{name} [{'rad' if which == 'q' else 'rad/s'}]", fontsize=8)
+    t = traj.t_s.to_numpy()
+    vals = np.column_stack([traj[f"{which}_{n}_{unit}"].to_numpy() for n in names])
+    pct = 100 * (vals - lo) / (hi - lo) if which == "q" else 100 * vals / hi
+    margin = np.minimum(vals - lo, hi - vals)  # rad or rad/s to the nearer limit
+    k, c = np.unravel_index(int(np.argmin(margin)), margin.shape)
+    fig, axes = plt.subplots(2, 1, figsize=(11, 8), sharex=True)
+    for side, ax in zip(("left", "right"), axes):
+        for j in (j for j, n in enumerate(names) if n.startswith(side)):
+            ax.plot(t, pct[:, j], lw=1.3, label=names[j])
+        if names[c].startswith(side):
+            ax.plot(t[k], pct[k, c], "o", ms=10, mfc="none", mec="tab:red", mew=2,
+                    label=f"closest to a limit: {names[c]}")
+        if which == "q":
+            for y in (0, 100):
+                ax.axhline(y, color="tab:red", ls=":", lw=1.2)
+            ax.set(ylim=(-8, 108), ylabel=f"{side} arm: position [% of its range]")
+        else:
+            top = max(1.3 * np.abs(pct).max(), 5.0)
+            if top >= 100:
+                for y in (-100, 100):
+                    ax.axhline(y, color="tab:red", ls=":", lw=1.2)
+            ax.set(ylim=(-min(top, 110), min(top, 110)), ylabel=f"{side} arm: velocity [% of its limit]")
         ax.grid(alpha=0.3)
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]")
-    fig.suptitle(f"Joint {'positions' if which == 'q' else 'velocities'} (left arm | right arm) and their limits "
-                 "(red dotted)")
+        ax.legend(fontsize=8, ncol=4, loc="upper right")
+    axes[-1].set_xlabel("time t [s]")
+    unit_txt = "rad" if which == "q" else "rad/s"
+    what = "positions (0 and 100 %: the joint's limits, red dotted)" if which == "q" else "velocities"
+    peak = np.abs(pct).max()
+    note = "" if which == "q" or peak >= 100 / 1.3 else f"; peak {peak:.0f} % of the limit (±100 %: off this scale)"
+    fig.suptitle(f"Joint {what}{note}\nclosest to a limit: {names[c]}, {margin[k, c]:.3f} {unit_txt} from it at "
+                 f"t = {t[k]:.1f} s", fontsize=11)
     save(fig, out_png)
 
 
@@ -115,15 +134,18 @@ def torques(tq: pd.DataFrame, meta: dict, t_pre: float, out_png: str | Path) -> 
 
 
 def convergence(outer: pd.DataFrame, out_png: str | Path) -> None:
-    """Violation and penalty per outer iteration of the augmented-Lagrangian loop."""
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    ax.semilogy(outer.outer, outer.eq_violation, "o-", label="equality violation [m or rad]")
-    ax.semilogy(outer.outer, np.maximum(outer.in_violation, 1e-16), "s-", label="inequality violation [m or rad]")
-    ax.semilogy(outer.outer, outer.mu, "^--", color="0.4", label="penalty mu")
-    ax.set(xlabel="outer iteration", ylabel="value (log scale)",
+    """Per outer iteration of the augmented-Lagrangian loop: the constraint violations (m or rad, the
+    largest residual of either kind) and, on its own axis, the penalty mu (dimensionless weight)."""
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, height_ratios=[2, 1])
+    ax.semilogy(outer.outer, outer.eq_violation, "o-", label="equality violation (closed chain, path)")
+    ax.semilogy(outer.outer, np.maximum(outer.in_violation, 1e-16), "s-", label="inequality violation (distances, limits)")
+    ax.set(ylabel="largest violation [m or rad]",
            title=f"Augmented Lagrangian: {len(outer)} outer, {int(outer.inner_iterations.sum())} FDDP iterations")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
+    ax2.semilogy(outer.outer, outer.mu, "^--", color="0.3")
+    ax2.set(xlabel="outer iteration", ylabel="penalty mu [-]")
+    ax2.grid(alpha=0.3, which="both")
     save(fig, out_png)
 
 
