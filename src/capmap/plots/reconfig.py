@@ -60,13 +60,16 @@ def joint_rates(runs: dict[str, pd.DataFrame], out_png: str | Path) -> None:
 
 
 def passive_joint(runs: dict[str, pd.DataFrame], out_png: str | Path) -> None:
-    """The unlocked joint's rotation theta and extension d over time, with their ranges."""
+    """The unlocked joint's rotation theta and extension d over time, with their ranges. The law is
+    prescribed, so the methods move this joint alike unless one slowed its time (rate limits): the
+    title says which, with the largest difference between the methods, and where they do differ."""
     fig, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
     meta = next(iter(runs.values())).attrs["capmap"]
+    styles = {"nullspace": dict(lw=3.0, alpha=0.45), "pinv": dict(lw=1.2, ls="--")}
     for method, df in runs.items():
         st = METHOD_STYLE.get(method, {"label": method})
-        axes[0].plot(df.t_s, df.passive_theta_deg, lw=1.6, **st)
-        axes[1].plot(df.t_s, df.passive_d_m, lw=1.6, **st)
+        axes[0].plot(df.t_s, df.passive_theta_deg, **{**st, **styles.get(method, {})})
+        axes[1].plot(df.t_s, df.passive_d_m, **{**st, **styles.get(method, {})})
     for ax, key, label in ((axes[0], "theta_deg", "rotation theta [deg]"), (axes[1], "d_m", "extension d [m]")):
         lo, hi = meta["passive_ranges"][key]
         ax.axhline(lo, color="0.3", ls=":", lw=1.2, label=f"range [{lo:g}, {hi:g}]")
@@ -74,8 +77,21 @@ def passive_joint(runs: dict[str, pd.DataFrame], out_png: str | Path) -> None:
         ax.set(ylabel=label)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    axes[0].set_title(f"Passive joint {meta['unlocked']}: quintic rest-to-rest law")
-    axes[1].set_xlabel("t [s]")
+    frames = list(runs.values())
+    if len(frames) == 2:
+        a, b = frames
+        t = a.t_s.to_numpy()
+        dth = np.abs(np.interp(t, b.t_s, b.passive_theta_deg) - a.passive_theta_deg.to_numpy()).max()
+        dd = np.abs(np.interp(t, b.t_s, b.passive_d_m) - a.passive_d_m.to_numpy()).max()
+        same = dth < 1e-6 and dd < 1e-9
+        by = "exactly" if dth == 0 and dd == 0 else f"to {dth:.1g} deg, {dd:.1g} m"
+        note = (f"the same for both methods ({by}): the law is prescribed,\n"
+                "the methods differ in the other joints (joint_rates.png) and the manipulability (manipulability.png)"
+                if same else f"the methods differ by up to {dth:.3g} deg and {dd:.3g} m (one slowed its time)")
+    else:
+        note = "quintic rest-to-rest law"
+    axes[0].set_title(f"Passive joint {meta['unlocked']}: quintic rest-to-rest law, {note}", fontsize=10)
+    axes[1].set_xlabel("time t [s]")
     save(fig, out_png)
 
 
