@@ -66,7 +66,7 @@ def test_the_3d_page_is_offline_and_holds_every_voxel_and_path():
     assert not re.search(r"<script[^>]+src=", page)  # plotly.js inlined, nothing fetched at view time
     assert "Plotly.restyle" in page and "plotly_sliderchange" in page and "plotly_buttonclicked" in page
     data = json.loads(re.search(r"const M = (\[.*?\]), L = ", page).group(1))
-    levels = json.loads(re.search(r", L = (\[.*?\]);\n", page).group(1))
+    levels = json.loads(re.search(r", L = (\[.*?\]), H = ", page).group(1))
     for m, (x, c) in zip(data, ((xyz, cap), (xyz[:250], bound))):
         np.testing.assert_allclose(np.c_[m["x"], m["y"], m["z"]], x, atol=1e-4)
         np.testing.assert_allclose(m["c"], c, atol=0.01)
@@ -76,3 +76,21 @@ def test_the_3d_page_is_offline_and_holds_every_voxel_and_path():
     assert len(shown["x"]) == int((cap >= 1500).sum()) and min(shown["marker"]["color"]) >= 1500
     assert any(t.get("name") == path.label for t in fig) and {"start", "goal", "direct line"} <= {t.get("name") for t in fig}
     assert re.search(r'"label":\s*"configuration S\+E\+W\+"', page) and re.search(r'"label":\s*"any configuration"', page)
+
+
+def test_the_3d_page_shows_0_kg_voxels_cuts_by_height_fixes_its_axes_and_names_the_binding_limit():
+    """The 0 kg voxels as their own trace (exactly those), a height slider over every voxel layer, axes
+    fixed to the data (not rescaled at each redraw), and hover text with the binding limit."""
+    rng = np.random.default_rng(1)
+    xyz = np.round(rng.uniform(-3, 3, (200, 3)) / 0.75) * 0.75
+    cap = np.where(rng.random(200) < 0.2, 0.0, rng.uniform(1, 4000, 200))
+    bind = np.array(["tau_j2_nm", "base_mx_nm"], dtype=object)[rng.integers(0, 2, 200)]
+    page = capacity_3d_html([("configuration S+E+W+", xyz, cap, bind)], 0.75, np.zeros(3), np.ones(3), [], (1500.0,), "t")
+    fig = json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
+    zero = next(t for t in fig if t.get("name", "").startswith("0 kg"))
+    np.testing.assert_allclose(np.c_[zero["x"], zero["y"], zero["z"]], xyz[cap == 0])
+    assert all(", bound by " in t for t in zero["text"])
+    heights = json.loads(re.search(r", H = (\[.*?\]), B = ", page).group(1))
+    assert sorted(heights) == sorted(set(np.round(xyz[:, 2], 4)))
+    text = page.replace("\\u003c", "<")  # plotly's JSON escapes '<'
+    assert '"autorange":false' in text.replace(" ", "") and "show z [m] <= " in text and '"uirevision"' in text

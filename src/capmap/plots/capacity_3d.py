@@ -1,6 +1,8 @@
 """Interactive 3D view of the capacity map: one self-contained HTML page (plotly.js inlined, no
-network at view time) with the reachable voxels coloured by capacity, a payload slider that hides
-the voxels below it, the direct line, the planned paths, the start and the goal."""
+network at view time) with the reachable voxels coloured by capacity (hover: the value and the limit
+that binds it), the 0 kg voxels (singular slabs) as their own trace, a payload slider that hides the
+voxels below it, a height slider that cuts the map at a layer so its inside shows, fixed axes, the
+direct line, the planned paths, the start and the goal."""
 
 from __future__ import annotations
 
@@ -30,35 +32,51 @@ def slider_levels(capacity_kg: np.ndarray, payloads_kg: tuple[float, ...], n: in
     return np.unique(np.r_[np.arange(0.0, top + step, step), payloads_kg])
 
 
-def capacity_3d_html(maps: list[tuple[str, np.ndarray, np.ndarray]], edge_m: float, start_m: np.ndarray,
+def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
                      goal_m: np.ndarray, paths: list[PlannedPath], payloads_kg: tuple[float, ...],
                      title: str) -> str:
-    """The page. ``maps``: (name, centres_m (V, 3), capacity_kg (V,)) of the reachable voxels of each
-    map (capacity of the voxel: the least over its points and motion directions, on the map's IK
-    branches), the first shown, buttons switch between them; ``edge_m`` the voxel edge; ``start_m``,
-    ``goal_m`` (3,); the slider starts at the first payload."""
+    """The page. ``maps``: (name, centres_m (V, 3), capacity_kg (V,)[, binding (V,) str]) of the
+    reachable voxels of each map (capacity of the voxel: the least over its points and motion
+    directions, on the map's IK branches; binding: the limit that sets it), the first shown, buttons
+    switch between them; ``edge_m`` the voxel edge; ``start_m``, ``goal_m`` (3,); the payload slider
+    starts at the first payload, the height slider at the top (the whole map)."""
     import plotly.graph_objects as go
 
-    _, xyz, c = maps[0]
-    c = np.asarray(c, float)
-    xyz = np.asarray(xyz, float)
+    maps = [m if len(m) == 4 else (*m, np.full(len(m[2]), "", dtype=object)) for m in maps]
+    maps = [(n, x, v, np.array(["" if str(b) in ("nan", "None") else str(b) for b in bb], dtype=object))
+            for n, x, v, bb in maps]  # no binding limit (e.g. an unset value): no hover line for it
+    _, xyz, c, bind = maps[0]
+    c, xyz = np.asarray(c, float), np.asarray(xyz, float)
     every = np.concatenate([np.asarray(m[2], float) for m in maps])
+    allxyz = np.concatenate([np.asarray(m[1], float).reshape(-1, 3) for m in maps] + [np.vstack([start_m, goal_m])])
     levels = slider_levels(every, payloads_kg)
     first = float(payloads_kg[0]) if payloads_kg else 0.0
     cmax = float(np.nanmax(every)) if every.size else 1.0
-    keep = c >= first
+    heights = np.unique(np.round(allxyz[:-2, 2], 4)) if len(allxyz) > 2 else np.array([0.0])
+    lo, hi = allxyz.min(axis=0) - edge_m, allxyz.max(axis=0) + edge_m
+    names = sorted({str(b) for m in maps for b in m[3]} - {""})
+
+    def hover(v, b):
+        return [f"{x:.0f} kg" + (f", bound by {y}" if y else "") for x, y in zip(v, b)]
+
+    keep, zero = c >= first, c == 0
+    hov = "(%{x:.2f}, %{y:.2f}, %{z:.2f}) m<br>%{text}<extra></extra>"
     fig = go.Figure()
     fig.add_trace(go.Scatter3d(
         x=xyz[keep, 0].tolist(), y=xyz[keep, 1].tolist(), z=xyz[keep, 2].tolist(), mode="markers",
         name="voxels carrying the payload",
         marker=dict(size=3, color=c[keep].tolist(), cmin=0.0, cmax=cmax, colorscale="Viridis", opacity=0.5,
                     colorbar=dict(title=dict(text="capacity [kg]"), x=1.02)),
-        text=[f"{v:.0f} kg" for v in c[keep]], hovertemplate="(%{x:.2f}, %{y:.2f}, %{z:.2f}) m<br>%{text}<extra></extra>"))
+        text=hover(c[keep], bind[keep]), hovertemplate=hov))
     fig.add_trace(go.Scatter3d(
         x=xyz[~keep, 0].tolist(), y=xyz[~keep, 1].tolist(), z=xyz[~keep, 2].tolist(), mode="markers",
         name="reachable, below the payload",
         marker=dict(size=2, color="lightgrey", opacity=0.25), visible="legendonly",
-        text=[f"{v:.0f} kg" for v in c[~keep]], hovertemplate="(%{x:.2f}, %{y:.2f}, %{z:.2f}) m<br>%{text}<extra></extra>"))
+        text=hover(c[~keep], bind[~keep]), hovertemplate=hov))
+    fig.add_trace(go.Scatter3d(
+        x=xyz[zero, 0].tolist(), y=xyz[zero, 1].tolist(), z=xyz[zero, 2].tolist(), mode="markers",
+        name="0 kg: a singular surface crosses the voxel", marker=dict(size=2.5, color="crimson", opacity=0.6),
+        text=hover(c[zero], bind[zero]), hovertemplate=hov))
     line = np.vstack([start_m, goal_m])
     fig.add_trace(go.Scatter3d(x=line[:, 0].tolist(), y=line[:, 1].tolist(), z=line[:, 2].tolist(), mode="lines",
                                name="direct line",
@@ -74,34 +92,56 @@ def capacity_3d_html(maps: list[tuple[str, np.ndarray, np.ndarray]], edge_m: flo
                                    name=name, text=[name],
                                    marker=dict(size=8, color=colour, symbol="diamond")))
     steps = [dict(method="skip", label=f"{v:g}", args=[None]) for v in levels]
+    cuts = [dict(method="skip", label=f"{z:.2f}", args=[None]) for z in heights]
     active = int(np.searchsorted(levels, first))
-    buttons = [dict(method="skip", label=name, args=[None]) for name, _, _ in maps]
+    buttons = [dict(method="skip", label=m[0], args=[None]) for m in maps]
+    span = hi - lo
     fig.update_layout(
         title=dict(text=f"{title}<br><sub>shown: {maps[0][0]} (buttons: the other maps); voxel edge {edge_m:g} m; the "
-                        f"slider hides the voxels below a payload (shown: capacity >= payload)</sub>"),
-        scene=dict(xaxis_title="x [m]", yaxis_title="y [m]", zaxis_title="z [m]", aspectmode="data"),
-        sliders=[dict(active=active, steps=steps, currentvalue=dict(prefix="payload [kg] >= "), pad=dict(t=30))],
-        updatemenus=[dict(type="buttons", direction="right", buttons=buttons, active=0, x=0.0, y=1.06,
-                          xanchor="left", yanchor="bottom", showactive=True)] if len(maps) > 1 else [],
-        legend=dict(x=0.0, y=0.95), margin=dict(l=0, r=0, t=110, b=0), height=800)
+                        f"payload slider hides the voxels below a payload, the height slider cuts the map above a layer; "
+                        f"hover: capacity and the limit that binds it</sub>"),
+        scene=dict(xaxis=dict(title="x [m]", range=[lo[0], hi[0]], autorange=False),
+                   yaxis=dict(title="y [m]", range=[lo[1], hi[1]], autorange=False),
+                   zaxis=dict(title="z [m]", range=[lo[2], hi[2]], autorange=False),
+                   aspectmode="manual", aspectratio=dict(x=1.0, y=span[1] / span[0], z=span[2] / span[0])),
+        uirevision="capmap",  # the camera stays where the user put it while the sliders redraw
+        sliders=[dict(active=active, steps=steps, currentvalue=dict(prefix="payload [kg] >= "), pad=dict(t=30),
+                      len=0.48, x=0.0),
+                 dict(active=len(cuts) - 1, steps=cuts, currentvalue=dict(prefix="show z [m] <= "), pad=dict(t=30),
+                      len=0.48, x=0.52)],
+        updatemenus=[dict(type="buttons", direction="right", buttons=buttons, active=0, x=0.0, y=1.0,
+                          xanchor="left", yanchor="top", showactive=True)] if len(maps) > 1 else [],
+        legend=dict(x=0.0, y=0.9), margin=dict(l=0, r=0, t=110, b=0), height=800)
     data = json.dumps([{"x": np.asarray(m[1])[:, 0].round(4).tolist(), "y": np.asarray(m[1])[:, 1].round(4).tolist(),
-                        "z": np.asarray(m[1])[:, 2].round(4).tolist(), "c": np.asarray(m[2], float).round(2).tolist()}
+                        "z": np.asarray(m[1])[:, 2].round(4).tolist(), "c": np.asarray(m[2], float).round(2).tolist(),
+                        "b": [names.index(str(b)) if str(b) in names else -1 for b in m[3]]}
                        for m in maps])
-    # on a slider step or a map button: the shown map's voxels >= the level in trace 0, the others in trace 1
-    script = ("const M = " + data + ", L = " + json.dumps(levels.tolist()) + ";\n"
+    # on a slider step or a map button: the shown map's voxels up to the height cut, >= the payload level in
+    # trace 0, the others in trace 1, its 0 kg voxels in trace 2
+    script = ("const M = " + data + ", L = " + json.dumps(levels.tolist()) + ", H = " + json.dumps(heights.tolist())
+              + ", B = " + json.dumps(names) + ";\n"
               "const gd = document.getElementById('{plot_id}');\n"
-              "let level = L[" + str(active) + "], shown = 0;\n"
+              "let level = L[" + str(active) + "], zmax = H[H.length - 1], shown = 0;\n"
               "function draw() {\n"
-              "  const V = M[shown], a = {x: [], y: [], z: [], c: [], t: []}, b = {x: [], y: [], z: [], t: []};\n"
+              "  const V = M[shown], a = {x: [], y: [], z: [], c: [], t: []}, b = {x: [], y: [], z: [], t: []},\n"
+              "        o = {x: [], y: [], z: [], t: []};\n"
               "  for (let i = 0; i < V.c.length; i++) {\n"
+              "    if (V.z[i] > zmax + 1e-6) continue;\n"
+              "    const t = V.c[i].toFixed(0) + ' kg' + (V.b[i] >= 0 ? ', bound by ' + B[V.b[i]] : '');\n"
               "    const s = V.c[i] >= level ? a : b;\n"
-              "    s.x.push(V.x[i]); s.y.push(V.y[i]); s.z.push(V.z[i]); s.t.push(V.c[i].toFixed(0) + ' kg');\n"
+              "    s.x.push(V.x[i]); s.y.push(V.y[i]); s.z.push(V.z[i]); s.t.push(t);\n"
               "    if (s === a) { a.c.push(V.c[i]); }\n"
+              "    if (V.c[i] === 0) { o.x.push(V.x[i]); o.y.push(V.y[i]); o.z.push(V.z[i]); o.t.push(t); }\n"
               "  }\n"
-              "  Plotly.restyle(gd, {x: [a.x, b.x], y: [a.y, b.y], z: [a.z, b.z], text: [a.t, b.t]}, [0, 1]);\n"
+              "  Plotly.restyle(gd, {x: [a.x, b.x, o.x], y: [a.y, b.y, o.y], z: [a.z, b.z, o.z], text: [a.t, b.t, o.t]},\n"
+              "                 [0, 1, 2]);\n"
               "  Plotly.restyle(gd, {'marker.color': [a.c]}, [0]);\n"
               "}\n"
-              "gd.on('plotly_sliderchange', function (ev) { level = L[ev.step._index]; draw(); });\n"
+              "gd.on('plotly_sliderchange', function (ev) {  // which slider: by its label\n"
+              "  if (ev.slider.currentvalue.prefix.startsWith('payload')) { level = L[ev.step._index]; }\n"
+              "  else { zmax = H[ev.step._index]; }\n"
+              "  draw();\n"
+              "});\n"
               "gd.on('plotly_buttonclicked', function (ev) { shown = ev.active; draw(); });\n")
     return fig.to_html(include_plotlyjs=True, full_html=True, post_script=script, div_id="capmap-3d",
                        config={"displaylogo": False})

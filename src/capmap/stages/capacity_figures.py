@@ -105,7 +105,8 @@ def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], ou
         f"; no path for {', '.join(missing)}" if missing else "")
     maps = [] if op is None else [(f"configuration {view.configuration} (the arm's)", op[op.n_reachable > 0])]
     maps.append(("any configuration (the bound: every IK branch)", vox[vox.n_reachable > 0]))
-    html = capacity_3d_html([(name, m[["x_m", "y_m", "z_m"]].to_numpy(), m.capacity_kg.to_numpy()) for name, m in maps],
+    html = capacity_3d_html([(name, m[["x_m", "y_m", "z_m"]].to_numpy(), m.capacity_kg.to_numpy(),
+                              m.binding.astype(str).to_numpy()) for name, m in maps],
                             edge, view.start_m, view.goal_m, paths, view.payloads_kg, title)
     Path(out_html).parent.mkdir(parents=True, exist_ok=True)
     Path(out_html).write_text(html)
