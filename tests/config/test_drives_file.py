@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from capmap.config.robot_file import load
-from capmap.errors import ConfigError
+from tests.config.test_urdf_robots import _error  # one line naming the file: the robot files' check
 from tests.scenario import ROOT, SSRMS_YAML
 
 UR5_DRIVES = ROOT / "config" / "robots" / "ur5_drives.yaml"
@@ -23,14 +23,6 @@ def _write(tmp_path, doc, name="robot.yaml"):
     p = tmp_path / name
     p.write_text(yaml.safe_dump(doc))
     return p
-
-
-def _error(path) -> str:
-    with pytest.raises(ConfigError) as exc:
-        load(path)
-    msg = str(exc.value)
-    assert "\n" not in msg and msg.startswith(str(path)), msg
-    return msg
 
 
 def _ur5_with_dynamics(tmp_path, damping, friction):

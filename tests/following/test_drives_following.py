@@ -1,5 +1,6 @@
 """Following with the drives' terms (issue 28): rotor inertia (armature) and friction in the follower's
-torque model, against the 1-DOF analytic limit, brute force on the admissible accelerations, a second
+torque model, against the 1-DOF analytic limit (brute force on the admissible accelerations with friction:
+tests/following/test_follower.py), a second
 inverse dynamics in joint space (M = CRBA of the links + diag(armature), Pinocchio's nonlinear effects,
 friction by hand), and TOPP-RA with armature and Coulomb friction (fs_coef) as the like-for-like bound."""
 
@@ -17,34 +18,13 @@ from capmap.core.profiles import scurve
 from capmap.core.reduction import free
 from capmap.following.follower import FollowSettings, follow
 from capmap.following.path import JointPath, path_at
-from capmap.following.path_dynamics import PathDynamics, path_dynamics, prepare
+from capmap.following.path_dynamics import path_dynamics, prepare
 from capmap.following.tables import follow_path
 from tests.scenario import ROOT
 
 UR5_DRIVES = ROOT / "config" / "robots" / "ur5_drives.yaml"
 UR5_Q0 = np.deg2rad([0, -68.75, 91.67, -108.86, -90, 0])
 UR5_LIM = np.array([14, 150, 150, 28, 28, 28.0])
-
-
-@pytest.mark.parametrize("seed", range(12))
-def test_admissible_accelerations_with_friction_equal_brute_force(seed):
-    """[lo, hi] at a forward path speed with friction vs a dense search over sdd of
-    |a sdd + b sd^2 + c + F_v q' sd + F_c sign(q')| <= T."""
-    rng = np.random.default_rng(seed)
-    n = 6
-    a, b, c, dq = rng.normal(size=n), rng.normal(size=n), 0.3 * rng.normal(size=n), rng.normal(size=n)
-    coulomb, viscous = rng.uniform(0, 0.4, n), rng.uniform(0, 0.5, n)
-    tau, sd = rng.uniform(0.8, 2.0, n), rng.uniform(0, 1.5)
-    pdyn = PathDynamics(np.zeros(1), a[None], b[None], c[None], dq[None], coulomb, viscous)
-    (lo,), (hi,) = pdyn.sdd_interval(AffineLimits(tau, tuple(f"tau_j{k}_nm" for k in range(n))), np.array([sd]))
-    x = np.linspace(-60, 60, 240001)
-    y = np.outer(x, a) + b * sd**2 + c + viscous * dq * sd + coulomb * np.sign(dq)
-    ok = np.all(np.abs(y) <= tau, axis=1)
-    if not ok.any():
-        assert lo > hi or hi - lo < 1e-3
-    else:
-        assert lo == pytest.approx(max(x[ok].min(), -60), abs=1e-3) or lo < -60
-        assert hi == pytest.approx(min(x[ok].max(), 60), abs=1e-3) or hi > 60
 
 
 @pytest.fixture(scope="module")

@@ -28,18 +28,22 @@ UR5_LIM = np.array([14, 150, 150, 28, 28, 28.0])
 # --------------------------------------------------------------------------- admissible accelerations
 
 
+@pytest.mark.parametrize("friction", [False, True])
 @pytest.mark.parametrize("seed", range(20))
-def test_admissible_path_accelerations_equal_brute_force(seed):
-    """[lo, hi] from the torque tables at a path speed vs a dense search over sdd of |a sdd + b sd^2 + c| <= T."""
+def test_admissible_path_accelerations_equal_brute_force(seed, friction):
+    """[lo, hi] from the torque tables at a forward path speed vs a dense search over sdd of
+    |a sdd + b sd^2 + c (+ F_v q' sd + F_c sign(q'), the drives' friction)| <= T."""
     rng = np.random.default_rng(seed)
     n = 6
     a, b, c = rng.normal(size=n), rng.normal(size=n), 0.3 * rng.normal(size=n)
     a[rng.random(n) < 0.15] = 0.0
     tau, sd = rng.uniform(0.5, 2.0, n), rng.uniform(0, 1.5)
-    pdyn = PathDynamics(np.zeros(1), a[None], b[None], c[None])
+    dq = rng.normal(size=n)
+    coulomb, viscous = (rng.uniform(0, 0.4, n), rng.uniform(0, 0.5, n)) if friction else (np.zeros(n), np.zeros(n))
+    pdyn = PathDynamics(np.zeros(1), a[None], b[None], c[None], dq[None], coulomb, viscous)
     (lo,), (hi,) = pdyn.sdd_interval(AffineLimits(tau, tuple(f"tau_j{k}_nm" for k in range(n))), np.array([sd]))
     x = np.linspace(-60, 60, 240001)
-    ok = np.all(np.abs(np.outer(x, a) + b * sd**2 + c) <= tau, axis=1)
+    ok = np.all(np.abs(np.outer(x, a) + b * sd**2 + c + viscous * dq * sd + coulomb * np.sign(dq)) <= tau, axis=1)
     if not ok.any():
         assert lo > hi or hi - lo < 1e-3
     else:

@@ -45,7 +45,7 @@ from capmap.core.profiles import SCurve, scurve
 from capmap.core.reduction import LockedArm
 from capmap.errors import CapmapError, SolverFailed
 from capmap.following.path import JointPath, interpolate_q, line_path, path_at
-from capmap.following.path_dynamics import PreparedPath, path_dynamics, prepare
+from capmap.following.path_dynamics import PreparedPath, forward_friction, path_dynamics, prepare
 
 __all__ = ["FollowResult", "follow", "FollowSettings", "FollowedSegment", "ExactTorques", "exact_torques",
            "follow_segment", "SATURATED"]
@@ -139,7 +139,7 @@ def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: fl
         y0 = b * (sd * sd) + c
         if friction:  # moving forward (or starting to): F_v q' sd + F_c sign(q') at this s
             dq = grid_dq[i] + f * (grid_dq[i + 1] - grid_dq[i])
-            y0 = y0 + f_v * dq * sd + f_c * np.sign(dq)
+            y0 = y0 + forward_friction(dq, sd, f_c, f_v)
         lo, hi = limits.interval_one(y0.tolist(), a.tolist())
         if in_sync and k + 1 < n_cmd:
             if lo <= sdd_c <= hi and sdc_all[k + 1] <= ceiling(sc_all[k + 1]) + 1e-12:

@@ -36,7 +36,13 @@ from capmap.core.reduction import LockedArm
 from capmap.errors import LimitInfeasible
 from capmap.following.path import JointPath
 
-__all__ = ["PathDynamics", "path_dynamics", "PreparedPath", "prepare"]
+__all__ = ["PathDynamics", "path_dynamics", "PreparedPath", "prepare", "forward_friction"]
+
+
+def forward_friction(dq: np.ndarray, sd, coulomb_nm: np.ndarray, viscous_nms: np.ndarray) -> np.ndarray:
+    """Friction torques (..., n) N m moving forward along the path (or starting to): viscous q' sd +
+    coulomb sign(q'), for q' = dq (..., n) rad/m at path speed sd >= 0 m/s (a float, or (..., 1))."""
+    return viscous_nms * dq * sd + coulomb_nm * np.sign(dq)
 
 
 @dataclass(frozen=True)
@@ -63,8 +69,7 @@ class PathDynamics:
         forward): viscous q' sd + coulomb sign(q')."""
         if not self.has_friction:
             return np.zeros_like(self.c)
-        sd = np.asarray(sd, dtype=float)[:, None]
-        return self.viscous_nms * self.dq * sd + self.coulomb_nm * np.sign(self.dq)
+        return forward_friction(self.dq, np.asarray(sd, dtype=float)[:, None], self.coulomb_nm, self.viscous_nms)
 
     def torques(self, s: np.ndarray, sd: np.ndarray, sdd: np.ndarray) -> np.ndarray:
         """Torques (N, n) at states (N,) by linear interpolation of the tables (friction at rest and not
@@ -162,5 +167,5 @@ def _interval_at(pdyn: PathDynamics, limits: AffineLimits, i: int, sd: float) ->
     """Admissible [lo, hi] at grid point i and path speed sd (Python floats)."""
     y0 = pdyn.b[i] * (sd * sd) + pdyn.c[i]
     if pdyn.has_friction:
-        y0 = y0 + pdyn.viscous_nms * pdyn.dq[i] * sd + pdyn.coulomb_nm * np.sign(pdyn.dq[i])
+        y0 = y0 + forward_friction(pdyn.dq[i], sd, pdyn.coulomb_nm, pdyn.viscous_nms)
     return limits.interval_one(y0.tolist(), pdyn.a[i].tolist())

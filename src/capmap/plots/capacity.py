@@ -199,16 +199,13 @@ def workspace_paths(vox: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out_
         ax2.plot(g.x_m, g.y_m, lw=1.5, **PATH_STYLE.get(name, {}))
     ax2.plot(last.x_m, last.y_m, "*", color="tab:orange", ms=12, label="goal")
     ax2.plot(first.x_m, first.y_m, "o", mfc="none", mec="tab:green", mew=2, ms=9, label="start (projected)")
-    cb = fig.colorbar(im, ax=ax2, label=f"voxel capacity [kg], {which} (white: not reached)")
-    cb.ax.axhline(payload_kg, color="k", lw=1.5)
+    _capacity_colorbar(fig, im, ax2, which, payload_kg)
     edge = (f"white line: boundary of {payload_kg:g} kg" if has_edge else
             f"no voxel of this layer carries {payload_kg:g} kg" if np.nanmax(img, initial=0) < payload_kg else
             f"every voxel of this layer carries {payload_kg:g} kg")
     ax2.set(xlabel="x [m]", ylabel="y [m]", title=f"goal's voxel layer z = {z:.2f} m, {which}\n{edge}")
     ax2.legend(fontsize=8, loc="lower left")
-    if no_path:
-        ax2.text(0.5, 0.97, f"no planned path: {_short(no_path)}", transform=ax2.transAxes, ha="center", va="top",
-                 fontsize=8, bbox=dict(fc="white", ec="tab:red", alpha=0.9), wrap=True)
+    _no_path_note(ax2, no_path)
     save(fig, out_png)
 
 
@@ -249,15 +246,25 @@ def _section_panel(ax, fig, main: pd.DataFrame, ts: pd.DataFrame, first, last, p
     ax.plot(0.0, first.z_m, "o", mfc="none", mec="tab:green", mew=2, ms=9, label="start")
     zp = ts.z_m.to_numpy()
     ax.set_ylim(max(extent[2], zp.min() - 4 * dx), min(extent[3], zp.max() + 4 * dx))
-    cb = fig.colorbar(im, ax=ax, label=f"voxel capacity [kg], {which} (white: not reached)")
-    cb.ax.axhline(payload_kg, color="k", lw=1.5)
+    _capacity_colorbar(fig, im, ax, which, payload_kg)
     ax.set(xlabel="distance along the start-goal direction (horizontal) [m]", ylabel="z [m]",
            title=f"vertical section through start and goal, {which}\nwhite line: boundary of {payload_kg:g} kg")
     ax.xaxis.set_major_locator(plt.MaxNLocator(6))
     ax.legend(fontsize=8, loc="lower left")
+    _no_path_note(ax, no_path)
+
+
+def _no_path_note(ax, no_path: str) -> None:
+    """Why there is no planned path, boxed at the top of the panel ('' : nothing)."""
     if no_path:
         ax.text(0.5, 0.97, f"no planned path: {_short(no_path)}", transform=ax.transAxes, ha="center", va="top",
                 fontsize=8, bbox=dict(fc="white", ec="tab:red", alpha=0.9), wrap=True)
+
+
+def _capacity_colorbar(fig, im, ax, which: str, payload_kg: float) -> None:
+    """The voxel capacity's colour bar beside ``ax``, the payload marked on it."""
+    cb = fig.colorbar(im, ax=ax, label=f"voxel capacity [kg], {which} (white: not reached)")
+    cb.ax.axhline(payload_kg, color="k", lw=1.5)
 
 
 def _short(text: str, n: int = 90) -> str:

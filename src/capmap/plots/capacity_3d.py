@@ -42,9 +42,10 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
     starts at the first payload, the height slider at the top (the whole map)."""
     import plotly.graph_objects as go
 
-    maps = [m if len(m) == 4 else (*m, np.full(len(m[2]), "", dtype=object)) for m in maps]
-    maps = [(n, x, v, np.array(["" if str(b) in ("nan", "None") else str(b) for b in bb], dtype=object))
-            for n, x, v, bb in maps]  # no binding limit (e.g. an unset value): no hover line for it
+    # the binding limits as text, '' where none is given or set (no hover line for it)
+    maps = [(m[0], m[1], m[2], np.array(["" if str(b) in ("nan", "None") else str(b)
+                                         for b in (m[3] if len(m) == 4 else [""] * len(m[2]))], dtype=object))
+            for m in maps]
     _, xyz, c, bind = maps[0]
     c, xyz = np.asarray(c, float), np.asarray(xyz, float)
     every = np.concatenate([np.asarray(m[2], float) for m in maps])

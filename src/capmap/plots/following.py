@@ -59,13 +59,31 @@ def _window_max(t: np.ndarray, y: np.ndarray, window_s: float = 0.5) -> tuple[np
     return t[starts], np.maximum.reduceat(y, starts)
 
 
+def _joint_panels(n: int):
+    """A figure with one panel per joint, two columns: (fig, axes (rows, 2))."""
+    rows = (n + 1) // 2
+    return plt.subplots(rows, 2, figsize=(12, 2.7 * rows), sharex=True, squeeze=False)
+
+
+def _finish_joint_panels(fig, axes, n: int, ncol: int, xlabel: str, title: str, out_png: str | Path) -> None:
+    """The unused panels off, one legend (the first panel's) under the figure, the x label, the title; saved."""
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=8, bbox_to_anchor=(0.5, 0.0))
+    for ax in axes[-1]:
+        ax.set_xlabel(xlabel)
+    fig.suptitle(title)
+    save(fig, out_png, rect=(0, 0.04, 1, 1))
+
+
 def follow_torques(ts: pd.DataFrame, limits: dict, case: str, out_png: str | Path) -> None:
     """Per joint: the torque the command would need (before limiting) and the follower's (after),
     both limits in the scale of every panel, the periods with the limit active shaded, the
     segment ends (rest at a waypoint) as vertical lines."""
     cols = list(limits)
     n = len(cols)
-    fig, axes = plt.subplots((n + 1) // 2, 2, figsize=(12, 2.7 * ((n + 1) // 2)), sharex=True, squeeze=False)
+    fig, axes = _joint_panels(n)
     t = ts.t_s.to_numpy()
     ends = t[np.flatnonzero(np.diff(ts.segment.to_numpy()))]
     for ax, col in zip(axes.ravel(), cols):
@@ -89,15 +107,8 @@ def follow_torques(ts: pd.DataFrame, limits: dict, case: str, out_png: str | Pat
         ax.set(ylabel="torque [N m]", title=f"joint {col.split('_')[1][1:]}: limit ±{lim:g} N m, "
                                             f"followed peak {100 * peak:.1f}%")
         ax.grid(alpha=0.3)
-    for ax in axes.ravel()[n:]:
-        ax.axis("off")
-    handles, labels = axes.ravel()[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8, bbox_to_anchor=(0.5, 0.0))
-    for ax in axes[-1]:
-        ax.set_xlabel("time t [s]")
-    fig.suptitle(f"{case}: joint torques before and after limiting"
-                 + (" (grey lines: segment ends, where the arm rests at a waypoint)" if len(ends) else ""))
-    save(fig, out_png, rect=(0, 0.04, 1, 1))
+    _finish_joint_panels(fig, axes, n, 4, "time t [s]", f"{case}: joint torques before and after limiting"
+                         + (" (grey lines: segment ends, where the arm rests at a waypoint)" if len(ends) else ""), out_png)
 
 
 def follow_torque_split(ts: pd.DataFrame, limits: dict, case: str, terms: str, out_png: str | Path) -> None:
@@ -106,7 +117,7 @@ def follow_torque_split(ts: pd.DataFrame, limits: dict, case: str, terms: str, o
     with the ±limit; ``terms`` names the model's terms (e.g. 'links+armature+coulomb+viscous')."""
     cols = list(limits)
     n = len(cols)
-    fig, axes = plt.subplots((n + 1) // 2, 2, figsize=(12, 2.7 * ((n + 1) // 2)), sharex=True, squeeze=False)
+    fig, axes = _joint_panels(n)
     s = ts.s_m.to_numpy()
     for ax, col in zip(axes.ravel(), cols):
         lim = limits[col]
@@ -124,13 +135,7 @@ def follow_torque_split(ts: pd.DataFrame, limits: dict, case: str, terms: str, o
         ax.set(ylabel="torque [N m]", title=f"joint {col.split('_')[1][1:]}: peak {np.abs(total).max():.3g} of ±{lim:g} "
                                             f"N m (rotor ≤{np.abs(arm).max():.2g}, friction ≤{np.abs(fric).max():.2g})")
         ax.grid(alpha=0.3)
-    for ax in axes.ravel()[n:]:
-        ax.axis("off")
-    handles, labels = axes.ravel()[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, bbox_to_anchor=(0.5, 0.0))
-    for ax in axes[-1]:
-        ax.set_xlabel("path coordinate s [m]")
-    drives = terms != "links"
-    fig.suptitle(f"{case}: the follower's joint torques split by term along the path (model: {terms.replace('+', ' + ')})"
-                 + ("" if drives else "; the robot file states no drives"))
-    save(fig, out_png, rect=(0, 0.04, 1, 1))
+    _finish_joint_panels(fig, axes, n, 5, "path coordinate s [m]",
+                         f"{case}: the follower's joint torques split by term along the path (model: "
+                         f"{terms.replace('+', ' + ')})" + ("" if terms != "links" else "; the robot file states no drives"),
+                         out_png)
