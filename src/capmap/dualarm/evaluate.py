@@ -82,15 +82,16 @@ class Safety:
         return self.names[self.distance.argmin(axis=1)]
 
 
-def safety(asm: Assembly, qs: np.ndarray, cutoff_m: float = 0.2) -> Safety:
+def safety(asm: Assembly, qs: np.ndarray, cutoff_m: float = 0.2, within_m: float | None = None) -> Safety:
     """Every candidate pair at every configuration qs (M, nq): with the chain packed
     (:func:`capmap.dualarm.chain.batch_distances`, equal to Pinocchio's placements to 1e-12 in the tests),
-    a pair whose bounding spheres are farther apart than ``cutoff_m`` gets inf (its distance is above it);
-    else on Pinocchio's kinematics, every pair exactly."""
+    a pair whose distance is above ``cutoff_m`` gets inf, and with ``within_m`` also one above both
+    ``within_m`` and the configuration's least distance (the least distance, its pair and every pair
+    within ``within_m`` stay exact); else on Pinocchio's kinematics, every pair exactly."""
     t = asm.task
     packed = pack(asm.model, (t.left, t.right, t.panel), asm.collision.prims)
     if not isinstance(packed, str):
-        D = batch_distances(packed, qs, asm.pairs, cutoff=cutoff_m)
+        D = batch_distances(packed, qs, asm.pairs, cutoff=cutoff_m, within=within_m)
         P = asm.collision.prims
         i, k, tt = asm.pairs.ss, asm.pairs.st[:, 0], asm.pairs.st[:, 1]
         names = np.array([f"{a} vs {b}" for a, b in zip(np.concatenate([P.seg_body[i[:, 0]], P.seg_body[k]]),

@@ -75,9 +75,9 @@ def plan_assembly(asm: Assembly, robot: DualArm, weights: Weights, solver: ALSet
     solve_s = time.perf_counter() - t1
     nq = asm.model.nq
     err = node_errors(asm, sol.xs)
-    at_nodes = safety(asm, sol.xs[:, :nq])
+    at_nodes = safety(asm, sol.xs[:, :nq], within_m=ACTIVE_WITHIN_M)  # what is used: minima and the active pairs
     t_fine, q_fine, node_fine = fine_grid(sol.xs, sol.us, asm.task.dt, fine_factor)
-    fine = safety(asm, q_fine)
+    fine = safety(asm, q_fine, within_m=ACTIVE_WITHIN_M)
     return AssemblyMotion(sol, solve_s, t1 - t0, clear, err, at_nodes, t_fine, node_fine, fine,
                           active_pairs(fine, t_fine, ACTIVE_WITHIN_M), fine_factor)
 

@@ -17,7 +17,7 @@ import crocoddyl
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.chain import Packed, batch_distances, pack, pair_table
+from capmap.dualarm.chain import Packed, PairRecheck, batch_distances, pack, pair_table
 from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
 from capmap.dualarm.node_kernel import node_eval
 from capmap.dualarm.ocp import Context, equality_size
@@ -149,7 +149,7 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
 
 
 def warm_up() -> None:
-    """Compile (or load from numba's cache) the node kernel, the pair filter and the collision model's
+    """Compile (or load from numba's cache) the node kernel, the pair filters and the collision model's
     distances and gradients, on a two-joint chain with the argument types of a real run (Crocoddyl's
     own data arrays)."""
     model = pin.Model()
@@ -173,7 +173,8 @@ def warm_up() -> None:
             m = CompiledNodeModel(ctx, k, pairs, mode, packed)
             d = m.createData()
             (m.calc(d, x), m.calcDiff(d, x)) if k == 3 else (m.calc(d, x, u), m.calcDiff(d, x, u))
-    batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1)
+    batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1, within=0.01)
+    PairRecheck(packed, pairs, 0.1).near(np.zeros((2, 2)))
     data = model.createData()  # the Pinocchio-side evaluation (key poses, the independent check)
     pin.computeJointJacobians(model, data, x[:2])
     CollisionModel(model, prims).evaluate(data, pairs, gradient=True)

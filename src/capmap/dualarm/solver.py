@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.dualarm.assembly import Assembly
-from capmap.dualarm.chain import batch_distances, pack
+from capmap.dualarm.chain import PairRecheck, batch_distances, pack
 from capmap.dualarm.collision import Pairs
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
@@ -132,7 +132,14 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
     if not inequalities:
         asm = replace(asm, pairs=NO_PAIRS)
     N = asm.task.N
-    keep = node_pairs(asm, xs0[:, :asm.model.nq], st.filter_m, ctx.packed)
+    # the pairs within filter_m on the warm start, then re-checked on each solution: incrementally when
+    # the chain is packed (a pair is evaluated again only when the motion can have brought it within)
+    recheck = PairRecheck(ctx.packed, asm.pairs, st.filter_m) if ctx.packed is not None else None
+
+    def near(qs):
+        return list(recheck.near(qs)) if recheck else node_pairs(asm, qs, st.filter_m)
+
+    keep = near(xs0[:, :asm.model.nq])
     models = [node_model(ctx, k, asm.pairs.subset(keep[k])) for k in range(N + 1)]
     problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:N], models[N])
     solver = crocoddyl.SolverFDDP(problem)
@@ -153,10 +160,10 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
         X = np.array(xs)
         eq, ineq, cs, gs = _violations(models, X)
         # re-check every candidate pair on the solution; pairs that came near join their node
-        near = node_pairs(asm, X[:, :asm.model.nq], st.filter_m, ctx.packed)
+        close = near(X[:, :asm.model.nq])
         added = 0
         for k in range(N + 1):
-            new = near[k] & ~keep[k]
+            new = close[k] & ~keep[k]
             if new.any():
                 keep[k] |= new
                 old = models[k]
@@ -194,15 +201,18 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
     return Solution(np.array(xs), np.array(us), tuple(stats), converged, message)
 
 
+def _pair_keys(p: Pairs) -> np.ndarray:
+    """One integer per pair of ``p`` (its kind and two primitive indices), in its order."""
+    ss, st = np.asarray(p.ss, np.int64).reshape(-1, 2), np.asarray(p.st, np.int64).reshape(-1, 2)
+    return np.concatenate([(ss[:, 0] << 21) + ss[:, 1], (1 << 42) + (st[:, 0] << 21) + st[:, 1]])
+
+
 def _carry(old: Pairs, new: Pairs, lam: np.ndarray) -> np.ndarray:
     """Multipliers of the old pair set moved to their places in the new (a superset)."""
+    keys = _pair_keys(new)
+    order = np.argsort(keys, kind="stable")
     out = np.zeros(len(new))
-    index = {("ss", tuple(p)): i for i, p in enumerate(new.ss)}
-    index.update({("st", tuple(p)): len(new.ss) + i for i, p in enumerate(new.st)})
-    for i, p in enumerate(old.ss):
-        out[index[("ss", tuple(p))]] = lam[i]
-    for i, p in enumerate(old.st):
-        out[index[("st", tuple(p))]] = lam[len(old.ss) + i]
+    out[order[np.searchsorted(keys[order], _pair_keys(old))]] = lam
     return out
 
 
