@@ -50,6 +50,7 @@ ROWS = [
     ("`tasks` (one task's payload)", "tasks.0.payload_kg = 3000"),
     ("`verification.dt_s`", "verification.dt_s = 0.05"),
     ("`follow.period_s`", "follow.period_s = 0.002"),
+    ("`follow.store_period_s`", "follow.store_period_s = 0.02"),
     ("`follow.ground.*`", "follow.ground.payload_kg = 3"),
     ("`follow.space.*`", "follow.space.catch_up_hz = 3"),
     ("`shards`", "shards = 3"),

@@ -123,6 +123,8 @@ NEW_CONFIG_CASES = [
     ({"directions.n": 5_000_000}, "directions.n = 5e+06 gives 5e+06 directions to build"),
     ({"follow.ground.line_m": [0, 1e-12, 0]}, "follow.ground.line_m = [0, 1e-12, 0] is 1e-12 m long"),
     ({"follow.period_s": 1e-9}, "follow.period_s: following"),
+    ({"follow.store_period_s": 1e-4}, "follow.store_period_s = 0.0001 s is shorter than follow.period_s = 0.005 s"),
+    ({"follow.store_period_s": NAN}, "follow.store_period_s = nan"),
     ({"follow.ground.v_max_mps": 1e-9}, "follow.ground.v_max_mps, follow.ground.a_max_mps2: follow.ground.line_m would take"),
     ({"task.v_max_mps": 1e-6, "task.a_max_mps2": 1e-6, "verification.dt_s": 0.05},
      "task.v_max_mps, task.a_max_mps2: the task's straight lines would take"),

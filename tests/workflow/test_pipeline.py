@@ -250,6 +250,10 @@ def test_follow_outputs(run_dir):
     for col in ("t_s", "s_cmd_m", "s_m", "sd_mps", "sdd_mps2", "tau_cmd_j1_nm", "tau_j1_nm", "lag_m", "deviation_m"):
         assert col in ts.columns
     assert ts.attrs["capmap"]["torque_limits_nm"]["tau_j1_nm"] == 14
+    # stored every 2 control periods (store_period_s 0.01 s at 5 ms), each window's torque peak kept
+    assert ts.attrs["capmap"]["rows"].startswith("every 2 control periods") and ts.t_s.diff().max() <= 0.01 + 1e-9
+    peak = max((ts[c].abs() / v).max() for c, v in ts.attrs["capmap"]["torque_limits_nm"].items())
+    assert 100 * peak == pytest.approx(ground.follower_peak_torque_pct, rel=1e-5)
     assert ts.s_m.iloc[-1] == pytest.approx(0.5, abs=1e-4) and ts.limited.any()
     for case in ("space", "ground"):
         for png in ("progress", "torques"):

@@ -159,6 +159,10 @@ def check_tasks(tasks: tuple[PlanTask, ...], arm: LockedArm, task: TaskConfig, f
 
 def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> None:
     """The follow section's cross-checks (payload known, robot loads, lengths match, line reachable)."""
+    if not fol.store_period_s >= fol.period_s:
+        raise ConfigError(f"{source}: follow.store_period_s = {fol.store_period_s:g} s is shorter than follow.period_s = "
+                          f"{fol.period_s:g} s: the stored series cannot be finer than the control; give at least "
+                          "the control period")
     if fol.space is not None and float(fol.space.payload_kg) not in cfg.task.payload_kg:
         raise ConfigError(f"{source}: follow.space.payload_kg = {fol.space.payload_kg:g} is not one of "
                           f"task.payload_kg {[f'{m:g}' for m in cfg.task.payload_kg]} (its verified path is followed)")

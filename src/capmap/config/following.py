@@ -38,17 +38,25 @@ class GroundFollowConfig:
 
 @dataclass(frozen=True)
 class FollowConfig:
-    """``follow``: the control period and the configured cases (None when absent)."""
+    """``follow``: the control period, the stored time series' period (every control period when
+    equal to it) and the configured cases (None when absent)."""
 
     period_s: float
     space: SpaceFollowConfig | None = None
     ground: GroundFollowConfig | None = None
+    store_period_s: float = 0.01  # the default of follow.store_period_s
 
     @classmethod
     def from_doc(cls, d: dict) -> "FollowConfig":
         space = SpaceFollowConfig(**{k: as_tuple(v) for k, v in d["space"].items()}) if "space" in d else None
         ground = GroundFollowConfig(**{k: as_tuple(v) for k, v in d["ground"].items()}) if "ground" in d else None
-        return cls(period_s=d["period_s"], space=space, ground=ground)
+        return cls(period_s=d["period_s"], space=space, ground=ground,
+                   **{k: d[k] for k in ("store_period_s",) if k in d})
+
+    @property
+    def store_every(self) -> int:
+        """Control periods per stored row of the time series (>= 1)."""
+        return max(1, round(self.store_period_s / self.period_s))
 
     @property
     def cases(self) -> tuple[str, ...]:

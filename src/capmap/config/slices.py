@@ -89,8 +89,8 @@ STAGES: dict[str, Stage] = {
     "baseline_shard": Stage(_baseline_shard, ("refine",)),
     "baseline": Stage(("baseline.check_voxels",), ("baseline_shard", "view")),
     # family 2: following (space: the verified path of its payload, not the verification's sampling)
-    "follow_space": Stage(("job", "follow.period_s", "follow.space"), ("plan",)),
-    "follow_ground": Stage(("follow.period_s", "follow.ground")),
+    "follow_space": Stage(("job", "follow.period_s", "follow.store_period_s", "follow.space"), ("plan",)),
+    "follow_ground": Stage(("follow.period_s", "follow.store_period_s", "follow.ground")),
     # family 3: reconfiguration
     "reconfig_pinv": Stage(tuple(f"reconfig.{k}" for k in _RECONFIG)),
     "reconfig_nullspace": Stage(("reconfig.kappa0",), ("reconfig_pinv",)),

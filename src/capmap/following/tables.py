@@ -16,7 +16,7 @@ from capmap.following.comparison import FollowComparison, compare
 from capmap.following.follower import FollowSettings, follow_segment
 from capmap.following.toppra_reference import time_optimal
 
-__all__ = ["PathRun", "follow_path", "follow_tables", "summary_row"]
+__all__ = ["PathRun", "follow_path", "follow_tables", "stored_rows", "summary_row"]
 
 
 @dataclass(frozen=True)
@@ -70,7 +70,7 @@ def follow_tables(case: str, arm: LockedArm, run: PathRun) -> tuple[pd.DataFrame
     joints, deviation) and TOPP-RA's (its samples and torques), on path and time axes running on
     across segments. Time, path coordinate, speed and acceleration are stored in float64; torques, joint
     angles, lag and deviation in float32 (7 significant digits, for plots and reading: the summary's
-    figures come from the full-precision values), every control period kept."""
+    figures come from the full-precision values), every control period kept (:func:`stored_rows` thins it)."""
     joints = arm.active_joint_numbers
     parts, tparts = [], []
     t_off = t_off_topp = s_off = 0.0
@@ -98,6 +98,33 @@ def follow_tables(case: str, arm: LockedArm, run: PathRun) -> tuple[pd.DataFrame
         t_off_topp += top.duration_s
         s_off += seg.table.length_m
     return pd.concat(parts, ignore_index=True), pd.concat(tparts, ignore_index=True)
+
+
+def stored_rows(ts: pd.DataFrame, every: int, limit_nm: np.ndarray) -> pd.DataFrame:
+    """The rows of a follower time series (one per control period) kept for storage: in each segment
+    every ``every``-th row and its last, the rows where ``limited`` or ``infeasible`` changes, and in
+    each window of ``every`` rows the row of the largest torque in proportion to ``limit_nm``
+    (n_active,) N m (the ``tau_j*_nm`` columns, in order), so that a plot of the stored series reaches
+    every window's torque peak. ``every`` <= 1 keeps every row."""
+    if every <= 1 or ts.empty:
+        return ts
+    seg = ts["segment"].to_numpy()
+    n = len(ts)
+    first = np.r_[True, seg[1:] != seg[:-1]]
+    last = np.r_[seg[1:] != seg[:-1], True]
+    starts = np.flatnonzero(first)
+    pos = np.arange(n) - np.repeat(starts, np.diff(np.r_[starts, n]))
+    window = np.cumsum(pos % every == 0) - 1
+    tau = ts[[c for c in ts.columns if c.startswith("tau_j")]].to_numpy(dtype=float)
+    ratio = np.abs(tau / np.asarray(limit_nm, dtype=float)).max(axis=1)
+    keep = (pos % every == 0) | last
+    order = np.lexsort((-ratio, window))  # by window, the largest ratio first
+    keep[order[np.r_[True, window[order][1:] != window[order][:-1]]]] = True
+    for flag in ("limited", "infeasible"):
+        f = ts[flag].to_numpy()
+        keep[1:] |= (f[1:] != f[:-1]) & ~first[1:]
+        keep[:-1] |= (f[1:] != f[:-1]) & ~first[1:]
+    return ts[keep].reset_index(drop=True)
 
 
 _EXACT = ("t_s", "s_cmd_m", "sd_cmd_mps", "sdd_cmd_mps2", "s_m", "sd_mps", "sdd_mps2")

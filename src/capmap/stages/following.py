@@ -12,7 +12,7 @@ from capmap.config.robot_file import load
 from capmap.config.validation import per_item
 from capmap.core.reduction import LockedArm, free
 from capmap.following.follower import FollowSettings
-from capmap.following.tables import follow_path, follow_tables, summary_row
+from capmap.following.tables import follow_path, follow_tables, stored_rows, summary_row
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
@@ -74,9 +74,12 @@ def stage_follow(case: str, out_timeseries: str, out_toppra: str, out_csv: str, 
     run = follow_path(fc.arm, fc.waypoints, fc.rotation, fc.q_start, fc.settings, log.info)
     ts, tp = follow_tables(case, fc.arm, run)
     limits, st, cmp = fc.settings.torque_limits(fc.arm), fc.settings, run.comparison
+    every = sc.run.follow.store_every
     prov = datasets.provenance("follow", sc.doc, case=case, torque_limits_nm=dict(zip(limits.names, limits.limit.tolist())),
-                               payload_kg=st.payload_kg, terms=cmp.follower_terms)
-    datasets.write(ts, out_timeseries, prov)
+                               payload_kg=st.payload_kg, terms=cmp.follower_terms, control_period_s=st.period_s,
+                               rows=f"every {every} control periods and each window's torque peak" if every > 1
+                               else "every control period")
+    datasets.write(stored_rows(ts, every, limits.limit), out_timeseries, prov)
     datasets.write(tp, out_toppra, prov)
     write_table(summary_row(case, fc.arm, fc.label, st, run), out_csv, out_md)
     log.info(f"{cmp.length_m:.3f} m in {cmp.follower_duration_s:.3f} s vs TOPP-RA {cmp.toppra_duration_s:.3f} s "
