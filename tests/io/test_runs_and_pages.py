@@ -94,3 +94,19 @@ def test_the_3d_page_shows_0_kg_voxels_cuts_by_height_fixes_its_axes_and_names_t
     assert sorted(heights) == sorted(set(np.round(xyz[:, 2], 4)))
     text = page.replace("\\u003c", "<")  # plotly's JSON escapes '<'
     assert '"autorange":false' in text.replace(" ", "") and "show z [m] <= " in text and '"uirevision"' in text
+
+
+def test_the_3d_page_draws_every_tasks_path_with_its_ends_named_and_keeps_it_in_view():
+    """A further task's path as its own trace (its waypoints, its name at its start and goal) and the
+    fixed axes wide enough for it, even where it leaves the voxels' extent."""
+    xyz = np.array([[0.0, 0, 0], [0.75, 0, 0], [0, 0.75, 0.75]])
+    task = PlannedPath("task over_the_top: planned path, 3200 kg (7.37 m)",
+                       np.array([[0, 0, 0], [0, 0, 4.0], [0.75, 0, 4.0], [0.75, 0, 0]]), ends="over_the_top")
+    page = capacity_3d_html([("configuration S+E+W+", xyz, np.array([1.0, 2.0, 3.0]))], 0.75, np.zeros(3),
+                            np.array([0.75, 0, 0]), [task], (1500.0,), "t")
+    fig = json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
+    trace = next(t for t in fig if t.get("name", "").startswith("task over_the_top"))
+    np.testing.assert_allclose(np.c_[trace["x"], trace["y"], trace["z"]], task.points_m)
+    assert trace["text"][0] == "over_the_top: start" and trace["text"][-1] == "over_the_top: goal"
+    zrange = json.loads(re.search(r'"zaxis":\{"title":\{[^}]*\},"range":(\[[^\]]*\])', page.replace(" ", "")).group(1))
+    assert zrange[1] >= 4.0

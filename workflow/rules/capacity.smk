@@ -142,15 +142,18 @@ rule summary:
 
 
 rule capacity_3d:
-    """Interactive 3D view of the map (self-contained HTML): voxels by capacity, payload slider, paths."""
+    """Interactive 3D view of the map (self-contained HTML): voxels by capacity, payload and height
+    sliders, the payloads' and the further tasks' paths."""
     input:
         voxels=out("voxels/voxels.parquet"),
         configurations=out("voxels/configurations.parquet"),
         waypoints=expand(out("plan/payload_{payload}kg/waypoints.parquet"), payload=PAYLOADS),
+        tasks=expand(out("tasks/{task}/waypoints.parquet"), task=TASKS),
     output:
         report(out("summary/capacity_3d.html"), category="Capacity map", caption="../report/capacity_3d.rst"),
     params:
         slice=params("view", "capacity_3d"),
+        tasks=TASKS,  # the further tasks' names, in the order of input.tasks (the paths' labels)
     log:
         out("logs/capacity_3d.log"),
     conda:

@@ -2,7 +2,7 @@
 network at view time) with the reachable voxels coloured by capacity (hover: the value and the limit
 that binds it), the 0 kg voxels (singular slabs) as their own trace, a payload slider that hides the
 voxels below it, a height slider that cuts the map at a layer so its inside shows, fixed axes, the
-direct line, the planned paths, the start and the goal."""
+direct line, the planned paths of the task's payloads and of each further task, the start and the goal."""
 
 from __future__ import annotations
 
@@ -16,10 +16,12 @@ __all__ = ["PlannedPath", "capacity_3d_html", "slider_levels"]
 
 @dataclass(frozen=True)
 class PlannedPath:
-    """A planned path: ``points_m`` (W, 3) waypoints; ``label`` for the legend (e.g. '1500 kg: A*')."""
+    """A planned path: ``points_m`` (W, 3) waypoints; ``label`` for the legend (e.g. '1500 kg: A*');
+    ``ends``: a name written at its first and last waypoint (a further task's own start and goal)."""
 
     label: str
     points_m: np.ndarray
+    ends: str = ""
 
 
 def slider_levels(capacity_kg: np.ndarray, payloads_kg: tuple[float, ...], n: int = 20) -> np.ndarray:
@@ -50,11 +52,12 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
     c, xyz = np.asarray(c, float), np.asarray(xyz, float)
     every = np.concatenate([np.asarray(m[2], float) for m in maps])
     allxyz = np.concatenate([np.asarray(m[1], float).reshape(-1, 3) for m in maps] + [np.vstack([start_m, goal_m])])
+    around = np.concatenate([allxyz] + [np.asarray(p.points_m, float).reshape(-1, 3) for p in paths])
     levels = slider_levels(every, payloads_kg)
     first = float(payloads_kg[0]) if payloads_kg else 0.0
     cmax = float(np.nanmax(every)) if every.size else 1.0
     heights = np.unique(np.round(allxyz[:-2, 2], 4)) if len(allxyz) > 2 else np.array([0.0])
-    lo, hi = allxyz.min(axis=0) - edge_m, allxyz.max(axis=0) + edge_m
+    lo, hi = around.min(axis=0) - edge_m, around.max(axis=0) + edge_m
     names = sorted({str(b) for m in maps for b in m[3]} - {""})
 
     def hover(v, b):
@@ -84,10 +87,14 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
                                line=dict(color="red", width=5, dash="dash")))
     for k, p in enumerate(paths):
         pts = np.asarray(p.points_m, float)
+        colour = ["black", "darkorange", "magenta", "cyan", "saddlebrown", "royalblue"][k % 6]
+        text = [""] * len(pts)
+        if p.ends:
+            text[0], text[-1] = f"{p.ends}: start", f"{p.ends}: goal"
         fig.add_trace(go.Scatter3d(x=pts[:, 0].tolist(), y=pts[:, 1].tolist(), z=pts[:, 2].tolist(),
-                                   mode="lines+markers", name=p.label,
-                                   line=dict(width=6, color=["black", "darkorange", "magenta", "cyan"][k % 4]),
-                                   marker=dict(size=3)))
+                                   mode="lines+markers+text" if p.ends else "lines+markers", name=p.label,
+                                   text=text if p.ends else None, textfont=dict(color=colour),
+                                   line=dict(width=6, color=colour), marker=dict(size=3, color=colour)))
     for pos, name, colour in ((start_m, "start", "green"), (goal_m, "goal", "red")):
         fig.add_trace(go.Scatter3d(x=[float(pos[0])], y=[float(pos[1])], z=[float(pos[2])], mode="markers+text",
                                    name=name, text=[name],

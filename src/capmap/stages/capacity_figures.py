@@ -91,15 +91,22 @@ def stage_summary(voxels: str, configurations: str, points: str, waypoints: list
                                            f"-> {out_csv}, {out_png}")
 
 
-def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], out_html: str, slice_json: str) -> None:
+def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], out_html: str, slice_json: str,
+                      task_waypoints: dict[str, str] | None = None) -> None:
     """The interactive 3D view (self-contained HTML): reachable voxels by capacity on the arm's
     configuration (a button shows the bound for any configuration), a payload slider, the direct line,
-    each payload's planned path (or its absence, in the title), start and goal."""
+    each payload's planned path and each further task's (``task_waypoints``: name -> its waypoints;
+    a missing path is named in the title), start and goal."""
     vox = datasets.read(voxels)
     view = MapView.from_slice(slice_json)
     op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
     planned, missing = _planned(waypoints)
     paths = [PlannedPath(f"planned path, {m:g} kg ({cost:.2f} m)", p) for m, cost, p in planned]
+    for name, path in (task_waypoints or {}).items():
+        found, none = _planned([path])
+        paths += [PlannedPath(f"task {name}: planned path, {m:g} kg ({cost:.2f} m)", p, ends=name)
+                  for m, cost, p in found]
+        missing += [f"task {name} ({m})" for m in none]
     edge = vox.attrs["capmap"]["grid"]["edge_m"]
     title = "Capacity map: reachable voxels by dynamic load-carrying capacity" + (
         f"; no path for {', '.join(missing)}" if missing else "")
