@@ -284,7 +284,8 @@ def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, reach, horizon, qs, r
     q_ref[k] a point has moved by at most g = sum_c |q - q_ref|_c reach[c] (:func:`motion_reach`, its
     largest per joint), so a pair's distance has changed by at most 2 g. While 2 g <= ``horizon`` only
     the node's watch list (watch[k, :nwatch[k]]: the pairs whose lower bound low_ref at the reference
-    was within cutoff + horizon; up_ref their distance there, or inf) is looked at: near when
+    was within cutoff + horizon; up_ref their distance there, or inf when only the bound is known) is
+    looked at: near when
     up_ref + 2 g < cutoff, far when low_ref - 2 g > cutoff, else evaluated. Beyond, every pair is
     evaluated and the node's reference, watch list and bounds are reset (in place)."""
     nj, S, T = chain_f.shape[0], seg_f.shape[0], tri_f.shape[0]
@@ -322,7 +323,7 @@ def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, reach, horizon, qs, r
         fk(chain_f, chain_i, qs[k], R, p)
         place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
         _bounding_spheres(A, B, V, ctr, rad)
-        _row(A, B, V, ctr, rad, rows, rsum, cutoff + horizon, True, need, d, low, P, Q)
+        _row(A, B, V, ctr, rad, rows, rsum, cutoff, True, need, d, low, P, Q)  # low: a bound where d is inf
         m = 0
         for n in range(npair):
             near[k, n] = d[n] < cutoff
