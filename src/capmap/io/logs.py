@@ -1,7 +1,7 @@
 """Logging for the stages: progress to the rule's log file and to stderr, one line per event.
 
 Every module logs through ``logging.getLogger(__name__)`` (below the ``capmap`` logger);
-:func:`stage_logger` adds the stage's label to each line (``[12:00:01] capacity shard 1/4:
+:func:`stage_logger` adds the stage's label to each line (``[12:00:01] capacity shard 0 of 4:
 500/18500 points ...``). :func:`one_line_errors` turns a :class:`~capmap.errors.CapmapError`
 into one ``capmap:`` line on stderr and in the log, and exit status 1.
 """

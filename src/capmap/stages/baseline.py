@@ -72,7 +72,7 @@ def stage_baseline_shard(voxels: str, out: str, slice_json: str, shard: int, sha
     ``voxels.refine``); one row per voxel that a point reaches."""
     cfg = stage_config(slice_json)
     run, bl = cfg.run, cfg.run.baseline
-    log = stage_logger(__name__, f"baseline shard {shard + 1}/{shards}")
+    log = stage_logger(__name__, f"baseline shard {shard} of {shards}")
     at = arm_task_from(run)
     sm = self_motion_of(at, run, bl.step_deg)
     dirs = run.directions.build()

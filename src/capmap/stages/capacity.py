@@ -58,7 +58,7 @@ def stage_sample(out: str, slice_json: str) -> None:
 def stage_capacity(points: str, out: str, slice_json: str, shard: int, shards: int) -> None:
     """Shard ``shard`` (0-based) of ``shards``: points with point_id % shards == shard."""
     cfg = stage_config(slice_json)
-    log = stage_logger(__name__, f"capacity shard {shard + 1}/{shards}")
+    log = stage_logger(__name__, f"capacity shard {shard} of {shards}")
     at = arm_task_from(cfg.run)  # limits checked before the long work
     arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dirs = cfg.run.directions.build()

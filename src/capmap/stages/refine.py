@@ -35,7 +35,7 @@ def stage_refine(voxels: str, out: str, out_configurations: str, slice_json: str
     a slab's voxels share their corners and faces), all branches and each configuration; write one row
     per voxel (``out``) and one per voxel x configuration met there (``out_configurations``)."""
     cfg = stage_config(slice_json)
-    log = stage_logger(__name__, f"refine shard {shard + 1}/{shards}")
+    log = stage_logger(__name__, f"refine shard {shard} of {shards}")
     at = arm_task_from(cfg.run)
     arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
     rf = cfg.run.refine
