@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from scipy import sparse
 from scipy.optimize import linprog
 
 __all__ = ["HeldPart", "HeldTorques", "held_torques", "part_wrench"]
@@ -72,15 +73,19 @@ def part_wrench(model: pin.Model, data: pin.Data, part: HeldPart) -> np.ndarray:
 
 
 def _minimax(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """z minimising max |A z + b| (A (n, m), b (n,)): the linear programme min t s.t. -t <= A z + b <= t
-    (HiGHS); z = 0 if it fails (the least-norm distribution)."""
-    n, m = A.shape
-    c = np.zeros(m + 1)
-    c[-1] = 1.0
-    ones = np.ones((n, 1))
-    res = linprog(c, A_ub=np.block([[A, -ones], [-A, -ones]]), b_ub=np.concatenate([-b, b]),
-                  bounds=[(None, None)] * m + [(0, None)], method="highs")
-    return res.x[:m] if res.status == 0 else np.zeros(m)
+    """z (K, m) minimising max_i |A[k] z[k] + b[k]|_i for each k (A (K, n, m), b (K, n)): the linear
+    programmes min t_k s.t. -t_k <= A[k] z[k] + b[k] <= t_k, independent, solved as one block-diagonal
+    programme (HiGHS; minimising the sum of the t_k minimises each); z = 0 if it fails (the least-norm
+    distribution)."""
+    K, n, m = A.shape
+    block = np.concatenate([np.concatenate([A, -A], axis=1), -np.ones((K, 2 * n, 1))], axis=2)  # (K, 2n, m + 1)
+    rows = np.broadcast_to(np.arange(K)[:, None, None] * 2 * n + np.arange(2 * n)[None, :, None], block.shape)
+    cols = np.broadcast_to(np.arange(K)[:, None, None] * (m + 1) + np.arange(m + 1)[None, None, :], block.shape)
+    A_ub = sparse.csr_matrix((block.ravel(), (rows.ravel(), cols.ravel())), shape=(2 * n * K, (m + 1) * K))
+    c = np.tile(np.r_[np.zeros(m), 1.0], K)
+    res = linprog(c, A_ub=A_ub, b_ub=np.concatenate([-b, b], axis=1).ravel(),
+                  bounds=([(None, None)] * m + [(0, None)]) * K, method="highs")
+    return res.x.reshape(K, m + 1)[:, :m] if res.status == 0 else np.zeros((K, m))
 
 
 def held_torques(model: pin.Model, grippers: tuple[int, int], part: HeldPart, q: np.ndarray, v: np.ndarray,
@@ -92,24 +97,22 @@ def held_torques(model: pin.Model, grippers: tuple[int, int], part: HeldPart, q:
     K, nv = v.shape
     data = model.createData()
     D = 1.0 / np.asarray(effort_nm, float)
-    out = {k: np.zeros((K, nv)) for k in ("tau", "tau0")}
-    wl, wr, fp, res = np.zeros((K, 6)), np.zeros((K, 6)), np.zeros((K, 6)), np.zeros(K)
+    tau0, base, fp = np.zeros((K, nv)), np.zeros((K, nv)), np.zeros((K, 6))
+    W0, N, JT, G = np.zeros((K, 12)), np.zeros((K, 12, 6)), np.zeros((K, nv, 12)), np.zeros((K, 6, 12))
     for k in range(K):
         pin.forwardKinematics(model, data, q[k], v[k], a[k])
         pin.updateFramePlacements(model, data)
         pin.computeJointJacobians(model, data, q[k])
-        tau0 = pin.rnea(model, data, q[k], v[k], a[k]).copy()
-        f = part_wrench(model, data, part)
+        tau0[k] = pin.rnea(model, data, q[k], v[k], a[k])
+        fp[k] = part_wrench(model, data, part)
         oMp = data.oMf[part.frame]
-        G = np.hstack([oMp.actInv(data.oMf[g]).toDualActionMatrix() for g in grippers])  # (6, 12)
-        JT = np.hstack([pin.getFrameJacobian(model, data, g, pin.ReferenceFrame.LOCAL).T for g in grippers])  # (nv, 12)
-        U, s, Vt = np.linalg.svd(G)
-        W0 = Vt[:6].T @ ((U.T @ f) / s)  # least norm: G has full row rank (the grippers are distinct frames)
-        N = Vt[6:].T  # (12, 6) the internal wrenches
-        base = tau0 + JT @ W0
-        W = W0 + N @ _minimax(D[:, None] * (JT @ N), D * base)
-        out["tau"][k] = tau0 + JT @ W
-        out["tau0"][k] = base
-        wl[k], wr[k], fp[k] = W[:6], W[6:], f
-        res[k] = float(np.linalg.norm(G @ W - f))
-    return HeldTorques(out["tau"], out["tau0"], wl, wr, fp, res)
+        G[k] = np.hstack([oMp.actInv(data.oMf[g]).toDualActionMatrix() for g in grippers])
+        JT[k] = np.hstack([pin.getFrameJacobian(model, data, g, pin.ReferenceFrame.LOCAL).T for g in grippers])
+        U, s, Vt = np.linalg.svd(G[k])
+        W0[k] = Vt[:6].T @ ((U.T @ fp[k]) / s)  # least norm: G has full row rank (the grippers are distinct frames)
+        N[k] = Vt[6:].T  # (12, 6) the internal wrenches
+        base[k] = tau0[k] + JT[k] @ W0[k]
+    W = W0 + np.einsum("kij,kj->ki", N, _minimax(D[:, None] * (JT @ N), D * base))  # the best internal wrenches
+    tau = tau0 + np.einsum("kij,kj->ki", JT, W)
+    res = np.linalg.norm(np.einsum("kij,kj->ki", G, W) - fp, axis=1)
+    return HeldTorques(tau, base, W[:, :6], W[:, 6:], fp, res)
