@@ -52,13 +52,16 @@ def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np
     h = 0.5 * np.hypot(np.linalg.norm(a) / (nu - 1), np.linalg.norm(b) / (nv - 1))
     slack += [np.hypot(h, asm.panel_radius) - asm.panel_radius] * len(grid)
     local, joints = np.concatenate(local), np.asarray(joints)
-    out = np.zeros((len(qs), len(local), 3))
+    used = np.unique(joints)
+    R, p = np.empty((len(qs), len(used), 3, 3)), np.empty((len(qs), len(used), 3))
     for k, q in enumerate(qs):
         pin.forwardKinematics(model, data, q)
-        for j in np.unique(joints):
-            M = data.oMi[int(j)]
-            sel = joints == j
-            out[k, sel] = local[sel] @ M.rotation.T + M.translation
+        for i, j in enumerate(used):
+            R[k, i], p[k, i] = data.oMi[int(j)].rotation, data.oMi[int(j)].translation
+    out = np.empty((len(qs), len(local), 3))
+    for i, j in enumerate(used):
+        sel = joints == j
+        out[:, sel] = local[sel] @ R[:, i].transpose(0, 2, 1) + p[:, i, None, :]
     return out, np.asarray(radii), np.asarray(names, dtype=object), np.asarray(slack)
 
 
