@@ -15,10 +15,11 @@ import pinocchio as pin
 import pytest
 
 from capmap.dualarm.assembly import warm_start
-from capmap.dualarm.chain import PairRecheck, batch_distances, fk, motion_reach, pack
+from capmap.dualarm.chain import fk, pack
 from capmap.dualarm.lie import jlog3, jlog6, log3, log6
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
+from capmap.dualarm.proximity import PairRecheck, batch_distances, motion_reach
 from capmap.dualarm.settings import ALSettings, Weights
 from capmap.dualarm.solver import initial_guess, node_pairs, solve, solve_csqp
 

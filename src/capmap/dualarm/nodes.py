@@ -17,10 +17,11 @@ import crocoddyl
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.chain import Packed, PairRecheck, batch_distances, pack, pair_table
+from capmap.dualarm.chain import Packed, pack, pair_table
 from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
 from capmap.dualarm.node_kernel import node_eval
 from capmap.dualarm.ocp import Context, equality_size
+from capmap.dualarm.proximity import PairRecheck, batch_distances
 from capmap.dualarm.settings import Weights
 from capmap.dualarm.task import AssemblyTask
 

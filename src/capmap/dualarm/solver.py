@@ -20,10 +20,11 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.dualarm.assembly import Assembly
-from capmap.dualarm.chain import PairRecheck, batch_distances, pack
+from capmap.dualarm.chain import pack
 from capmap.dualarm.collision import Pairs
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
+from capmap.dualarm.proximity import PairRecheck, batch_distances
 from capmap.dualarm.settings import ALSettings, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
