@@ -19,7 +19,7 @@ from capmap.dualarm.chain import fk, pack
 from capmap.dualarm.lie import jlog3, jlog6, log3, log6
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
-from capmap.dualarm.proximity import PairRecheck, batch_distances, motion_reach
+from capmap.dualarm.proximity import batch_distances
 from capmap.dualarm.settings import ALSettings, Weights
 from capmap.dualarm.solver import initial_guess, node_pairs, solve, solve_csqp
 
@@ -120,6 +120,17 @@ def test_a_joint_that_is_not_revolute_is_not_packed():
     assert isinstance(why, str) and "'slider'" in why and "not a revolute joint" in why
 
 
+def test_a_one_joint_chain_is_packed():
+    """eigenpy returns a 1-dof model's Jacobian as a vector: the packing still reads its axis."""
+    model = pin.Model()
+    j = model.addJoint(0, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.3])), "hinge")
+    frames = tuple(model.addFrame(pin.Frame(n, j, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME)) for n in "lrp")
+    from capmap.dualarm.collision import Primitives
+    packed = pack(model, frames, Primitives.empty())
+    assert not isinstance(packed, str), packed
+    np.testing.assert_allclose(packed.chain_f[1, 12:], [0.0, 1.0, 0.0])
+
+
 def test_batch_distances_equal_pinocchio_placements_and_the_cutoff_only_drops_far_pairs(small):
     asm, ctx, xs, _, _ = small
     d = asm.model.createData()
@@ -145,73 +156,6 @@ def test_batch_distances_within_keep_each_minimum_and_every_near_pair_exact(smal
     assert np.array_equal(Dw[keep], D[keep])
     assert np.array_equal(keep | (D > np.maximum(0.01, D.min(axis=1))[:, None]), np.ones_like(keep))
     assert keep.mean() < 0.5  # it does skip most pairs
-
-
-def test_motion_reach_bounds_how_far_every_primitive_moves(small):
-    """Every segment end (local points of its joint) moves by at most |dq| . reach along random motions."""
-    asm, ctx, xs, _, _ = small
-    pk, m, d = ctx.packed, asm.model, asm.model.createData()
-    reach = motion_reach(pk)
-    S = len(pk.seg_f)
-    assert np.all(reach[S:][pk.tri_j == 0] == 0.0) and np.all(reach[:S][pk.seg_j == 0] == 0.0)
-    rng = np.random.default_rng(3)
-    worst = 0.0
-    for _ in range(30):
-        q0 = xs[rng.integers(len(xs)), :14] + rng.normal(scale=0.3, size=14)
-        dq = rng.normal(scale=10.0 ** rng.uniform(-3, 0), size=14)
-        ends = []
-        for q in (q0, q0 + dq):
-            pin.forwardKinematics(m, d, q)
-            ends.append(np.array([[d.oMi[int(j)].act(pk.seg_f[s, 3 * e:3 * e + 3]) for e in (0, 1)]
-                                  for s, j in enumerate(pk.seg_j)]))
-        moved = np.linalg.norm(ends[1] - ends[0], axis=2).max(axis=1)
-        bound = reach[:S] @ np.abs(dq)
-        assert np.all(moved <= bound + 1e-12)
-        worst = max(worst, float((moved / np.maximum(bound, 1e-300))[pk.seg_j > 0].max()))
-    assert worst > 0.3  # a bound, but not a vacuous one
-
-
-@pytest.mark.parametrize("horizon", [0.05, 0.5])
-def test_pair_recheck_finds_exactly_the_near_pairs_as_the_motion_changes(small, horizon):
-    """The incremental re-check against a full evaluation, over motions from tiny to large (a wide
-    horizon keeps the watch lists through larger motions, where a loose bound would show)."""
-    asm, ctx, xs, _, _ = small
-    qs = xs[:, :14].copy()
-    rc = PairRecheck(ctx.packed, asm.pairs, 0.06, horizon=horizon)
-    rng = np.random.default_rng(8)
-    kept = 0
-    for step in [0.0, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1, 1e-4, 0.0] + [3e-3] * 20:
-        qs = qs + rng.normal(scale=step, size=qs.shape)
-        before = rc.q_ref.copy() if rc.q_ref is not None else None
-        near = rc.near(qs)
-        assert np.array_equal(near, batch_distances(ctx.packed, qs, asm.pairs, cutoff=0.06) < 0.06), step
-        if before is not None:
-            kept += int((rc.q_ref == before).all(axis=1).sum())
-    assert kept > 0  # some nodes did use their watch lists
-
-
-def test_pair_recheck_uses_the_bound_where_it_is_tight():
-    """A segment 1 m from a hinge's axis (its motion bound is tight) between two fixed segments just
-    beyond and just within the cutoff: a turn of 0.01 rad brings the first within it and takes the
-    second out of it, which the watch list must see (a bound 10x too tight in either direction
-    keeps the old answer)."""
-    from capmap.dualarm.collision import Pairs, Primitives
-    model = pin.Model()
-    j = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "hinge")
-    frames = tuple(model.addFrame(pin.Frame(n, j, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME)) for n in "lrp")
-    c, dq = 0.06, 0.01
-    obj = np.array(["x"] * 3, dtype=object)
-    prims = Primitives(np.array([j, 0, 0]), np.array([[1.0, 0, 0], [1.0, c + 0.9 * dq, -0.5], [1.0, -(c - 0.9 * dq), -0.5]]),
-                       np.array([[1.0, 0, 0.2], [1.0, c + 0.9 * dq, 0.5], [1.0, -(c - 0.9 * dq), 0.5]]), np.zeros(3), obj,
-                       np.zeros(0, int), np.zeros((0, 3, 3)), np.zeros(0), obj[:0])
-    packed = pack(model, frames, prims)
-    pairs = Pairs(np.array([[0, 1], [0, 2]]), np.zeros((0, 2), int))
-    rc = PairRecheck(packed, pairs, c, horizon=1.0)
-    assert rc.near(np.zeros((1, 1))).tolist() == [[False, True]]
-    moved = np.full((1, 1), dq)
-    assert rc.near(moved).tolist() == [[True, False]]
-    assert (rc.q_ref == 0).all()  # answered from the watch list, not by a refresh
-    assert np.array_equal(rc.near(moved), batch_distances(packed, moved, pairs) < c)
 
 
 # ---------------------------------------------------------------------------------------------- node contract

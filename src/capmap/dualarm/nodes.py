@@ -21,7 +21,7 @@ from capmap.dualarm.chain import Packed, pack, pair_table
 from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
 from capmap.dualarm.node_kernel import node_eval
 from capmap.dualarm.ocp import Context, equality_size
-from capmap.dualarm.proximity import PairRecheck, batch_distances
+from capmap.dualarm.proximity import batch_distances
 from capmap.dualarm.settings import Weights
 from capmap.dualarm.task import AssemblyTask
 
@@ -150,7 +150,7 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
 
 
 def warm_up() -> None:
-    """Compile (or load from numba's cache) the node kernel, the pair filters and the collision model's
+    """Compile (or load from numba's cache) the node kernel, the pair filter and the collision model's
     distances and gradients, on a two-joint chain with the argument types of a real run (Crocoddyl's
     own data arrays)."""
     model = pin.Model()
@@ -175,7 +175,6 @@ def warm_up() -> None:
             d = m.createData()
             (m.calc(d, x), m.calcDiff(d, x)) if k == 3 else (m.calc(d, x, u), m.calcDiff(d, x, u))
     batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1, within=0.01)
-    PairRecheck(packed, pairs, 0.1).near(np.zeros((2, 2)))
     data = model.createData()  # the Pinocchio-side evaluation (key poses, the independent check)
     pin.computeJointJacobians(model, data, x[:2])
     CollisionModel(model, prims).evaluate(data, pairs, gradient=True)

@@ -24,7 +24,7 @@ from capmap.dualarm.chain import pack
 from capmap.dualarm.collision import Pairs
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
-from capmap.dualarm.proximity import PairRecheck, batch_distances
+from capmap.dualarm.proximity import batch_distances
 from capmap.dualarm.settings import ALSettings, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
@@ -133,14 +133,7 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
     if not inequalities:
         asm = replace(asm, pairs=NO_PAIRS)
     N = asm.task.N
-    # the pairs within filter_m on the warm start, then re-checked on each solution: incrementally when
-    # the chain is packed (a pair is evaluated again only when the motion can have brought it within)
-    recheck = PairRecheck(ctx.packed, asm.pairs, st.filter_m) if ctx.packed is not None else None
-
-    def near(qs):
-        return list(recheck.near(qs)) if recheck else node_pairs(asm, qs, st.filter_m)
-
-    keep = near(xs0[:, :asm.model.nq])
+    keep = node_pairs(asm, xs0[:, :asm.model.nq], st.filter_m, ctx.packed)
     models = [node_model(ctx, k, asm.pairs.subset(keep[k])) for k in range(N + 1)]
     problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:N], models[N])
     solver = crocoddyl.SolverFDDP(problem)
@@ -161,10 +154,10 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
         X = np.array(xs)
         eq, ineq, cs, gs = _violations(models, X)
         # re-check every candidate pair on the solution; pairs that came near join their node
-        close = near(X[:, :asm.model.nq])
+        near = node_pairs(asm, X[:, :asm.model.nq], st.filter_m, ctx.packed)
         added = 0
         for k in range(N + 1):
-            new = close[k] & ~keep[k]
+            new = near[k] & ~keep[k]
             if new.any():
                 keep[k] |= new
                 old = models[k]
