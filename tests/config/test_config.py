@@ -32,3 +32,17 @@ def test_config_errors_name_the_key(mutate, expect):
     mutate(doc)
     with pytest.raises(CapmapError, match=expect.replace(".", r"\.")):
         parse_config(doc)
+
+
+@pytest.mark.parametrize("period, store, every", [(0.001, None, 10), (0.02, None, 1), (0.004, None, 2),
+                                                  (0.003, 0.01, 3), (0.001, 0.001, 1)])
+def test_the_stored_series_period_defaults_to_a_valid_one_and_never_stores_coarser_than_asked(period, store, every):
+    """A control period above the default store period is a valid config without the key (the default
+    follows it); rows are never farther apart than asked (a whole number of control periods)."""
+    doc = _doc()
+    doc["follow"]["period_s"] = period
+    if store is not None:
+        doc["follow"]["store_period_s"] = store
+    fol = check_run_config(doc).follow
+    assert fol.store_every == every
+    assert fol.store_every * period <= max(store or 0.01, period) * (1 + 1e-9)

@@ -131,6 +131,31 @@ def test_a_one_joint_chain_is_packed():
     np.testing.assert_allclose(packed.chain_f[1, 12:], [0.0, 1.0, 0.0])
 
 
+def test_batch_distances_within_keep_a_minimum_that_its_bounds_reach_by_rounding():
+    """A segment end over a triangle's inside: the plane bound equals the distance there, and rounding
+    puts it above about half the time; the nearest pair's distance must stay exact (not inf), and with
+    no pairs at all there is nothing to fail on."""
+    from scipy.spatial.transform import Rotation
+
+    from capmap.dualarm.collision import Pairs, Primitives
+    model = pin.Model()
+    j = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "hinge")
+    frames = tuple(model.addFrame(pin.Frame(n, j, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME)) for n in "lrp")
+    rng = np.random.default_rng(4)
+    obj = np.array(["x"], dtype=object)
+    pairs = Pairs(np.zeros((0, 2), int), np.array([[0, 0]]))
+    for _ in range(200):
+        Rm, h = Rotation.random(random_state=rng).as_matrix(), rng.uniform(0.02, 0.15)
+        tri = np.array([[0.0, 0, 0], [2, 0, 0], [0, 2, 0]]) @ Rm.T
+        a, b = np.array([0.3, 0.3, h]) @ Rm.T, np.array([0.5, 0.7, h + 0.3]) @ Rm.T
+        prims = Primitives(np.array([0]), a[None], b[None], np.zeros(1), obj, np.array([0]), tri[None], np.zeros(1), obj)
+        packed = pack(model, frames, prims)
+        D = batch_distances(packed, np.zeros((3, 1)), pairs, cutoff=0.2, within=0.01)
+        assert np.isfinite(D).all() and np.allclose(D, h, atol=1e-12)
+    empty = Pairs(np.zeros((0, 2), int), np.zeros((0, 2), int))
+    assert batch_distances(packed, np.zeros((3, 1)), empty, cutoff=0.2, within=0.01).shape == (3, 0)
+
+
 def test_batch_distances_equal_pinocchio_placements_and_the_cutoff_only_drops_far_pairs(small):
     asm, ctx, xs, _, _ = small
     d = asm.model.createData()

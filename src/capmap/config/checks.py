@@ -159,7 +159,7 @@ def check_tasks(tasks: tuple[PlanTask, ...], arm: LockedArm, task: TaskConfig, f
 
 def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> None:
     """The follow section's cross-checks (payload known, robot loads, lengths match, line reachable)."""
-    if not fol.store_period_s >= fol.period_s:
+    if fol.store_period_s is not None and not fol.store_period_s >= fol.period_s:
         raise ConfigError(f"{source}: follow.store_period_s = {fol.store_period_s:g} s is shorter than follow.period_s = "
                           f"{fol.period_s:g} s: the stored series cannot be finer than the control; give at least "
                           "the control period")

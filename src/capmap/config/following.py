@@ -4,10 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from capmap.config.typed import FILE
 from capmap.config.validation import as_tuple
 
-__all__ = ["SpaceFollowConfig", "GroundFollowConfig", "FollowConfig"]
+__all__ = ["SpaceFollowConfig", "GroundFollowConfig", "FollowConfig", "STORE_PERIOD_S"]
+
+STORE_PERIOD_S = 0.01  # s: the stored time series' period when follow.store_period_s is not given
 
 
 @dataclass(frozen=True)
@@ -44,7 +48,7 @@ class FollowConfig:
     period_s: float
     space: SpaceFollowConfig | None = None
     ground: GroundFollowConfig | None = None
-    store_period_s: float = 0.01  # the default of follow.store_period_s
+    store_period_s: float | None = None  # follow.store_period_s; None: STORE_PERIOD_S, or the control period if longer
 
     @classmethod
     def from_doc(cls, d: dict) -> "FollowConfig":
@@ -55,8 +59,10 @@ class FollowConfig:
 
     @property
     def store_every(self) -> int:
-        """Control periods per stored row of the time series (>= 1)."""
-        return max(1, round(self.store_period_s / self.period_s))
+        """Control periods per stored row of the time series (>= 1): the most whole periods within the
+        store period (rows never farther apart than asked)."""
+        store = max(STORE_PERIOD_S, self.period_s) if self.store_period_s is None else self.store_period_s
+        return max(1, int(np.floor(store / self.period_s * (1 + 1e-9))))
 
     @property
     def cases(self) -> tuple[str, ...]:

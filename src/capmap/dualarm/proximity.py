@@ -17,6 +17,7 @@ from capmap.dualarm.distance import segseg, segtri
 __all__ = ["batch_distances"]
 
 _jit = numba.njit(cache=True)  # plain calls (see capmap.dualarm.chain)
+ROUNDING = 1e-9  # m: how far a lower bound may exceed the distance it bounds by rounding (~1e-15 here)
 
 
 @_jit
@@ -79,11 +80,16 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, cutoff,
         fk(chain_f, chain_i, qs[k], R, p)
         place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
         _bounding_spheres(A, B, V, ctr, rad)
-        cut = cutoff
+        cut, d0 = cutoff, np.nan
         if within >= 0.0 and nearest >= 0:
-            cut = min(cutoff, max(within, _pair_distance(A, B, V, rows, rsum, nearest, P, Q)))
+            d0 = _pair_distance(A, B, V, rows, rsum, nearest, P, Q)
+            # the bounds are computed otherwise than the distances and may exceed them by rounding: a pair at
+            # the threshold keeps its distance with ROUNDING to spare, and the nearest pair's is written
+            cut = min(cutoff, max(within, d0) + ROUNDING)
         _row(A, B, V, ctr, rad, rows, rsum, cut, out[k], P, Q)
-        if within >= 0.0:
+        if d0 <= cutoff:  # (d0 is nan unless the nearest pair was evaluated: False)
+            out[k, nearest] = d0
+        if within >= 0.0 and rows.shape[0] > 0:
             n = np.argmin(out[k])
             nearest = n if np.isfinite(out[k, n]) else -1
 

@@ -75,9 +75,11 @@ def part_wrench(model: pin.Model, data: pin.Data, part: HeldPart) -> np.ndarray:
 def _minimax(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     """z (K, m) minimising max_i |A[k] z[k] + b[k]|_i for each k (A (K, n, m), b (K, n)): the linear
     programmes min t_k s.t. -t_k <= A[k] z[k] + b[k] <= t_k, independent, solved as one block-diagonal
-    programme (HiGHS; minimising the sum of the t_k minimises each); z = 0 if it fails (the least-norm
-    distribution)."""
+    programme (HiGHS; minimising the sum of the t_k minimises each); if that fails, each alone, and
+    z[k] = 0 where one fails (the least-norm distribution)."""
     K, n, m = A.shape
+    if K == 0:
+        return np.zeros((0, m))
     block = np.concatenate([np.concatenate([A, -A], axis=1), -np.ones((K, 2 * n, 1))], axis=2)  # (K, 2n, m + 1)
     rows = np.broadcast_to(np.arange(K)[:, None, None] * 2 * n + np.arange(2 * n)[None, :, None], block.shape)
     cols = np.broadcast_to(np.arange(K)[:, None, None] * (m + 1) + np.arange(m + 1)[None, None, :], block.shape)
@@ -85,7 +87,11 @@ def _minimax(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     c = np.tile(np.r_[np.zeros(m), 1.0], K)
     res = linprog(c, A_ub=A_ub, b_ub=np.concatenate([-b, b], axis=1).ravel(),
                   bounds=([(None, None)] * m + [(0, None)]) * K, method="highs")
-    return res.x.reshape(K, m + 1)[:, :m] if res.status == 0 else np.zeros((K, m))
+    if res.status == 0:
+        return res.x.reshape(K, m + 1)[:, :m]
+    if K == 1:
+        return np.zeros((1, m))
+    return np.vstack([_minimax(A[k:k + 1], b[k:k + 1]) for k in range(K)])  # each alone: one failure costs one
 
 
 def held_torques(model: pin.Model, grippers: tuple[int, int], part: HeldPart, q: np.ndarray, v: np.ndarray,

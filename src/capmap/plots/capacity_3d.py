@@ -91,6 +91,8 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
         text = [""] * len(pts)
         if p.ends:
             text[0], text[-1] = f"{p.ends}: start", f"{p.ends}: goal"
+            if len(pts) == 1:
+                text[0] = f"{p.ends}: start and goal"
         fig.add_trace(go.Scatter3d(x=pts[:, 0].tolist(), y=pts[:, 1].tolist(), z=pts[:, 2].tolist(),
                                    mode="lines+markers+text" if p.ends else "lines+markers", name=p.label,
                                    text=text if p.ends else None, textfont=dict(color=colour),
