@@ -13,6 +13,11 @@ from capmap.io.runs import stale_outputs
 from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html, slider_levels
 
 
+def _traces(page: str) -> list[dict]:
+    """The traces of the 3D page's figure, as plotly wrote them."""
+    return json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
+
+
 def test_stale_outputs_are_what_the_config_no_longer_makes(tmp_path):
     run = tmp_path / "results" / "default"
     for d in ("verify/payload_1500kg", "verify/payload_4000kg", "tasks/a", "tasks/b"):
@@ -71,7 +76,7 @@ def test_the_3d_page_is_offline_and_holds_every_voxel_and_path():
         np.testing.assert_allclose(np.c_[m["x"], m["y"], m["z"]], x, atol=1e-4)
         np.testing.assert_allclose(m["c"], c, atol=0.01)
     assert 1500.0 in levels
-    fig = json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
+    fig = _traces(page)
     shown = next(t for t in fig if t.get("name") == "voxels carrying the payload")
     assert len(shown["x"]) == int((cap >= 1500).sum()) and min(shown["marker"]["color"]) >= 1500
     assert any(t.get("name") == path.label for t in fig) and {"start", "goal", "direct line"} <= {t.get("name") for t in fig}
@@ -86,7 +91,7 @@ def test_the_3d_page_shows_0_kg_voxels_cuts_by_height_fixes_its_axes_and_names_t
     cap = np.where(rng.random(200) < 0.2, 0.0, rng.uniform(1, 4000, 200))
     bind = np.array(["tau_j2_nm", "base_mx_nm"], dtype=object)[rng.integers(0, 2, 200)]
     page = capacity_3d_html([("configuration S+E+W+", xyz, cap, bind)], 0.75, np.zeros(3), np.ones(3), [], (1500.0,), "t")
-    fig = json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
+    fig = _traces(page)
     zero = next(t for t in fig if t.get("name", "").startswith("0 kg"))
     np.testing.assert_allclose(np.c_[zero["x"], zero["y"], zero["z"]], xyz[cap == 0])
     assert all(", bound by " in t for t in zero["text"])
@@ -104,7 +109,7 @@ def test_the_3d_page_draws_every_tasks_path_with_its_ends_named_and_keeps_it_in_
                        np.array([[0, 0, 0], [0, 0, 4.0], [0.75, 0, 4.0], [0.75, 0, 0]]), ends="over_the_top")
     page = capacity_3d_html([("configuration S+E+W+", xyz, np.array([1.0, 2.0, 3.0]))], 0.75, np.zeros(3),
                             np.array([0.75, 0, 0]), [task], (1500.0,), "t")
-    fig = json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
+    fig = _traces(page)
     trace = next(t for t in fig if t.get("name", "").startswith("task over_the_top"))
     np.testing.assert_allclose(np.c_[trace["x"], trace["y"], trace["z"]], task.points_m)
     assert trace["text"][0] == "over_the_top: start" and trace["text"][-1] == "over_the_top: goal"

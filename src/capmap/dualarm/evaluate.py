@@ -66,7 +66,8 @@ def fine_grid(xs: np.ndarray, us: np.ndarray, dt: float, factor: int) -> tuple[n
 
 @dataclass(frozen=True)
 class Safety:
-    """distance (M, P): every candidate pair's safety distance at every configuration; names (P,)
+    """distance (M, P): every candidate pair's safety distance at every configuration (inf where
+    :func:`safety` shows it above its cutoff, or above both ``within_m`` and the least); names (P,)
     'a vs b' of the bodies of each pair."""
 
     distance: np.ndarray
