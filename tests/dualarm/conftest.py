@@ -1,4 +1,5 @@
-"""The default config's dual-arm problem pieces (robot with fitted capsules, scene, envelope)."""
+"""The default config's dual-arm problem pieces (robot with fitted capsules, scene, envelope) and a small
+problem on them (40 nodes) for the compiled nodes and solver."""
 
 from __future__ import annotations
 
@@ -8,13 +9,18 @@ import yaml
 
 from capmap.config.dualarm import cloud_source, fit_settings, load_dual_arm_file
 from capmap.config.scene_file import load_scene
-from capmap.dualarm.assembly import assemble
+from capmap.dualarm.assembly import assemble, warm_start
+from capmap.dualarm.chain import pack
 from capmap.dualarm.cloud import fit_envelope
+from capmap.dualarm.ocp import Context
 from capmap.dualarm.robot import build_dual_arm, fit_capsules
 from capmap.dualarm.scene import nearest_solid, scan
+from capmap.dualarm.settings import Weights
+from capmap.dualarm.solver import initial_guess, node_pairs
 from tests.scenario import ROOT
 
 SECTION = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["dualarm"]
+W = Weights(control=np.linspace(0.5, 2.0, 14), velocity=1.0, panel=0.01, margin_m=0.005)  # the small problem's
 
 
 @pytest.fixture(scope="session")
@@ -43,3 +49,17 @@ def make_assembly(robot, scene, envelope):
     def make(nodes=500, dt=0.02, pre=350):
         return assemble(robot, scene, envelope[0], envelope[1], nodes, dt, pre)
     return make
+
+
+@pytest.fixture(scope="session")
+def small(robot, make_assembly):
+    asm = make_assembly(40, 0.25, 28)
+    qs = warm_start(asm)
+    xs, us = initial_guess(qs, asm.task.dt)
+    t = asm.task
+    packed = pack(asm.model, (t.left, t.right, t.panel), asm.collision.prims)
+    assert not isinstance(packed, str), packed
+    ctx = Context(asm.model, asm.task, asm.collision, W, robot.q_lower, robot.q_upper, robot.v_max, mu=1e3,
+                  packed=packed)
+    keep = node_pairs(asm, qs, 0.15)
+    return asm, ctx, xs, us, keep

@@ -14,16 +14,15 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.dualarm.assembly import warm_start
 from capmap.dualarm.chain import fk, pack
 from capmap.dualarm.lie import jlog3, jlog6, log3, log6
 from capmap.dualarm.nodes import CompiledNodeModel
-from capmap.dualarm.ocp import Context, NodeModel
+from capmap.dualarm.ocp import NodeModel
 from capmap.dualarm.proximity import batch_distances
-from capmap.dualarm.settings import ALSettings, Weights
-from capmap.dualarm.solver import initial_guess, node_pairs, solve, solve_csqp
+from capmap.dualarm.settings import ALSettings
+from capmap.dualarm.solver import solve, solve_csqp
+from tests.dualarm.conftest import W
 
-W = Weights(control=np.linspace(0.5, 2.0, 14), velocity=1.0, panel=0.01, margin_m=0.005)
 NODES = [0, 10, 27, 28, 29, 35, 39, 40]  # transfer, pre-insertion and around it, insertion, terminal
 
 
@@ -84,20 +83,6 @@ def test_jlog6_is_the_derivative_of_log6():
 
 
 # ---------------------------------------------------------------------------------------------- chain
-@pytest.fixture(scope="module")
-def small(robot, make_assembly):
-    asm = make_assembly(40, 0.25, 28)
-    qs = warm_start(asm)
-    xs, us = initial_guess(qs, asm.task.dt)
-    t = asm.task
-    packed = pack(asm.model, (t.left, t.right, t.panel), asm.collision.prims)
-    assert not isinstance(packed, str), packed
-    ctx = Context(asm.model, asm.task, asm.collision, W, robot.q_lower, robot.q_upper, robot.v_max, mu=1e3,
-                  packed=packed)
-    keep = node_pairs(asm, qs, 0.15)
-    return asm, ctx, xs, us, keep
-
-
 def test_packed_kinematics_equal_pinocchio(small):
     asm, ctx, xs, _, _ = small
     m, d = asm.model, asm.model.createData()

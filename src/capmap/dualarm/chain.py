@@ -18,10 +18,12 @@ import numba
 import numpy as np
 import pinocchio as pin
 
+from capmap.dualarm.broadphase import pair_groups, static_balls
 from capmap.dualarm.collision import Pairs, Primitives
 from capmap.dualarm.distance import segseg, segtri
 
-__all__ = ["Packed", "pack", "fk", "pair_table", "place_primitives", "plane_gap", "lower_bound", "distances"]
+__all__ = ["Packed", "pack", "fk", "pair_table", "place_primitives", "plane_gap", "lower_bound", "distances",
+           "groups_of"]
 
 _jit = numba.njit(cache=True)  # plain calls (numba's IR inlining, inline="always", compiles several times slower)
 
@@ -32,7 +34,8 @@ class Packed:
     the universe); moves (nj, nv) bool: the columns that move joint j's body; frame_f (3, 12): R,
     p of the left gripper, right gripper and panel frames in their joints; frame_j (3,);
     seg_f (S, 6): segment ends a, b (in their joint's frame, world for joint 0); seg_j (S,);
-    seg_r (S,); tri_f (T, 9); tri_j (T,); tri_r (T,)."""
+    seg_r (S,); tri_f (T, 9); tri_j (T,); tri_r (T,); seg_g (S,), tri_g (T,), balls (G, 4): the static
+    primitives' bodies and their balls (:func:`capmap.dualarm.broadphase.static_balls`)."""
 
     chain_f: np.ndarray
     chain_i: np.ndarray
@@ -45,6 +48,9 @@ class Packed:
     tri_f: np.ndarray
     tri_j: np.ndarray
     tri_r: np.ndarray
+    seg_g: np.ndarray
+    tri_g: np.ndarray
+    balls: np.ndarray
 
 
 def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> Packed | str:
@@ -76,11 +82,12 @@ def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> P
     frame_f = np.array([np.concatenate([model.frames[f].placement.rotation.ravel(), model.frames[f].placement.translation])
                         for f in frames])
     frame_j = np.array([model.frames[f].parentJoint for f in frames], dtype=np.int64)
-    return Packed(chain_f, chain_i, moves, frame_f, frame_j,
-                  np.ascontiguousarray(np.hstack([prims.seg_a, prims.seg_b]), dtype=float),
-                  prims.seg_joint.astype(np.int64), prims.seg_r.astype(float),
-                  np.ascontiguousarray(prims.tri_v.reshape(-1, 9), dtype=float), prims.tri_joint.astype(np.int64),
-                  prims.tri_r.astype(float))
+    seg = (np.ascontiguousarray(np.hstack([prims.seg_a, prims.seg_b]), dtype=float),
+           prims.seg_joint.astype(np.int64), prims.seg_r.astype(float))
+    tri = (np.ascontiguousarray(prims.tri_v.reshape(-1, 9), dtype=float), prims.tri_joint.astype(np.int64),
+           prims.tri_r.astype(float))
+    groups = static_balls(*seg, prims.seg_body, *tri, prims.tri_body)
+    return Packed(chain_f, chain_i, moves, frame_f, frame_j, *seg, *tri, *groups)
 
 
 def pair_table(packed: Packed, pairs: Pairs) -> tuple[np.ndarray, np.ndarray]:
@@ -91,6 +98,12 @@ def pair_table(packed: Packed, pairs: Pairs) -> tuple[np.ndarray, np.ndarray]:
                       np.column_stack([np.ones(len(st), np.int64), st])]).astype(np.int64)
     rsum = np.concatenate([packed.seg_r[ss[:, 0]] + packed.seg_r[ss[:, 1]], packed.seg_r[st[:, 0]] + packed.tri_r[st[:, 1]]])
     return np.ascontiguousarray(rows), rsum
+
+
+def groups_of(packed: Packed, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pair rows' groups (order, groups, spheres) of :func:`capmap.dualarm.broadphase.pair_groups`."""
+    pk = packed
+    return pair_groups(rows, pk.seg_j, pk.seg_r, pk.tri_j, pk.tri_r, pk.seg_g, pk.tri_g, pk.balls)
 
 
 @_jit

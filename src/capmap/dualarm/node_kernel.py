@@ -6,6 +6,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from capmap.dualarm.broadphase import group_bound
 from capmap.dualarm.chain import fk, lower_bound, place_primitives
 from capmap.dualarm.distance import segseg, segtri
 from capmap.dualarm.lie import jlog3, jlog6, log3, log6
@@ -34,13 +35,15 @@ def _pose_rows(Je, Jl, out, row, nv):
 
 
 @numba.njit(cache=True)
-def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tri_j, rows, rsum,
-              kind, tg, axis, par, lim, lam_eq, lam_in, x, u, mu, diff, c, C, g, Lx, Lxx, Lu, xnext):
+def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tri_j, rows, rsum, order, groups,
+              spheres, kind, tg, axis, par, lim, lam_eq, lam_in, x, u, mu, diff, c, C, g, Lx, Lxx, Lu, xnext):
     """One node: returns the cost; fills c (m,), g (p,) and without ``diff`` the next state xnext
     (2 nq,), with ``diff`` C (m, 2 nq), Lx (2 nq), Lxx (2 nq, 2 nq), Lu (nq). par: dt, w_velocity,
     w_panel, margin, scale, running (0/1), limits (0/1), al (0/1), bound (0/1: a pair with a zero
     multiplier and a lower bound above the margin gets that bound as g, exact distances otherwise);
-    lim (4, nq): w_control, q_lower, q_upper, v_max."""
+    lim (4, nq): w_control, q_lower, q_upper, v_max; order, groups, spheres: the pairs' groups
+    (:func:`capmap.dualarm.broadphase.pair_groups`): with ``bound``, a group whose pairs all have zero
+    multipliers and whose bound clears the margin gets that bound as every pair's g."""
     dt, wv, wp, margin, scale = par[0], par[1], par[2], par[3], par[4]
     running, limits, al = par[5] > 0.5, par[6] > 0.5, par[7] > 0.5
     bound = al and par[8] > 0.5
@@ -162,19 +165,34 @@ def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tr
         A, B = np.empty((seg_f.shape[0], 3)), np.empty((seg_f.shape[0], 3))
         V = np.empty((tri_f.shape[0], 3, 3))
         place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
-        for n in range(npair):
-            # a pair with no multiplier whose lower bound clears the margin contributes nothing to the
-            # cost or its derivatives: its g is that (positive) bound, the exact distance is skipped
-            if bound and lam_in[n] == 0.0:
-                lb = lower_bound(A, B, V, rows[n, 0], rows[n, 1], rows[n, 2]) - rsum[n] - margin
-                if lb > 0.0:
-                    g[n] = lb
-                    continue
-            if rows[n, 0] == 0:
-                core = segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, n)
-            else:
-                core = segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, n)
-            g[n] = core - rsum[n] - margin
+        for gi in range(groups.shape[0]):
+            s0, s1 = groups[gi, 0], groups[gi, 1]
+            # pairs with no multiplier whose lower bound clears the margin contribute nothing to the cost
+            # or its derivatives: their g is that (positive) bound, the exact distance is skipped
+            if bound and groups[gi, 2] > 0:
+                free = True
+                for t in range(s0, s1):
+                    if lam_in[order[t]] != 0.0:
+                        free = False
+                        break
+                if free:
+                    lb = group_bound(A, B, V, rows, order, groups, spheres, gi) - margin
+                    if lb > 0.0:
+                        for t in range(s0, s1):
+                            g[order[t]] = lb
+                        continue
+            for t in range(s0, s1):
+                n = order[t]
+                if bound and lam_in[n] == 0.0:
+                    lb = lower_bound(A, B, V, rows[n, 0], rows[n, 1], rows[n, 2]) - rsum[n] - margin
+                    if lb > 0.0:
+                        g[n] = lb
+                        continue
+                if rows[n, 0] == 0:
+                    core = segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, n)
+                else:
+                    core = segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, n)
+                g[n] = core - rsum[n] - margin
     if limits:
         for i in range(nq):
             g[npair + i] = q[i] - lim[1, i]

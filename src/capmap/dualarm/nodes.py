@@ -17,8 +17,9 @@ import crocoddyl
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.chain import Packed, pack, pair_table
+from capmap.dualarm.chain import Packed, groups_of, pack, pair_table
 from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
+from capmap.dualarm.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
 from capmap.dualarm.node_kernel import node_eval
 from capmap.dualarm.ocp import Context, equality_size
 from capmap.dualarm.proximity import batch_distances
@@ -101,10 +102,10 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
         pk = packed
         seg_f, seg_j, tri_f, tri_j, rows = _compact(pk, self.rows)
         self._static = (pk.chain_f, pk.chain_i, pk.moves, pk.frame_f, pk.frame_j, seg_f, seg_j, tri_f, tri_j,
-                        rows, self.rsum, self.kind, self.tg, self.axis, self.par, self.lim)
+                        rows, self.rsum, *groups_of(pk, self.rows), self.kind, self.tg, self.axis, self.par, self.lim)
         exact = self.par.copy()
         exact[8] = 0.0  # values(): every pair's exact distance
-        self._static_exact = self._static[:14] + (exact, self.lim)
+        self._static_exact = self._static[:-2] + (exact, self.lim)
 
     def createData(self):
         d = crocoddyl.ActionDataAbstract(self)
@@ -169,11 +170,18 @@ def warm_up() -> None:
                   np.ones(2), packed=packed)
     pairs = Pairs(np.array([[0, 1]]), np.array([[0, 0]]))
     x, u = np.full(4, 0.1), np.full(2, 0.1)
+    models = {}
     for mode in ("al", "constrained"):
         for k in range(4):
             m = CompiledNodeModel(ctx, k, pairs, mode, packed)
             d = m.createData()
             (m.calc(d, x), m.calcDiff(d, x)) if k == 3 else (m.calc(d, x, u), m.calcDiff(d, x, u))
+            models.setdefault(mode, []).append(m)
+    P = pack_nodes(models["al"])  # the compiled FDDP (capmap.dualarm.solver), the argument types of a real run
+    xs, us = np.tile(x, (4, 1)), np.tile(u, (3, 1))
+    Luu = np.ascontiguousarray(np.broadcast_to(np.eye(2), (3, 2, 2)))
+    fddp(P, 0.1, 0.005, Luu, x.copy(), xs, us, 2, False, 100.0, 1e-9, 1e3, ALPHAS)
+    evaluate_nodes(P, xs)
     batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1, within=0.01)
     data = model.createData()  # the Pinocchio-side evaluation (key poses, the independent check)
     pin.computeJointJacobians(model, data, x[:2])

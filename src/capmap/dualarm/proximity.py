@@ -10,7 +10,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from capmap.dualarm.chain import Packed, fk, pair_table, place_primitives, plane_gap
+from capmap.dualarm.broadphase import group_bound
+from capmap.dualarm.chain import Packed, fk, groups_of, pair_table, place_primitives, plane_gap
 from capmap.dualarm.collision import Pairs
 from capmap.dualarm.distance import segseg, segtri
 
@@ -49,24 +50,31 @@ def _pair_distance(A, B, V, rows, rsum, n, P, Q):
 
 
 @_jit
-def _row(A, B, V, ctr, rad, rows, rsum, cutoff, out, P, Q):
-    """out[n] for each pair row n: its safety distance (m), or inf when the bounding spheres or the
-    triangle's plane put it above ``cutoff``. One call per configuration (a call per pair would pay
-    numba's per-array argument overhead)."""
+def _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, out, P, Q):
+    """out[n] for each pair row n: its safety distance (m), or inf when its group's ball, the bounding
+    spheres or the triangle's plane put it above ``cutoff``. One call per configuration (a call per
+    pair would pay numba's per-array argument overhead)."""
     S = A.shape[0]
-    for n in range(rows.shape[0]):
-        a, b = rows[n, 1], rows[n, 2] + (S if rows[n, 0] == 1 else 0)
-        dx, dy, dz = ctr[a, 0] - ctr[b, 0], ctr[a, 1] - ctr[b, 1], ctr[a, 2] - ctr[b, 2]
-        if np.sqrt(dx * dx + dy * dy + dz * dz) - rad[a] - rad[b] - rsum[n] > cutoff:
-            out[n] = np.inf
-        elif rows[n, 0] == 1 and plane_gap(A, B, rows[n, 1], V, rows[n, 2]) - rsum[n] > cutoff:
-            out[n] = np.inf  # both ends on one side of the triangle's plane, farther than the cutoff
-        else:
-            out[n] = _pair_distance(A, B, V, rows, rsum, n, P, Q)
+    for gi in range(groups.shape[0]):
+        if groups[gi, 2] > 0 and group_bound(A, B, V, rows, order, groups, spheres, gi) > cutoff:
+            for t in range(groups[gi, 0], groups[gi, 1]):
+                out[order[t]] = np.inf
+            continue
+        for t in range(groups[gi, 0], groups[gi, 1]):
+            n = order[t]
+            a, b = rows[n, 1], rows[n, 2] + (S if rows[n, 0] == 1 else 0)
+            dx, dy, dz = ctr[a, 0] - ctr[b, 0], ctr[a, 1] - ctr[b, 1], ctr[a, 2] - ctr[b, 2]
+            if np.sqrt(dx * dx + dy * dy + dz * dz) - rad[a] - rad[b] - rsum[n] > cutoff:
+                out[n] = np.inf
+            elif rows[n, 0] == 1 and plane_gap(A, B, rows[n, 1], V, rows[n, 2]) - rsum[n] > cutoff:
+                out[n] = np.inf  # both ends on one side of the triangle's plane, farther than the cutoff
+            else:
+                out[n] = _pair_distance(A, B, V, rows, rsum, n, P, Q)
 
 
 @numba.njit(cache=True)
-def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, cutoff, within, out):
+def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, groups, spheres, cutoff, within,
+           out):
     """out[k, n]: pair n's safety distance at qs[k], or inf when it is above ``cutoff``; with
     ``within`` >= 0 also inf when it is above both ``within`` and the least distance at qs[k] (the
     previous configuration's nearest pair, evaluated first, bounds that least distance)."""
@@ -75,18 +83,31 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, cutoff,
     A, B, V = np.empty((S, 3)), np.empty((S, 3)), np.empty((T, 3, 3))
     ctr, rad = np.empty((S + T, 3)), np.empty(S + T)
     P, Q = np.empty((1, 3)), np.empty((1, 3))
+    # the static primitives (joint 0) are placed once; each configuration places the moving ones
+    ms, mt = np.flatnonzero(seg_j != 0), np.flatnonzero(tri_j != 0)
+    mseg_f, mseg_j, mtri_f, mtri_j = seg_f[ms], seg_j[ms], tri_f[mt], tri_j[mt]
+    mA, mB, mV = np.empty((len(ms), 3)), np.empty((len(ms), 3)), np.empty((len(mt), 3, 3))
+    mctr, mrad = np.empty((len(ms) + len(mt), 3)), np.empty(len(ms) + len(mt))
+    if qs.shape[0]:
+        fk(chain_f, chain_i, qs[0], R, p)
+        place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
+        _bounding_spheres(A, B, V, ctr, rad)
     nearest = -1
     for k in range(qs.shape[0]):
         fk(chain_f, chain_i, qs[k], R, p)
-        place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
-        _bounding_spheres(A, B, V, ctr, rad)
+        place_primitives(mseg_f, mseg_j, mtri_f, mtri_j, R, p, mA, mB, mV)
+        _bounding_spheres(mA, mB, mV, mctr, mrad)
+        for i in range(len(ms)):
+            A[ms[i]], B[ms[i]], ctr[ms[i]], rad[ms[i]] = mA[i], mB[i], mctr[i], mrad[i]
+        for i in range(len(mt)):
+            V[mt[i]], ctr[S + mt[i]], rad[S + mt[i]] = mV[i], mctr[len(ms) + i], mrad[len(ms) + i]
         cut, d0 = cutoff, np.nan
         if within >= 0.0 and nearest >= 0:
             d0 = _pair_distance(A, B, V, rows, rsum, nearest, P, Q)
             # the bounds are computed otherwise than the distances and may exceed them by rounding: a pair at
             # the threshold keeps its distance with ROUNDING to spare, and the nearest pair's is written
             cut = min(cutoff, max(within, d0) + ROUNDING)
-        _row(A, B, V, ctr, rad, rows, rsum, cut, out[k], P, Q)
+        _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cut, out[k], P, Q)
         if d0 <= cutoff:  # (d0 is nan unless the nearest pair was evaluated: False)
             out[k, nearest] = d0
         if within >= 0.0 and rows.shape[0] > 0:
@@ -104,5 +125,5 @@ def batch_distances(packed: Packed, qs: np.ndarray, pairs: Pairs, cutoff: float 
     qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, packed.chain_f.shape[0] - 1)
     out = np.empty((len(qs), len(rows)))
     _batch(packed.chain_f, packed.chain_i, packed.seg_f, packed.seg_j, packed.tri_f, packed.tri_j, qs, rows, rsum,
-           float(cutoff), -1.0 if within is None else float(within), out)
+           *groups_of(packed, rows), float(cutoff), -1.0 if within is None else float(within), out)
     return out

@@ -22,6 +22,7 @@ import pinocchio as pin
 from capmap.dualarm.assembly import Assembly
 from capmap.dualarm.chain import pack
 from capmap.dualarm.collision import Pairs
+from capmap.dualarm.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
 from capmap.dualarm.proximity import batch_distances
@@ -112,22 +113,79 @@ def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float, packed=None) -> l
     return [row < filter_m for row in d]
 
 
-def _violations(models: list, xs: np.ndarray) -> tuple[float, float, list, list]:
-    eq, ineq, cs, gs = 0.0, 0.0, [], []
-    for m, x in zip(models, xs):
-        c, g = m.values(x)
-        cs.append(c)
-        gs.append(g)
-        eq = max(eq, float(np.abs(c).max()))
-        ineq = max(ineq, float(np.maximum(-g, 0).max(initial=0.0)))
-    return eq, ineq, cs, gs
+class _CrocoddylInner:
+    """The inner solve by Crocoddyl's SolverFDDP on Python action models (the Pinocchio reference)."""
+
+    def __init__(self, models: list, x0: np.ndarray, st: ALSettings):
+        self.models = models
+        self.problem = crocoddyl.ShootingProblem(x0.copy(), models[:-1], models[-1])
+        self.solver = crocoddyl.SolverFDDP(self.problem)
+        self.solver.th_stop = st.inner_stop
+        self.solver.reg_incFactor = REG_INCREASE
+
+    def replace(self, k: int, m) -> None:
+        self.models[k] = m
+        if k < len(self.models) - 1:
+            self.problem.updateModel(k, m)
+        else:
+            self.problem.terminalModel = m
+
+    def solve(self, xs: np.ndarray, us: np.ndarray, maxiter: int, feasible: bool, mu: float):
+        self.solver.solve(list(xs), list(us), maxiter, feasible)
+        return np.array(self.solver.xs), np.array(self.solver.us), int(self.solver.iter), float(self.solver.cost)
+
+    def violations(self, xs: np.ndarray) -> tuple[list, list]:
+        cs, gs = zip(*(m.values(x) for m, x in zip(self.models, xs)))
+        return list(cs), list(gs)
+
+
+class _CompiledInner(_CrocoddylInner):
+    """The inner solve by the compiled FDDP (:func:`capmap.dualarm.fddp.fddp`, Crocoddyl's algorithm) on the
+    compiled node models packed flat: no Python call per node."""
+
+    def __init__(self, models: list, x0: np.ndarray, st: ALSettings):
+        self.models, self.x0, self.st = models, x0.copy(), st
+        first, nq = models[0], models[0].Fu.shape[1]
+        self.h, self.a = first.Fx[0, nq], first.Fu[0, 0]
+        I, Z = np.eye(nq), np.zeros((nq, nq))
+        Fx, Fu = np.block([[I, self.h * I], [Z, I]]), np.vstack([self.a * I, self.h * I])
+        assert all(np.array_equal(m.Fx, Fx) and np.array_equal(m.Fu, Fu) for m in models)  # what fddp() is written for
+        Luu = first.ctx.task.dt * np.diag(first.lim[0])
+        self.Luu = np.ascontiguousarray(np.broadcast_to(Luu, (len(models) - 1, nq, nq)))
+        self.packed = None
+
+    def replace(self, k: int, m) -> None:
+        self.models[k] = m
+        self.packed = None
+
+    def _pack(self):
+        if self.packed is None:
+            self.packed = pack_nodes(self.models)
+        else:  # the multipliers only
+            P = self.packed
+            P[23][:] = np.concatenate([m.lam_eq for m in self.models])
+            P[25][:] = np.concatenate([m.lam_in for m in self.models])
+        return self.packed
+
+    def solve(self, xs: np.ndarray, us: np.ndarray, maxiter: int, feasible: bool, mu: float):
+        xs, us = np.array(xs, dtype=float), np.array(us, dtype=float)
+        _, it, cost = fddp(self._pack(), self.h, self.a, self.Luu, self.x0, xs, us, maxiter, feasible, mu,
+                           self.st.inner_stop, REG_INCREASE, ALPHAS)
+        return xs, us, int(it), float(cost)
+
+    def violations(self, xs: np.ndarray) -> tuple[list, list]:
+        P = self._pack()
+        evaluate_nodes(P, np.ascontiguousarray(xs, dtype=float))
+        c, g, eo, io = P[27], P[29], P[24], P[26]
+        return [c[eo[k]:eo[k + 1]].copy() for k in range(len(xs))], [g[io[k]:io[k + 1]].copy() for k in range(len(xs))]
 
 
 def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], settings: ALSettings,
           xs0: np.ndarray, us0: np.ndarray, log=None, inequalities: bool = True, compiled: bool = True) -> Solution:
     """The augmented-Lagrangian loop (module docstring) from the initial guess xs0, us0;
     ``inequalities=False``: the equality-only problem (no collision pairs, no limits);
-    ``compiled=False``: Pinocchio's node models (the reference) instead of the compiled ones."""
+    ``compiled=False``: Pinocchio's node models and Crocoddyl's FDDP (the reference) instead of the
+    compiled ones and the compiled FDDP."""
     st = settings
     ctx = context(asm, weights, limits, compiled, log, mu=float(st.mu0), with_limits=inequalities)
     if not inequalities:
@@ -135,26 +193,23 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
     N = asm.task.N
     keep = node_pairs(asm, xs0[:, :asm.model.nq], st.filter_m, ctx.packed)
     models = [node_model(ctx, k, asm.pairs.subset(keep[k])) for k in range(N + 1)]
-    problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:N], models[N])
-    solver = crocoddyl.SolverFDDP(problem)
-    solver.th_stop = st.inner_stop
     # after a multiplier update the full step is often rejected until the regularisation has grown enough: by
     # Crocoddyl's x10 per rejected line search (10 trial rollouts each) that took ~8 rejections per outer iteration
     # on the default problem (46 of 132 iterations); x1000 reaches it in ~3: 118 -> 91 FDDP iterations, solve
     # 8.1 -> 6.3 s, the same solution (errors, margin, active pairs equal to 1e-12)
-    solver.reg_incFactor = REG_INCREASE
-    xs, us = list(xs0), list(us0)
+    inner = (_CompiledInner if ctx.packed is not None else _CrocoddylInner)(models, xs0[0], st)
+    xs, us = np.array(xs0, dtype=float), np.array(us0, dtype=float)
     stats, prev, converged, message = [], np.inf, False, ""
     feasible = False
     for outer in range(st.max_outer):
         t0 = time.perf_counter()
-        solver.solve(xs, us, st.max_inner, feasible)
+        xs, us, iters, cost = inner.solve(xs, us, st.max_inner, feasible, ctx.mu)
         feasible = True
-        xs, us = list(solver.xs), list(solver.us)
-        X = np.array(xs)
-        eq, ineq, cs, gs = _violations(models, X)
+        cs, gs = inner.violations(xs)
+        eq = max(float(np.abs(c).max()) for c in cs)
+        ineq = max(float(np.maximum(-g, 0).max(initial=0.0)) for g in gs)
         # re-check every candidate pair on the solution; pairs that came near join their node
-        near = node_pairs(asm, X[:, :asm.model.nq], st.filter_m, ctx.packed)
+        near = node_pairs(asm, xs[:, :asm.model.nq], st.filter_m, ctx.packed)
         added = 0
         for k in range(N + 1):
             new = near[k] & ~keep[k]
@@ -165,16 +220,12 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
                 m.lam_eq = old.lam_eq
                 m.lam_in[:len(m.pairs)] = _carry(old.pairs, m.pairs, old.lam_in[:len(old.pairs)])
                 m.lam_in[len(m.pairs):] = old.lam_in[len(old.pairs):]
-                models[k] = m
-                if k < N:
-                    problem.updateModel(k, m)
-                else:
-                    problem.terminalModel = m
+                inner.replace(k, m)
                 added += int(new.sum())
-        stats.append(OuterStats(outer, ctx.mu, int(solver.iter), float(solver.cost), eq, ineq,
-                                int(sum(len(m.pairs) for m in models)), added, time.perf_counter() - t0))
+        stats.append(OuterStats(outer, ctx.mu, iters, cost, eq, ineq, int(sum(len(m.pairs) for m in models)), added,
+                                time.perf_counter() - t0))
         if log:
-            log(f"outer {outer}: mu {ctx.mu:.0e}, {solver.iter} FDDP iterations, cost {solver.cost:.6g}, equality "
+            log(f"outer {outer}: mu {ctx.mu:.0e}, {iters} FDDP iterations, cost {cost:.6g}, equality "
                 f"violation {eq:.2e}, inequality {ineq:.2e}, {added} pairs added ({time.perf_counter() - t0:.1f} s)")
         violation = max(eq, ineq)
         if violation < st.tolerance and added == 0:
@@ -192,7 +243,7 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
         prev = min(prev, violation)
     else:
         message = f"{st.max_outer} outer iterations without reaching the tolerance {st.tolerance:g}"
-    return Solution(np.array(xs), np.array(us), tuple(stats), converged, message)
+    return Solution(xs, us, tuple(stats), converged, message)
 
 
 def _pair_keys(p: Pairs) -> np.ndarray:

@@ -1,0 +1,99 @@
+"""Pair groups: many pairs dropped by one test (the node kernel's and the pair filter's broad phase).
+
+A group is the pairs of one moving primitive (a robot or panel segment, or a panel triangle) with the
+static primitives of one named body (an environment face or capsule, an unknown-space box), when
+there are at least :data:`MIN_GROUP` of them. The body's static primitives lie in a ball, centre c and
+reach rho (the farthest core point plus that primitive's radius, fixed at :func:`static_balls`), so
+every pair's safety distance is at least ``|c - moving core| - rho - r_moving`` (:func:`group_bound`):
+when that clears a threshold, every pair of the group does, and none needs its own bound or distance.
+Tested against every pair's exact distance in tests/dualarm/test_nodes.py.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from capmap.dualarm.distance import _pointtri_uv
+
+__all__ = ["MIN_GROUP", "static_balls", "pair_groups", "group_bound"]
+
+MIN_GROUP = 2  # a single pair is tested on its own (a group's test would only add one)
+
+
+def static_balls(seg_f: np.ndarray, seg_j: np.ndarray, seg_r: np.ndarray, seg_body: np.ndarray, tri_f: np.ndarray,
+                 tri_j: np.ndarray, tri_r: np.ndarray, tri_body: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(seg_g (S,), tri_g (T,): each static primitive's body ball, -1 for a moving one; balls (G, 4): centre m
+    and reach m, over the body's static segments (S, 6 ends), triangles (T, 9 vertices) and their radii)."""
+    seg_g, tri_g = np.full(len(seg_f), -1, np.int64), np.full(len(tri_f), -1, np.int64)
+    names = sorted({str(b) for b in seg_body[seg_j == 0]} | {str(b) for b in tri_body[tri_j == 0]})
+    balls = np.zeros((len(names), 4))
+    for g, name in enumerate(names):
+        s = (seg_j == 0) & (np.asarray(seg_body, dtype=str) == name)
+        t = (tri_j == 0) & (np.asarray(tri_body, dtype=str) == name)
+        seg_g[s], tri_g[t] = g, g
+        pts = np.vstack([seg_f[s].reshape(-1, 3), tri_f[t].reshape(-1, 3)])
+        c = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+        far_s = np.linalg.norm(seg_f[s].reshape(-1, 2, 3) - c, axis=2).max(axis=1) + seg_r[s]
+        far_t = np.linalg.norm(tri_f[t].reshape(-1, 3, 3) - c, axis=2).max(axis=1) + tri_r[t]
+        balls[g, :3], balls[g, 3] = c, np.concatenate([far_s, far_t]).max()
+    return seg_g, tri_g, balls
+
+
+def pair_groups(rows: np.ndarray, seg_j: np.ndarray, seg_r: np.ndarray, tri_j: np.ndarray, tri_r: np.ndarray,
+                seg_g: np.ndarray, tri_g: np.ndarray, balls: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(order (P,): the pair rows (kind, first, second) grouped; groups (G, 4) int: start and end in
+    ``order``, the column of ``rows`` naming the moving primitive (0: test each pair on its own) and 1
+    when that primitive is a triangle; spheres (G, 4): the body's centre m and its reach plus the moving
+    primitive's radius m)."""
+    if not len(rows):
+        return np.zeros(0, np.int64), np.zeros((0, 4), np.int64), np.zeros((0, 4))
+    kind, a, b = rows[:, 0], rows[:, 1], rows[:, 2]
+    tri = kind == 1
+    b_joint, b_body, b_r = seg_j[b * ~tri], seg_g[b * ~tri], seg_r[b * ~tri]  # (index 0 where b is a triangle)
+    b_joint[tri], b_body[tri], b_r[tri] = tri_j[b[tri]], tri_g[b[tri]], tri_r[b[tri]]
+    b_static, a_static = b_joint == 0, seg_j[a] == 0
+    col = np.where(~a_static & b_static, 1, np.where(a_static & ~b_static, 2, 0))
+    body = np.where(col == 1, b_body, np.where(col == 2, seg_g[a], -1))
+    moving = np.where(col == 1, a, b)
+    r_moving = np.where(col == 1, seg_r[a], b_r)
+    key = np.where(col > 0, (col.astype(np.int64) << 60) + (moving.astype(np.int64) << 30) + body, -1)
+    order = np.lexsort((np.arange(len(rows)), key)).astype(np.int64)
+    ks = key[order]
+    starts = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
+    ends = np.r_[starts[1:], len(rows)].astype(np.int64)
+    first = order[starts]
+    grouped = (col[first] > 0) & (ends - starts >= MIN_GROUP)
+    # a run that is not a group: one group per pair, tested on its own (column 0)
+    size = np.where(grouped, 1, ends - starts)
+    g_start = np.repeat(starts, size) + (np.arange(size.sum()) - np.repeat(np.cumsum(size) - size, size))
+    g_grouped = np.repeat(grouped, size)
+    g_end = np.where(g_grouped, np.repeat(ends, size), g_start + 1)
+    g_first = order[g_start]
+    g_col = np.where(g_grouped, col[g_first], 0)
+    groups = np.column_stack([g_start, g_end, g_col, (g_grouped & (kind[g_first] == 1) & (g_col == 2)).astype(np.int64)])
+    spheres = np.zeros((len(groups), 4))
+    spheres[g_grouped, :3] = balls[body[g_first[g_grouped]], :3]
+    spheres[g_grouped, 3] = balls[body[g_first[g_grouped]], 3] + r_moving[g_first[g_grouped]]
+    return order, np.ascontiguousarray(groups, dtype=np.int64).reshape(-1, 4), spheres
+
+
+@numba.njit(cache=True)
+def group_bound(A, B, V, rows, order, groups, spheres, gi):
+    """A lower bound (m) of the safety distance of every pair of group ``gi`` (:func:`pair_groups`) at the
+    world segments A, B (S, 3) and triangles V (T, 3, 3): the distance from the body's centre to the
+    moving core, less the reach."""
+    mi = rows[order[groups[gi, 0]], groups[gi, 2]]
+    if groups[gi, 3] == 1:
+        u, w = _pointtri_uv(spheres, gi, V, mi, 0.0, spheres, gi)
+        d2 = 0.0
+        for i in range(3):
+            q = V[mi, 0, i] + u * (V[mi, 1, i] - V[mi, 0, i]) + w * (V[mi, 2, i] - V[mi, 0, i])
+            d2 += (spheres[gi, i] - q) ** 2
+    else:
+        dx, dy, dz = B[mi, 0] - A[mi, 0], B[mi, 1] - A[mi, 1], B[mi, 2] - A[mi, 2]
+        ex, ey, ez = spheres[gi, 0] - A[mi, 0], spheres[gi, 1] - A[mi, 1], spheres[gi, 2] - A[mi, 2]
+        L2 = dx * dx + dy * dy + dz * dz
+        t = 0.0 if L2 == 0.0 else min(max((ex * dx + ey * dy + ez * dz) / L2, 0.0), 1.0)
+        d2 = (ex - t * dx) ** 2 + (ey - t * dy) ** 2 + (ez - t * dz) ** 2
+    return np.sqrt(d2) - spheres[gi, 3]

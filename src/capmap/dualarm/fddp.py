@@ -1,0 +1,299 @@
+"""Crocoddyl's FDDP, compiled with the node kernel inside it: one call solves the augmented problem, with
+no Python callback per node (Crocoddyl calls a Python action model ~200,000 times per solve).
+
+The algorithm is Crocoddyl 3.2's ``SolverFDDP`` step for step (src/core/solvers/fddp.cpp and ddp.cpp):
+the same backward pass (gaps in the value function while infeasible, the regularisation ``preg`` on
+Quu and Vxx, Cholesky of Quu), the same expected improvement (dg, dq, dv), the same line search over
+alphas 1, 1/2, ..., 1/512 with its acceptance tests (th_acceptstep 0.1, th_acceptnegstep 2, th_grad
+1e-12), the same regularisation schedule (reg_min 1e-9, reg_max 1e9, the given increase factor,
+decrease 10, thresholds 0.5 and 0.01) and stop (|d0 + d1 / 2| < th_stop once feasible). The problem
+is the one :class:`capmap.dualarm.nodes.CompiledNodeModel` states (linear dynamics x+ = Fx x + Fu u,
+Luu = dt diag(w_control), Lxu = 0), its nodes packed flat by :func:`pack_nodes`.
+tests/dualarm/test_nodes.py checks it against Crocoddyl's own solver on the Pinocchio node models:
+the same iterations and the same trajectory.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from capmap.dualarm.node_kernel import node_eval
+
+__all__ = ["pack_nodes", "fddp", "evaluate_nodes", "ALPHAS"]
+
+ALPHAS = 0.5 ** np.arange(10)  # Crocoddyl's step lengths
+REG_MIN, REG_MAX, REG_DEC = 1e-9, 1e9, 10.0
+TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEPINC = 0.1, 2.0, 1e-12, 0.5, 0.01
+
+
+def _offsets(sizes) -> np.ndarray:
+    return np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+
+
+def pack_nodes(models: list) -> tuple:
+    """The nodes (CompiledNodeModel, N + 1, mode 'al') as one tuple of flat arrays and offsets for
+    :func:`fddp`; their multipliers are read now (pack again after changing them)."""
+    if any(m.mode != "al" or len(m.lam_in) != m.n_in for m in models):
+        raise ValueError("the compiled FDDP takes augmented-Lagrangian nodes (mode 'al') only")
+    st = [m._static for m in models]
+    c = np.ascontiguousarray
+
+    def cat(i, shape):
+        parts = [s[i] for s in st]
+        return c(np.concatenate(parts) if parts else np.zeros(shape)), _offsets([len(p) for p in parts])
+
+    seg_f, so = cat(5, (0, 6))
+    seg_j, _ = cat(6, (0,))
+    tri_f, to = cat(7, (0, 9))
+    tri_j, _ = cat(8, (0,))
+    rows, po = cat(9, (0, 3))
+    rsum, _ = cat(10, (0,))
+    order, _ = cat(11, (0,))
+    groups, go = cat(12, (0, 4))
+    spheres, _ = cat(13, (0, 4))
+    kind = np.array([s[14] for s in st], dtype=np.int64)
+    tg, axis, par = (c(np.stack([s[i] for s in st])) for i in (15, 16, 17))
+    lam_eq, eo = c(np.concatenate([m.lam_eq for m in models])), _offsets([m.m_eq for m in models])
+    lam_in, io = c(np.concatenate([m.lam_in for m in models])), _offsets([m.n_in for m in models])
+    s0 = st[0]
+    return (s0[0], s0[1], s0[2], s0[3], s0[4], seg_f, seg_j.astype(np.int64), so, tri_f, tri_j.astype(np.int64), to,
+            rows.astype(np.int64), rsum, po, order.astype(np.int64), groups.astype(np.int64), spheres, go, kind, tg,
+            axis, par, s0[18], lam_eq, eo, lam_in, io, np.empty(len(lam_eq)), np.empty((len(lam_eq), len(s0[2][0]) * 2)),
+            np.empty(len(lam_in)))
+
+
+@numba.njit(cache=True)
+def _eval(P, k, x, u, mu, diff, exact, Lx, Lxx, Lu, xnext):
+    """Node k's cost (node_eval on its slice of the packed nodes ``P``); ``exact``: every pair's distance."""
+    (chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, so, tri_f, tri_j, to, rows, rsum, po, order, groups,
+     spheres, go, kind, tg, axis, par, lim, lam_eq, eo, lam_in, io, c, C, g) = P
+    s0, s1, t0, t1, p0, p1 = so[k], so[k + 1], to[k], to[k + 1], po[k], po[k + 1]
+    g0, g1, e0, e1, i0, i1 = go[k], go[k + 1], eo[k], eo[k + 1], io[k], io[k + 1]
+    pr = par[k].copy()
+    if exact:
+        pr[8] = 0.0
+    return node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f[s0:s1], seg_j[s0:s1], tri_f[t0:t1], tri_j[t0:t1],
+                     rows[p0:p1], rsum[p0:p1], order[p0:p1], groups[g0:g1], spheres[g0:g1], kind[k], tg[k], axis[k], pr,
+                     lim, lam_eq[e0:e1], lam_in[i0:i1], x, u, mu, diff, c[e0:e1], C[e0:e1], g[i0:i1], Lx, Lxx, Lu, xnext)
+
+
+@numba.njit(cache=True)
+def evaluate_nodes(P, xs):
+    """Every node's equality values c and inequality values g (exact distances) at the states xs (N + 1,
+    2 nq), written into the packed nodes' c and g (flat, by node offsets eo, io)."""
+    n2 = xs.shape[1]
+    Lx, Lxx, Lu, xn = np.empty(n2), np.empty((n2, n2)), np.empty(n2 // 2), np.empty(n2)
+    u0 = np.zeros(n2 // 2)
+    for k in range(xs.shape[0]):
+        _eval(P, k, xs[k], u0, 1.0, False, True, Lx, Lxx, Lu, xn)
+
+
+@numba.njit(cache=True)
+def _calc(P, xs, us, mu, cost, xnext, k, x, u):
+    Lx, Lxx, Lu = np.empty(0), np.empty((0, 0)), np.empty(0)
+    cost[k] = _eval(P, k, x, u, mu, False, False, Lx, Lxx, Lu, xnext[k])
+    return cost[k]
+
+
+@numba.njit(cache=True)
+def _chol_solve(A, L, B):
+    """B <- A^-1 B by Cholesky (A symmetric); False when A is not positive definite (Eigen's LLT test)."""
+    n = A.shape[0]
+    for j in range(n):
+        s = A[j, j]
+        for p in range(j):
+            s -= L[j, p] * L[j, p]
+        if not s > 0.0:
+            return False
+        L[j, j] = np.sqrt(s)
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / L[j, j]
+    for col in range(B.shape[1]):
+        for i in range(n):
+            s = B[i, col]
+            for p in range(i):
+                s -= L[i, p] * B[p, col]
+            B[i, col] = s / L[i, i]
+        for i in range(n - 1, -1, -1):
+            s = B[i, col]
+            for p in range(i + 1, n):
+                s -= L[p, i] * B[p, col]
+            B[i, col] = s / L[i, i]
+    return True
+
+
+@numba.njit(cache=True)
+def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, k_):
+    """Crocoddyl's backwardPass for the dynamics Fx = [[I, h I], [0, I]], Fu = [[a I], [h I]] (the products
+    with Fx and Fu in closed form; Lxu = 0); False where Quu is not positive definite or a value is not
+    finite."""
+    N, n2 = Lx.shape[0] - 1, Lx.shape[1]
+    n = n2 // 2
+    Vxx[N] = Lxx[N]
+    Vx[N] = Lx[N]
+    for i in range(n2):
+        Vxx[N, i, i] += preg
+    if not feasible:
+        Vx[N] += Vxx[N] @ fs[N]
+    Qxx, Qxu, Quu, Qx = np.empty((n2, n2)), np.empty((n2, n)), np.empty((n, n)), np.empty(n2)
+    L, Kt = np.zeros((n, n)), np.empty((n, n2 + 1))
+    for t in range(N - 1, -1, -1):
+        V, v = Vxx[t + 1], Vx[t + 1]
+        for i in range(n):
+            Qx[i] = Lx[t, i] + v[i]
+            Qx[n + i] = Lx[t, n + i] + h * v[i] + v[n + i]
+            Qu[t, i] = Lu[t, i] + a * v[i] + h * v[n + i]
+            for j in range(n):
+                A, Bq, Bv, D = V[i, j], V[i, n + j], V[n + i, j], V[n + i, n + j]
+                Qxx[i, j] = Lxx[t, i, j] + A
+                Qxx[i, n + j] = Lxx[t, i, n + j] + h * A + Bq
+                Qxx[n + i, j] = Lxx[t, n + i, j] + h * A + Bv
+                Qxx[n + i, n + j] = Lxx[t, n + i, n + j] + h * h * A + h * Bq + h * Bv + D
+                top, bot = a * A + h * Bq, a * Bv + h * D  # V Fu
+                Qxu[i, j] = top
+                Qxu[n + i, j] = h * top + bot
+                Quu[i, j] = Luu[t, i, j] + a * top + h * bot
+        for i in range(n):
+            Quu[i, i] += preg
+            Kt[i, n2] = Qu[t, i]  # k solved with K, as the last column
+            for j in range(n2):
+                Kt[i, j] = Qxu[j, i]
+        if not _chol_solve(Quu, L, Kt):
+            return False
+        for i in range(n):
+            k_[t, i] = Kt[i, n2]
+            for j in range(n2):
+                K[t, i, j] = Kt[i, j]
+        for i in range(n):
+            s = 0.0
+            for j in range(n):
+                s += Quu[i, j] * k_[t, j]
+            Quuk[t, i] = s
+        for i in range(n2):
+            s = Qx[i]
+            for r in range(n):
+                s -= K[t, r, i] * Qu[t, r]
+            Vx[t, i] = s
+        M = Qxu @ K[t]
+        for i in range(n2):
+            for j in range(i, n2):
+                Vxx[t, i, j] = Vxx[t, j, i] = 0.5 * ((Qxx[i, j] - M[i, j]) + (Qxx[j, i] - M[j, i]))
+            Vxx[t, i, i] += preg
+        if not feasible:
+            Vx[t] += Vxx[t] @ fs[t]
+        if not (np.all(np.isfinite(Vx[t])) and np.all(np.isfinite(Vxx[t]))):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try):
+    """Crocoddyl's FDDP forwardPass: the trial's cost, nan when a cost or state is not finite."""
+    N = xs.shape[0] - 1
+    total = 0.0
+    xn = x0.copy()
+    for t in range(N + 1):
+        if feasible or alpha == 1.0:
+            xs_try[t] = xn
+        else:
+            xs_try[t] = xn + fs[t] * (alpha - 1.0)
+        if t < N:
+            dx = xs_try[t] - xs[t]
+            us_try[t] = us[t] - k_[t] * alpha - K[t] @ dx
+            total += _calc(P, xs, us, mu, cost, xnext, t, xs_try[t], us_try[t])
+            xn = xnext[t].copy()
+            if not (np.isfinite(total) and np.all(np.isfinite(xn))):
+                return np.nan
+        else:
+            total += _calc(P, xs, us, mu, cost, xnext, t, xs_try[t], np.zeros(us.shape[1]))
+            if not np.isfinite(total):
+                return np.nan
+    return total
+
+
+@numba.njit(cache=True)
+def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas):
+    """Crocoddyl's SolverFDDP.solve from xs (N + 1, 2 nq), us (N, nq) (both updated in place) on the packed
+    nodes P at penalty mu; the dynamics Fx = [[I, h I], [0, I]], Fu = [[a I], [h I]] (h: the nodes'
+    dt in s, a = dt^2 / 2 in s^2); Luu (N, nq, nq). Returns (converged, iterations as Crocoddyl's ``iter``,
+    cost)."""
+    N, n2, nu = xs.shape[0] - 1, xs.shape[1], us.shape[1]
+    cost, xnext = np.zeros(N + 1), np.zeros((N + 1, n2))
+    Lx, Lxx, Lu = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2)), np.zeros((N + 1, nu))
+    Vx, Vxx = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2))
+    Qu, Quuk, K, k_ = np.zeros((N, nu)), np.zeros((N, nu)), np.zeros((N, nu, n2)), np.zeros((N, nu))
+    fs = np.zeros((N + 1, n2))
+    xs_try, us_try = np.zeros((N + 1, n2)), np.zeros((N, nu))
+    xs_try[0] = x0
+    u0 = np.zeros(nu)
+    preg = REG_MIN
+    was_feasible = False
+    recalc = True
+    total = 0.0
+    d0 = d1 = 0.0
+    for it in range(maxiter):
+        while True:
+            if recalc:
+                if it == 0:
+                    for t in range(N + 1):
+                        _calc(P, xs, us, mu, cost, xnext, t, xs[t], us[t] if t < N else u0)
+                for t in range(N + 1):
+                    _eval(P, t, xs[t], us[t] if t < N else u0, mu, True, False, Lx[t], Lxx[t], Lu[t], xnext[t])
+                total = 0.0
+                for t in range(N + 1):  # in Crocoddyl's order
+                    total += cost[t]
+                fs[0] = x0 - xs[0]
+                for t in range(N):
+                    fs[t + 1] = xnext[t] - xs[t + 1]
+            if _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, k_):
+                break
+            recalc = False
+            preg = min(preg * reg_inc, REG_MAX)
+            if preg == REG_MAX:
+                return False, it, total
+        dg, dq = 0.0, 0.0
+        if not feasible:
+            dg -= Vx[N] @ fs[N]
+            dq += fs[N] @ (Vxx[N] @ fs[N])
+        for t in range(N):
+            dg += Qu[t] @ k_[t]
+            dq -= k_[t] @ Quuk[t]
+            if not feasible:
+                dg -= Vx[t] @ fs[t]
+                dq += fs[t] @ (Vxx[t] @ fs[t])
+        recalc = False
+        alpha = alphas[0]
+        for alpha in alphas:
+            trial = _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try)
+            if np.isnan(trial):
+                continue
+            dV = total - trial
+            dv = 0.0
+            if not feasible:  # the terminal node first, as Crocoddyl
+                dv -= fs[N] @ (Vxx[N] @ (xs[N] - xs_try[N]))
+                for t in range(N):
+                    dv -= fs[t] @ (Vxx[t] @ (xs[t] - xs_try[t]))
+            d0, d1 = dg + dv, dq - 2.0 * dv
+            dVexp = alpha * (d0 + 0.5 * alpha * d1)
+            if (dVexp >= 0.0 and (abs(d0) < TH_GRAD or dV > TH_ACCEPT * dVexp)) or (
+                    dVexp < 0.0 and not feasible and dV > TH_ACCEPTNEG * dVexp):
+                was_feasible = feasible
+                xs[:] = xs_try
+                us[:] = us_try
+                feasible = was_feasible or alpha == 1.0
+                total = trial
+                recalc = True
+                break
+        if alpha > TH_STEPDEC:
+            preg = max(preg / REG_DEC, REG_MIN)
+        if alpha <= TH_STEPINC:
+            preg = min(preg * reg_inc, REG_MAX)
+            if preg == REG_MAX:
+                return False, it, total
+        if was_feasible and abs(d0 + 0.5 * d1) < th_stop:
+            return True, it, total
+    return False, maxiter, total

@@ -1,0 +1,135 @@
+"""The compiled FDDP against Crocoddyl's own SolverFDDP on the same node models, and the pair groups'
+bound against every pair's exact distance.
+
+Tolerances: both solvers run the same algorithm in double precision; the compiled one forms Fx^T V Fx
+and Quu^-1 in closed form where Crocoddyl multiplies and factorises matrices, so their iterates differ
+by rounding (measured <= 1e-12 on the states here), amplified by the iterations: 1e-8 leaves four
+orders of margin for other vector units. The group bound is a true lower bound up to rounding of the
+distances (~1e-15 m): 1e-12 m.
+"""
+
+from __future__ import annotations
+
+import crocoddyl
+import numpy as np
+import pytest
+
+from capmap.dualarm.broadphase import group_bound
+from capmap.dualarm.chain import fk, groups_of, pair_table, place_primitives
+from capmap.dualarm.fddp import ALPHAS, fddp, pack_nodes
+from capmap.dualarm.nodes import CompiledNodeModel
+from capmap.dualarm.proximity import batch_distances
+from capmap.dualarm.solver import REG_INCREASE
+
+
+def _models(small, seed):
+    asm, ctx, xs, us, keep = small
+    rng = np.random.default_rng(seed)
+    models = [CompiledNodeModel(ctx, k, asm.pairs.subset(keep[k]), "al", ctx.packed) for k in range(len(xs))]
+    for m in models:  # some multipliers on, as after a few outer iterations
+        m.lam_eq = rng.normal(size=m.m_eq)
+        m.lam_in = np.where(rng.random(m.n_in) < 0.1, np.abs(rng.normal(size=m.n_in)) * 50, 0.0)
+    return models
+
+
+def _crocoddyl(models, xs, us, maxiter, feasible, alphas=ALPHAS):
+    problem = crocoddyl.ShootingProblem(xs[0].copy(), models[:-1], models[-1])
+    solver = crocoddyl.SolverFDDP(problem)
+    solver.th_stop, solver.reg_incFactor, solver.alphas = 1e-9, REG_INCREASE, list(alphas)
+    ok = solver.solve(list(xs), list(us), maxiter, feasible)
+    return ok, int(solver.iter), float(solver.cost), np.array(solver.xs), np.array(solver.us), solver.isFeasible
+
+
+def _compiled(models, xs, us, maxiter, feasible, alphas=ALPHAS):
+    m = models[0]
+    nq = m.Fu.shape[1]
+    Luu = np.ascontiguousarray(np.broadcast_to(m.ctx.task.dt * np.diag(m.lim[0]), (len(models) - 1, nq, nq)))
+    xs, us = xs.copy(), us.copy()
+    ok, it, cost = fddp(pack_nodes(models), m.Fx[0, nq], m.Fu[0, 0], Luu, xs[0].copy(), xs, us, maxiter, feasible,
+                        m.ctx.mu, 1e-9, REG_INCREASE, np.asarray(alphas, dtype=float))
+    return ok, it, cost, xs, us
+
+
+# the feasible start perturbs the controls by 0.005 rad/s^2: larger steps drive cores through each other, where a
+# pair's gradient direction comes from rounding (closest points coincide) and two correct solvers part ways
+@pytest.mark.parametrize("maxiter, feasible, perturb", [(1, False, 0.0), (3, False, 0.0), (30, False, 0.0),
+                                                        (30, True, 0.005)])
+def test_compiled_fddp_takes_crocoddyls_steps(small, maxiter, feasible, perturb):
+    """The same iterations, acceptance and stop as Crocoddyl's SolverFDDP from an infeasible start (the
+    initial guess: gaps between the nodes) and from a feasible one (a rollout of perturbed controls)."""
+    asm, ctx, xs, us, _ = small
+    models = _models(small, 7)
+    if feasible:  # roll the perturbed controls out: no gaps
+        us = us + perturb * np.random.default_rng(8).normal(size=us.shape)
+        xs = xs.copy()
+        for k, m in enumerate(models[:-1]):
+            xs[k + 1] = m.Fx @ xs[k] + m.Fu @ us[k]
+    ref, fast = _crocoddyl(models, xs, us, maxiter, feasible), _compiled(models, xs, us, maxiter, feasible)
+    assert fast[:2] == ref[:2]  # converged, iterations
+    assert fast[2] == pytest.approx(ref[2], rel=1e-9)
+    assert np.abs(fast[3] - ref[3]).max() < 1e-8 and np.abs(fast[4] - ref[4]).max() < 1e-6
+    if maxiter == 30:
+        assert ref[1] > 2  # the comparison covered many steps, not one
+
+
+def test_compiled_fddp_takes_crocoddyls_partial_steps_across_gaps(small):
+    """Step lengths 1/2 and 1/4 only: the trials close part of the initial guess's gaps (FDDP's infeasible
+    rollout), which the full default step never exercises on this problem."""
+    asm, ctx, xs, us, _ = small
+    models = _models(small, 7)
+    ref, fast = _crocoddyl(models, xs, us, 3, False, (0.5, 0.25)), _compiled(models, xs, us, 3, False, (0.5, 0.25))
+    assert not ref[5]  # still infeasible: every step was partial
+    assert fast[:2] == ref[:2] and fast[2] == pytest.approx(ref[2], rel=1e-9)
+    assert np.abs(fast[3] - ref[3]).max() < 1e-8 and np.abs(fast[4] - ref[4]).max() < 1e-6
+
+
+def test_compiled_fddp_refuses_nodes_it_does_not_solve(small):
+    asm, ctx, xs, _, keep = small
+    with pytest.raises(ValueError, match="mode 'al'"):
+        pack_nodes([CompiledNodeModel(ctx, k, asm.pairs.subset(keep[k]), "constrained", ctx.packed) for k in range(3)])
+
+
+def test_group_bound_never_exceeds_a_pair_distance_and_drops_far_groups(small):
+    asm, ctx, xs, _, _ = small
+    pk = ctx.packed
+    rows, rsum = pair_table(pk, asm.pairs)
+    order, groups, spheres = groups_of(pk, rows)
+    real = groups[:, 2] > 0
+    assert real.sum() > 20 and (groups[real, 1] - groups[real, 0]).sum() > 0.5 * len(rows)  # most pairs are grouped
+    nj = pk.chain_f.shape[0]
+    R, p = np.empty((nj, 3, 3)), np.empty((nj, 3))
+    A, B, V = np.empty((len(pk.seg_f), 3)), np.empty((len(pk.seg_f), 3)), np.empty((len(pk.tri_f), 3, 3))
+    D = batch_distances(pk, xs[:, :14], asm.pairs)
+    dropped = 0
+    for k in range(len(xs)):
+        fk(pk.chain_f, pk.chain_i, xs[k, :14], R, p)
+        place_primitives(pk.seg_f, pk.seg_j, pk.tri_f, pk.tri_j, R, p, A, B, V)
+        for gi in np.flatnonzero(real):
+            lb = group_bound(A, B, V, rows, order, groups, spheres, gi)
+            members = order[groups[gi, 0]:groups[gi, 1]]
+            assert lb <= D[k, members].min() + 1e-12
+            dropped += lb > 0.1
+    assert dropped > 0.05 * real.sum() * len(xs)  # the bound does drop groups (measured 10 % here at 0.1 m)
+
+
+@pytest.mark.parametrize("k", [0, 10, 28, 35, 40])
+def test_node_with_its_groups_bounded_equals_the_node_with_every_distance(small, k):
+    """A group (or pair) skipped by its bound has a zero multiplier and clears the margin: the cost and its
+    derivatives are those of every pair's exact distance, bit for bit."""
+    asm, ctx, xs, us, keep = small
+    rng = np.random.default_rng(300 + k)
+    m = CompiledNodeModel(ctx, k, asm.pairs.subset(keep[k] | (rng.random(len(asm.pairs)) < 0.5)), "al", ctx.packed)
+    m.lam_eq = rng.normal(size=m.m_eq)
+    m.lam_in[:5] = 100.0  # a few pairs on, the rest skippable
+    exact = CompiledNodeModel(ctx, k, m.pairs, "al", ctx.packed)
+    exact.lam_eq, exact.lam_in = m.lam_eq, m.lam_in
+    exact._static = exact._static_exact
+    u = None if k == asm.task.N else us[k]
+    for x in (xs[k], xs[k] + 0.05 * rng.normal(size=28)):
+        da, db = m.createData(), exact.createData()
+        for model, d in ((m, da), (exact, db)):
+            model.calc(d, x, u) if u is not None else model.calc(d, x)
+            model.calcDiff(d, x, u) if u is not None else model.calcDiff(d, x)
+        assert da.cost == db.cost
+        for name in ("Lx", "Lxx", "Lu", "xnext"):
+            assert np.array_equal(getattr(da, name), getattr(db, name)), name
