@@ -17,3 +17,44 @@ below everything, plots only read DataFrames.
 """
 
 __version__ = "0.1.0"
+__all__ = ["numba_folder"]
+
+
+def numba_folder(package, base: str) -> str:
+    """The cache folder under ``base`` for the compiled sources (the files importing numba) of ``package``
+    (a folder): named by their content."""
+    import hashlib
+    from pathlib import Path
+
+    h = hashlib.sha256()
+    for f in sorted(Path(package).rglob("*.py")):
+        text = f.read_bytes()
+        if b"import numba" in text:
+            h.update(str(f.relative_to(package)).encode() + b"\0" + text)
+    return str(Path(base) / f"numba-{h.hexdigest()[:16]}")
+
+
+def _numba_cache_dir() -> None:
+    """Numba's on-disk cache in a folder per content of capmap's compiled sources (:func:`numba_folder`).
+    Numba checks a cached function against its own file's time stamp only, not the functions it calls in
+    other files, so an edit of a callee (the dual-arm node kernel, called by the compiled FDDP) would
+    leave its callers' cached code stale; a new folder per content recompiles everything instead
+    (``python -m capmap.kernels`` warms it). Under NUMBA_CACHE_DIR when set, else the package's
+    __pycache__ when writable, else the user's cache folder. Set before numba is imported (numba reads it
+    then), or in numba's config after."""
+    import os
+    import sys
+    from pathlib import Path
+
+    package = Path(__file__).resolve().parent
+    base = os.environ.get("CAPMAP_NUMBA_BASE") or os.environ.get("NUMBA_CACHE_DIR")
+    if not base:
+        base = str(package / "__pycache__") if os.access(package, os.W_OK) else str(Path.home() / ".cache" / "capmap")
+    os.environ["CAPMAP_NUMBA_BASE"] = base  # child processes derive theirs from the same base
+    folder = numba_folder(package, base)
+    os.environ["NUMBA_CACHE_DIR"] = folder
+    if "numba" in sys.modules:
+        sys.modules["numba"].config.CACHE_DIR = folder
+
+
+_numba_cache_dir()

@@ -1,5 +1,6 @@
-"""The compiled FDDP against Crocoddyl's own SolverFDDP on the same node models, and the pair groups'
-bound against every pair's exact distance.
+"""The compiled FDDP against Crocoddyl's own SolverFDDP on the same node models; the pair groups and their
+bound against every pair's exact distance; the primitives' motion bound and the node's memory of its
+last bounds against brute force and a node without it.
 
 Tolerances: both solvers run the same algorithm in double precision; the compiled one forms Fx^T V Fx
 and Quu^-1 in closed form where Crocoddyl multiplies and factorises matrices, so their iterates differ
@@ -14,8 +15,8 @@ import crocoddyl
 import numpy as np
 import pytest
 
-from capmap.dualarm.broadphase import group_bound
-from capmap.dualarm.chain import fk, groups_of, pair_table, place_primitives
+from capmap.dualarm.broadphase import MIN_GROUP, group_bound, pair_groups
+from capmap.dualarm.chain import fk, groups_of, joint_placements, levers, pair_table, place_primitives
 from capmap.dualarm.fddp import ALPHAS, fddp, pack_nodes
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.proximity import batch_distances
@@ -133,3 +134,90 @@ def test_node_with_its_groups_bounded_equals_the_node_with_every_distance(small,
         assert da.cost == db.cost
         for name in ("Lx", "Lxx", "Lu", "xnext"):
             assert np.array_equal(getattr(da, name), getattr(db, name)), name
+
+
+def test_pair_groups_partition_the_pairs_by_moving_primitive_and_body():
+    """Every pair in exactly one group; a group is one moving primitive against one static body (two pairs
+    at least), anything else a group of its own."""
+    rng = np.random.default_rng(0)
+    S, T, P = 40, 30, 300
+    seg_j, tri_j = rng.integers(0, 3, S), rng.integers(0, 2, T)
+    seg_g, tri_g = np.where(seg_j == 0, rng.integers(0, 5, S), -1), np.where(tri_j == 0, rng.integers(0, 5, T), -1)
+    balls, seg_r, tri_r = rng.random((5, 4)), rng.random(S), rng.random(T)
+    rows = np.column_stack([rng.integers(0, 2, P), rng.integers(0, S, P), np.zeros(P, int)])
+    rows[:, 2] = np.where(rows[:, 0] == 0, rng.integers(0, S, P), rng.integers(0, T, P))
+    order, groups, spheres = pair_groups(rows, seg_j, seg_r, tri_j, tri_r, seg_g, tri_g, balls)
+    cover = np.zeros(P, int)
+    for (s0, s1, col, is_tri), sphere in zip(groups, spheres):
+        members = rows[order[s0:s1]]
+        cover[order[s0:s1]] += 1
+        if not col:
+            assert s1 - s0 == 1
+            continue
+        assert s1 - s0 >= MIN_GROUP and len(set(members[:, col])) == 1  # one moving primitive
+        static = members[:, 3 - col]
+        tri_static = (members[:, 0] == 1) & (col == 1)
+        body = np.where(tri_static, tri_g[np.where(tri_static, static, 0)], seg_g[np.where(tri_static, 0, static)])
+        assert len(set(body)) == 1 and body[0] >= 0  # one static body
+        moving_r = seg_r[members[0, 1]] if col == 1 else (tri_r if is_tri else seg_r)[members[0, 2]]
+        assert np.allclose(sphere, [*balls[body[0], :3], balls[body[0], 3] + moving_r])
+    assert np.all(cover == 1)
+    assert (groups[:, 2] > 0).sum() > 10
+
+
+def test_levers_bound_how_far_every_primitive_moves(small):
+    """Brute force: each moving segment end and triangle vertex, placed at two configurations, moves at most
+    sum |dq_i| lever_i, for small and large steps."""
+    asm, ctx, xs, _, _ = small
+    pk = ctx.packed
+    ms, mt = np.flatnonzero(pk.seg_j > 0), np.flatnonzero(pk.tri_j > 0)
+    lever = levers(pk, ms, mt)
+    nj, rng = pk.chain_f.shape[0], np.random.default_rng(5)
+    R, p = np.empty((2, nj, 3, 3)), np.empty((2, nj, 3))
+    ratio = []
+    for step in (1e-3, 0.05, 0.5, 2.0):
+        for _ in range(20):
+            q0 = xs[rng.integers(len(xs)), :14] + rng.normal(size=14) * 0.3
+            qs = np.vstack([q0, q0 + step * rng.normal(size=14)])
+            joint_placements(pk.chain_f, pk.chain_i, qs, R, p)
+            pts = []
+            for k in range(2):
+                A, B, V = np.empty((len(pk.seg_f), 3)), np.empty((len(pk.seg_f), 3)), np.empty((len(pk.tri_f), 3, 3))
+                place_primitives(pk.seg_f, pk.seg_j, pk.tri_f, pk.tri_j, R[k], p[k], A, B, V)
+                pts.append((A[ms], B[ms], V[mt]))
+            moved = np.concatenate([np.maximum(np.linalg.norm(pts[1][0] - pts[0][0], axis=1),
+                                               np.linalg.norm(pts[1][1] - pts[0][1], axis=1)),
+                                    np.linalg.norm(pts[1][2] - pts[0][2], axis=2).max(axis=1)])
+            bound = lever @ np.abs(qs[1] - qs[0])
+            assert np.all(moved <= bound + 1e-12)
+            ratio.append(moved.max() / bound.max())
+    assert max(ratio) > 0.1  # not vacuous
+
+
+@pytest.mark.parametrize("k", [0, 20, 35])
+def test_node_calc_with_the_bounds_of_its_last_calcdiff_equals_a_fresh_node(small, k):
+    """A calc after calcDiff skips the pairs whose bound there, less the primitives' motion since, clears the
+    margin: the cost and next state are those of a node without that memory, bit for bit, also where the
+    motion brings pairs within the margin."""
+    asm, ctx, xs, us, keep = small
+    rng = np.random.default_rng(400 + k)
+    pairs = asm.pairs.subset(keep[k])
+    m = CompiledNodeModel(ctx, k, pairs, "al", ctx.packed)
+    m.lam_eq = rng.normal(size=m.m_eq)
+    m.lam_in[:3] = 50.0
+    u = None if k == asm.task.N else us[k]
+    d = m.createData()
+    m.calcDiff(d, xs[k], u) if u is not None else m.calcDiff(d, xs[k])
+    assert np.isfinite(m.ref_q).all()
+    penetrating = 0
+    for scale in (1e-4, 1e-2, 0.1, 0.3):
+        for _ in range(5):
+            x = xs[k] + np.concatenate([scale * rng.normal(size=14), rng.normal(size=14)])
+            fresh = CompiledNodeModel(ctx, k, pairs, "al", ctx.packed)
+            fresh.lam_eq, fresh.lam_in = m.lam_eq, m.lam_in
+            da, db = m.createData(), fresh.createData()
+            for model, dd in ((m, da), (fresh, db)):
+                model.calc(dd, x, u) if u is not None else model.calc(dd, x)
+            assert da.cost == db.cost and np.array_equal(da.xnext, db.xnext)
+            penetrating += int((fresh.values(x)[1][:len(pairs)] < 0).any())
+    assert penetrating > 0  # some motions did bring pairs within the margin

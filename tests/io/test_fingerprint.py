@@ -149,3 +149,27 @@ def test_the_disk_cache_serves_the_same_sources_and_not_edited_ones(tmp_path, mo
     finally:
         for f in _CACHED:
             f.cache_clear()
+
+
+def test_numba_cache_folder_follows_every_compiled_source_and_only_those(tmp_path):
+    """Numba checks a cached function against its own file only: an edit of a callee in another file must
+    move the whole cache (capmap.numba_folder), an edit elsewhere must not."""
+    from pathlib import Path
+
+    import numba
+
+    import capmap
+    from capmap import numba_folder
+
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "caller.py").write_text("import numba\nfrom pkg.sub.callee import f\n")
+    (pkg / "sub" / "callee.py").write_text("import numba\n\n@numba.njit(cache=True)\ndef f(x):\n    return x\n")
+    (pkg / "plain.py").write_text("X = 1\n")
+    first = numba_folder(pkg, "/base")
+    (pkg / "plain.py").write_text("X = 2\n")
+    assert numba_folder(pkg, "/base") == first
+    (pkg / "sub" / "callee.py").write_text("import numba\n\n@numba.njit(cache=True)\ndef f(x):\n    return 2 * x\n")
+    assert numba_folder(pkg, "/base") != first and numba_folder(pkg, "/base").startswith("/base/numba-")
+    # and capmap's own kernels use the folder of its sources
+    assert numba.config.CACHE_DIR == numba_folder(Path(capmap.__file__).parent, Path(numba.config.CACHE_DIR).parent)

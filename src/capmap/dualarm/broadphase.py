@@ -46,36 +46,48 @@ def pair_groups(rows: np.ndarray, seg_j: np.ndarray, seg_r: np.ndarray, tri_j: n
     ``order``, the column of ``rows`` naming the moving primitive (0: test each pair on its own) and 1
     when that primitive is a triangle; spheres (G, 4): the body's centre m and its reach plus the moving
     primitive's radius m)."""
-    if not len(rows):
-        return np.zeros(0, np.int64), np.zeros((0, 4), np.int64), np.zeros((0, 4))
-    kind, a, b = rows[:, 0], rows[:, 1], rows[:, 2]
-    tri = kind == 1
-    b_joint, b_body, b_r = seg_j[b * ~tri], seg_g[b * ~tri], seg_r[b * ~tri]  # (index 0 where b is a triangle)
-    b_joint[tri], b_body[tri], b_r[tri] = tri_j[b[tri]], tri_g[b[tri]], tri_r[b[tri]]
-    b_static, a_static = b_joint == 0, seg_j[a] == 0
-    col = np.where(~a_static & b_static, 1, np.where(a_static & ~b_static, 2, 0))
-    body = np.where(col == 1, b_body, np.where(col == 2, seg_g[a], -1))
-    moving = np.where(col == 1, a, b)
-    r_moving = np.where(col == 1, seg_r[a], b_r)
-    key = np.where(col > 0, (col.astype(np.int64) << 60) + (moving.astype(np.int64) << 30) + body, -1)
-    order = np.lexsort((np.arange(len(rows)), key)).astype(np.int64)
-    ks = key[order]
-    starts = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
-    ends = np.r_[starts[1:], len(rows)].astype(np.int64)
-    first = order[starts]
-    grouped = (col[first] > 0) & (ends - starts >= MIN_GROUP)
-    # a run that is not a group: one group per pair, tested on its own (column 0)
-    size = np.where(grouped, 1, ends - starts)
-    g_start = np.repeat(starts, size) + (np.arange(size.sum()) - np.repeat(np.cumsum(size) - size, size))
-    g_grouped = np.repeat(grouped, size)
-    g_end = np.where(g_grouped, np.repeat(ends, size), g_start + 1)
-    g_first = order[g_start]
-    g_col = np.where(g_grouped, col[g_first], 0)
-    groups = np.column_stack([g_start, g_end, g_col, (g_grouped & (kind[g_first] == 1) & (g_col == 2)).astype(np.int64)])
-    spheres = np.zeros((len(groups), 4))
-    spheres[g_grouped, :3] = balls[body[g_first[g_grouped]], :3]
-    spheres[g_grouped, 3] = balls[body[g_first[g_grouped]], 3] + r_moving[g_first[g_grouped]]
-    return order, np.ascontiguousarray(groups, dtype=np.int64).reshape(-1, 4), spheres
+    return _pair_groups(np.ascontiguousarray(rows, dtype=np.int64), seg_j, seg_r, tri_j, tri_r, seg_g, tri_g, balls,
+                        MIN_GROUP)
+
+
+@numba.njit(cache=True)
+def _pair_groups(rows, seg_j, seg_r, tri_j, tri_r, seg_g, tri_g, balls, min_group):
+    P = rows.shape[0]
+    key = np.empty(P, np.int64)
+    col, body, rmov = np.zeros(P, np.int64), np.full(P, -1, np.int64), np.zeros(P)
+    for n in range(P):
+        kind, a, b = rows[n, 0], rows[n, 1], rows[n, 2]
+        b_static = (seg_j[b] if kind == 0 else tri_j[b]) == 0
+        a_static = seg_j[a] == 0
+        if not a_static and b_static:
+            col[n], body[n], rmov[n] = 1, seg_g[b] if kind == 0 else tri_g[b], seg_r[a]
+            key[n] = (1 << 60) + (a << 30) + body[n]
+        elif a_static and not b_static:
+            col[n], body[n], rmov[n] = 2, seg_g[a], seg_r[b] if kind == 0 else tri_r[b]
+            key[n] = (2 << 60) + (b << 30) + body[n]
+        else:
+            key[n] = -1
+    order = np.argsort(key, kind="mergesort")  # stable: pairs keep their order within a group
+    groups, spheres = np.zeros((P, 4), np.int64), np.zeros((P, 4))
+    G, s = 0, 0
+    while s < P:
+        e = s + 1
+        while e < P and key[order[e]] == key[order[s]]:
+            e += 1
+        n = order[s]
+        if col[n] > 0 and e - s >= min_group:
+            groups[G, 0], groups[G, 1], groups[G, 2] = s, e, col[n]
+            groups[G, 3] = 1 if rows[n, 0] == 1 and col[n] == 2 else 0
+            for i in range(3):
+                spheres[G, i] = balls[body[n], i]
+            spheres[G, 3] = balls[body[n], 3] + rmov[n]
+            G += 1
+        else:  # one group per pair, tested on its own (column 0)
+            for t in range(s, e):
+                groups[G, 0], groups[G, 1] = t, t + 1
+                G += 1
+        s = e
+    return order.astype(np.int64), groups[:G].copy(), spheres[:G].copy()
 
 
 @numba.njit(cache=True)

@@ -23,7 +23,8 @@ from capmap.dualarm.collision import Pairs, Primitives
 from capmap.dualarm.distance import segseg, segtri
 
 __all__ = ["Packed", "pack", "fk", "pair_table", "place_primitives", "plane_gap", "lower_bound", "distances",
-           "groups_of"]
+           "groups_of", "joint_placements", "levers",
+           "static_bound", "place_moving"]
 
 _jit = numba.njit(cache=True)  # plain calls (numba's IR inlining, inline="always", compiles several times slower)
 
@@ -34,8 +35,12 @@ class Packed:
     the universe); moves (nj, nv) bool: the columns that move joint j's body; frame_f (3, 12): R,
     p of the left gripper, right gripper and panel frames in their joints; frame_j (3,);
     seg_f (S, 6): segment ends a, b (in their joint's frame, world for joint 0); seg_j (S,);
-    seg_r (S,); tri_f (T, 9); tri_j (T,); tri_r (T,); seg_g (S,), tri_g (T,), balls (G, 4): the static
-    primitives' bodies and their balls (:func:`capmap.dualarm.broadphase.static_balls`)."""
+    seg_r (S,); tri_f (T, 17): vertices (9) in their joint's frame, then for :func:`static_bound` the
+    centroid (3), reach (1), unit normal (3) and plane offset (1); tri_j (T,); tri_r (T,); seg_g (S,),
+    tri_g (T,), balls (G, 4): the static primitives' bodies and their balls
+    (:func:`capmap.dualarm.broadphase.static_balls`); reach (nj, nv):
+    a bound on the distance from joint j's origin to the origin of column i's joint, in any configuration
+    (the lengths of the placements between them), where column i moves joint j."""
 
     chain_f: np.ndarray
     chain_i: np.ndarray
@@ -51,6 +56,7 @@ class Packed:
     seg_g: np.ndarray
     tri_g: np.ndarray
     balls: np.ndarray
+    reach: np.ndarray
 
 
 def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> Packed | str:
@@ -87,7 +93,22 @@ def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> P
     tri = (np.ascontiguousarray(prims.tri_v.reshape(-1, 9), dtype=float), prims.tri_joint.astype(np.int64),
            prims.tri_r.astype(float))
     groups = static_balls(*seg, prims.seg_body, *tri, prims.tri_body)
-    return Packed(chain_f, chain_i, moves, frame_f, frame_j, *seg, *tri, *groups)
+    v = tri[0].reshape(-1, 3, 3)
+    ctr = v.mean(axis=1)
+    reach = np.linalg.norm(v - ctr[:, None], axis=2).max(axis=1, initial=0.0)
+    nrm = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    size = np.linalg.norm(nrm, axis=1)
+    nrm = np.where(size[:, None] > 0, nrm / np.where(size > 0, size, 1.0)[:, None], 0.0)  # 0: no plane bound
+    ext = np.column_stack([ctr, reach, nrm, np.einsum("ij,ij->i", nrm, v[:, 0])])
+    tri = (np.ascontiguousarray(np.hstack([tri[0], ext])),) + tri[1:]
+    reach = np.zeros((nj, model.nv))
+    for j in range(1, nj):
+        length, l = 0.0, j
+        while l > 0:  # up the chain: |o_l - o_parent(l)| = |placement translation of l|
+            reach[j, chain_i[l, 1]] = length
+            length += np.linalg.norm(chain_f[l, 9:12])
+            l = chain_i[l, 0]
+    return Packed(chain_f, chain_i, moves, frame_f, frame_j, *seg, *tri, *groups, reach)
 
 
 def pair_table(packed: Packed, pairs: Pairs) -> tuple[np.ndarray, np.ndarray]:
@@ -98,6 +119,18 @@ def pair_table(packed: Packed, pairs: Pairs) -> tuple[np.ndarray, np.ndarray]:
                       np.column_stack([np.ones(len(st), np.int64), st])]).astype(np.int64)
     rsum = np.concatenate([packed.seg_r[ss[:, 0]] + packed.seg_r[ss[:, 1]], packed.seg_r[st[:, 0]] + packed.tri_r[st[:, 1]]])
     return np.ascontiguousarray(rows), rsum
+
+
+def levers(packed: Packed, seg: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """(len(seg) + len(tri), nv): how far (m) a point of each of those segments, then triangles, moves per
+    radian of each column, at most, in any configuration: the reach from its joint's origin to the column's
+    joint plus its own extent from its joint's origin (a rotation dq about an axis through o moves X by at
+    most |dq| |X - o|); 0 for a static primitive or a column that does not move it."""
+    pk = packed
+    far = np.concatenate([np.maximum(np.linalg.norm(pk.seg_f[seg, :3], axis=1), np.linalg.norm(pk.seg_f[seg, 3:6], axis=1)),
+                          np.linalg.norm(pk.tri_f[tri, :9].reshape(-1, 3, 3), axis=2).max(axis=1, initial=0.0)])
+    joint = np.concatenate([pk.seg_j[seg], pk.tri_j[tri]])
+    return np.ascontiguousarray(np.where(pk.moves[joint], pk.reach[joint] + far[:, None], 0.0) * (joint > 0)[:, None])
 
 
 def groups_of(packed: Packed, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -134,6 +167,13 @@ def fk(chain_f, chain_i, q, R, p):
 
 
 @_jit
+def joint_placements(chain_f, chain_i, qs, R, p):
+    """World placements R (K, nj, 3, 3), p (K, nj, 3) of every joint at each configuration qs (K, nq)."""
+    for k in range(qs.shape[0]):
+        fk(chain_f, chain_i, qs[k], R[k], p[k])
+
+
+@_jit
 def place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V):
     """World segment ends A, B (S, 3) and triangles V (T, 3, 3) at the joint placements R, p."""
     for s in range(seg_f.shape[0]):
@@ -153,6 +193,27 @@ def place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V):
                 else:
                     V[t, k, i] = (p[j, i] + R[j, i, 0] * tri_f[t, 3 * k] + R[j, i, 1] * tri_f[t, 3 * k + 1]
                                   + R[j, i, 2] * tri_f[t, 3 * k + 2])
+
+
+@_jit
+def place_moving(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V):
+    """World segment ends A, B (S, 3) and triangles V (T, 3, 3) of the moving primitives (joint > 0) at the
+    joint placements R, p; the static ones' rows are left as they are."""
+    for s in range(seg_f.shape[0]):
+        j = seg_j[s]
+        if j == 0:
+            continue
+        for i in range(3):
+            A[s, i] = p[j, i] + R[j, i, 0] * seg_f[s, 0] + R[j, i, 1] * seg_f[s, 1] + R[j, i, 2] * seg_f[s, 2]
+            B[s, i] = p[j, i] + R[j, i, 0] * seg_f[s, 3] + R[j, i, 1] * seg_f[s, 4] + R[j, i, 2] * seg_f[s, 5]
+    for t in range(tri_f.shape[0]):
+        j = tri_j[t]
+        if j == 0:
+            continue
+        for k in range(3):
+            for i in range(3):
+                V[t, k, i] = (p[j, i] + R[j, i, 0] * tri_f[t, 3 * k] + R[j, i, 1] * tri_f[t, 3 * k + 1]
+                              + R[j, i, 2] * tri_f[t, 3 * k + 2])
 
 
 @_jit
@@ -198,6 +259,21 @@ def lower_bound(A, B, V, kind, a, b):
     for m in range(3):
         reach = max(reach, np.sqrt((V[b, m, 0] - cx) ** 2 + (V[b, m, 1] - cy) ** 2 + (V[b, m, 2] - cz) ** 2))
     return max(_point_segment(A, B, a, cx, cy, cz) - reach, plane_gap(A, B, a, V, b))
+
+
+@_jit
+def static_bound(A, B, s, tri_f, t):
+    """A lower bound (m) of the distance from segment A[s] -> B[s] to the static triangle tri_f[t] (world
+    coordinates, with its centroid, reach, normal and offset): the larger of the distance to its centroid
+    less its reach and, when both ends lie on one side of its plane, the nearer end's distance to it."""
+    lb = _point_segment(A, B, s, tri_f[t, 9], tri_f[t, 10], tri_f[t, 11]) - tri_f[t, 12]
+    nx, ny, nz, off = tri_f[t, 13], tri_f[t, 14], tri_f[t, 15], tri_f[t, 16]
+    if nx != 0.0 or ny != 0.0 or nz != 0.0:
+        da = nx * A[s, 0] + ny * A[s, 1] + nz * A[s, 2] - off
+        db = nx * B[s, 0] + ny * B[s, 1] + nz * B[s, 2] - off
+        if da * db > 0.0:
+            lb = max(lb, min(abs(da), abs(db)))
+    return lb
 
 
 @_jit

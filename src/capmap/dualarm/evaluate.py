@@ -12,7 +12,7 @@ import pinocchio as pin
 
 from capmap.dualarm.assembly import Assembly
 from capmap.dualarm.chain import pack
-from capmap.dualarm.proximity import batch_distances
+from capmap.dualarm.proximity import near_pairs
 from capmap.dualarm.task import node_constraints
 
 __all__ = ["NodeErrors", "node_errors", "fine_grid", "Safety", "safety", "active_pairs"]
@@ -66,9 +66,9 @@ def fine_grid(xs: np.ndarray, us: np.ndarray, dt: float, factor: int) -> tuple[n
 
 @dataclass(frozen=True)
 class Safety:
-    """distance (M, P): every candidate pair's safety distance at every configuration (inf where
-    :func:`safety` shows it above its cutoff, or above both ``within_m`` and the least); names (P,)
-    'a vs b' of the bodies of each pair."""
+    """distance (M, P): safety distances at every configuration of the candidate pairs :func:`safety`
+    evaluated somewhere (inf where it shows one above its cutoff, or above both ``within_m`` and the
+    least; a pair it never evaluates is left out); names (P,) 'a vs b' of the bodies of each pair."""
 
     distance: np.ndarray
     names: np.ndarray
@@ -93,12 +93,16 @@ def safety(asm: Assembly, qs: np.ndarray, cutoff_m: float = 0.2, within_m: float
     t = asm.task
     packed = pack(asm.model, (t.left, t.right, t.panel), asm.collision.prims)
     if not isinstance(packed, str):
-        D = batch_distances(packed, qs, asm.pairs, cutoff=cutoff_m, within=within_m)
+        # only the pairs evaluated somewhere are kept (a pair left out would be an inf column)
+        k, n, d = near_pairs(packed, qs, asm.pairs, cutoff=cutoff_m, within=within_m)
+        cols = np.unique(n) if len(n) or not len(asm.pairs) else np.zeros(1, np.int64)
+        D = np.full((len(qs), len(cols)), np.inf)
+        D[k, np.searchsorted(cols, n)] = d
         P = asm.collision.prims
-        i, k, tt = asm.pairs.ss, asm.pairs.st[:, 0], asm.pairs.st[:, 1]
-        names = np.array([f"{a} vs {b}" for a, b in zip(np.concatenate([P.seg_body[i[:, 0]], P.seg_body[k]]),
-                                                         np.concatenate([P.seg_body[i[:, 1]], P.tri_body[tt]]))],
-                         dtype=object)
+        i, kk, tt = asm.pairs.ss, asm.pairs.st[:, 0], asm.pairs.st[:, 1]
+        first, second = np.concatenate([P.seg_body[i[:, 0]], P.seg_body[kk]]), np.concatenate([P.seg_body[i[:, 1]],
+                                                                                                P.tri_body[tt]])
+        names = np.array([f"{a} vs {b}" for a, b in zip(first[cols], second[cols])], dtype=object)
         return Safety(D, names)
     data = asm.model.createData()
     D = np.empty((len(qs), len(asm.pairs)))

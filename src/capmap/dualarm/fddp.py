@@ -20,9 +20,12 @@ import numpy as np
 
 from capmap.dualarm.node_kernel import node_eval
 
-__all__ = ["pack_nodes", "fddp", "evaluate_nodes", "ALPHAS"]
+__all__ = ["pack_nodes", "fddp", "evaluate_nodes", "ALPHAS", "LAM_EQ", "EQ_AT", "LAM_IN", "IN_AT", "C_VALUES",
+           "G_VALUES"]
 
 ALPHAS = 0.5 ** np.arange(10)  # Crocoddyl's step lengths
+# where pack_nodes() puts the multipliers, their node offsets and the nodes' constraint values
+LAM_EQ, EQ_AT, LAM_IN, IN_AT, C_VALUES, G_VALUES = 29, 30, 31, 32, 33, 35
 REG_MIN, REG_MAX, REG_DEC = 1e-9, 1e9, 10.0
 TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEPINC = 0.1, 2.0, 1e-12, 0.5, 0.01
 
@@ -45,36 +48,42 @@ def pack_nodes(models: list) -> tuple:
 
     seg_f, so = cat(5, (0, 6))
     seg_j, _ = cat(6, (0,))
-    tri_f, to = cat(7, (0, 9))
+    tri_f, to = cat(7, (0, models[0].packed.tri_f.shape[1]))
     tri_j, _ = cat(8, (0,))
-    rows, po = cat(9, (0, 3))
-    rsum, _ = cat(10, (0,))
-    order, _ = cat(11, (0,))
-    groups, go = cat(12, (0, 4))
-    spheres, _ = cat(13, (0, 4))
-    kind = np.array([s[14] for s in st], dtype=np.int64)
-    tg, axis, par = (c(np.stack([s[i] for s in st])) for i in (15, 16, 17))
+    Aw, _ = cat(9, (0, 3))
+    Bw, _ = cat(10, (0, 3))
+    Vw, _ = cat(11, (0, 3, 3))
+    lever, _ = cat(12, (0, models[0].packed.reach.shape[1]))
+    rows, po = cat(15, (0, 3))
+    rsum, _ = cat(16, (0,))
+    order, _ = cat(17, (0,))
+    groups, go = cat(18, (0, 4))
+    spheres, _ = cat(19, (0, 4))
+    kind = np.array([s[20] for s in st], dtype=np.int64)
+    tg, axis, par = (c(np.stack([s[i] for s in st])) for i in (21, 22, 23))
+    ref_lb, ref_q = c(np.concatenate([s[13] for s in st])), c(np.stack([s[14] for s in st]))
     lam_eq, eo = c(np.concatenate([m.lam_eq for m in models])), _offsets([m.m_eq for m in models])
     lam_in, io = c(np.concatenate([m.lam_in for m in models])), _offsets([m.n_in for m in models])
     s0 = st[0]
     return (s0[0], s0[1], s0[2], s0[3], s0[4], seg_f, seg_j.astype(np.int64), so, tri_f, tri_j.astype(np.int64), to,
-            rows.astype(np.int64), rsum, po, order.astype(np.int64), groups.astype(np.int64), spheres, go, kind, tg,
-            axis, par, s0[18], lam_eq, eo, lam_in, io, np.empty(len(lam_eq)), np.empty((len(lam_eq), len(s0[2][0]) * 2)),
-            np.empty(len(lam_in)))
+            Aw, Bw, Vw, lever, ref_lb, ref_q, rows.astype(np.int64), rsum, po, order.astype(np.int64),
+            groups.astype(np.int64), spheres, go, kind, tg, axis, par, s0[24], lam_eq, eo, lam_in, io,
+            np.empty(len(lam_eq)), np.empty((len(lam_eq), len(s0[2][0]) * 2)), np.empty(len(lam_in)))
 
 
 @numba.njit(cache=True)
 def _eval(P, k, x, u, mu, diff, exact, Lx, Lxx, Lu, xnext):
     """Node k's cost (node_eval on its slice of the packed nodes ``P``); ``exact``: every pair's distance."""
-    (chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, so, tri_f, tri_j, to, rows, rsum, po, order, groups,
-     spheres, go, kind, tg, axis, par, lim, lam_eq, eo, lam_in, io, c, C, g) = P
+    (chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, so, tri_f, tri_j, to, Aw, Bw, Vw, lever, ref_lb, ref_q,
+     rows, rsum, po, order, groups, spheres, go, kind, tg, axis, par, lim, lam_eq, eo, lam_in, io, c, C, g) = P
     s0, s1, t0, t1, p0, p1 = so[k], so[k + 1], to[k], to[k + 1], po[k], po[k + 1]
     g0, g1, e0, e1, i0, i1 = go[k], go[k + 1], eo[k], eo[k + 1], io[k], io[k + 1]
     pr = par[k].copy()
     if exact:
         pr[8] = 0.0
     return node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f[s0:s1], seg_j[s0:s1], tri_f[t0:t1], tri_j[t0:t1],
-                     rows[p0:p1], rsum[p0:p1], order[p0:p1], groups[g0:g1], spheres[g0:g1], kind[k], tg[k], axis[k], pr,
+                     Aw[s0:s1], Bw[s0:s1], Vw[t0:t1], lever[s0 + t0:s1 + t1], ref_lb[p0:p1], ref_q[k], rows[p0:p1],
+                     rsum[p0:p1], order[p0:p1], groups[g0:g1], spheres[g0:g1], kind[k], tg[k], axis[k], pr,
                      lim, lam_eq[e0:e1], lam_in[i0:i1], x, u, mu, diff, c[e0:e1], C[e0:e1], g[i0:i1], Lx, Lxx, Lu, xnext)
 
 
@@ -112,17 +121,19 @@ def _chol_solve(A, L, B):
             for p in range(j):
                 s -= L[i, p] * L[j, p]
             L[i, j] = s / L[j, j]
-    for col in range(B.shape[1]):
-        for i in range(n):
-            s = B[i, col]
-            for p in range(i):
-                s -= L[i, p] * B[p, col]
-            B[i, col] = s / L[i, i]
-        for i in range(n - 1, -1, -1):
-            s = B[i, col]
-            for p in range(i + 1, n):
-                s -= L[p, i] * B[p, col]
-            B[i, col] = s / L[i, i]
+    m = B.shape[1]
+    for i in range(n):  # row by row, each column's sums in the same order as a column-by-column solve
+        for p in range(i):
+            for col in range(m):
+                B[i, col] -= L[i, p] * B[p, col]
+        for col in range(m):
+            B[i, col] /= L[i, i]
+    for i in range(n - 1, -1, -1):
+        for p in range(i + 1, n):
+            for col in range(m):
+                B[i, col] -= L[p, i] * B[p, col]
+        for col in range(m):
+            B[i, col] /= L[i, i]
     return True
 
 

@@ -7,7 +7,7 @@ import numba
 import numpy as np
 
 from capmap.dualarm.broadphase import group_bound
-from capmap.dualarm.chain import fk, lower_bound, place_primitives
+from capmap.dualarm.chain import fk, lower_bound, place_moving, static_bound
 from capmap.dualarm.distance import segseg, segtri
 from capmap.dualarm.lie import jlog3, jlog6, log3, log6
 
@@ -35,13 +35,19 @@ def _pose_rows(Je, Jl, out, row, nv):
 
 
 @numba.njit(cache=True)
-def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tri_j, rows, rsum, order, groups,
-              spheres, kind, tg, axis, par, lim, lam_eq, lam_in, x, u, mu, diff, c, C, g, Lx, Lxx, Lu, xnext):
+def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tri_j, A, B, V, lever, ref_lb, ref_q,
+              rows, rsum, order, groups, spheres, kind, tg, axis, par, lim, lam_eq, lam_in, x, u, mu, diff, c, C, g, Lx, Lxx,
+              Lu, xnext):
     """One node: returns the cost; fills c (m,), g (p,) and without ``diff`` the next state xnext
     (2 nq,), with ``diff`` C (m, 2 nq), Lx (2 nq), Lxx (2 nq, 2 nq), Lu (nq). par: dt, w_velocity,
     w_panel, margin, scale, running (0/1), limits (0/1), al (0/1), bound (0/1: a pair with a zero
     multiplier and a lower bound above the margin gets that bound as g, exact distances otherwise);
-    lim (4, nq): w_control, q_lower, q_upper, v_max; order, groups, spheres: the pairs' groups
+    lim (4, nq): w_control, q_lower, q_upper, v_max; A, B (S, 3), V (T, 3, 3): the primitives' world
+    coordinates, the static ones' given, the moving ones' written here; lever (S + T, nq): how far a point
+    of each primitive moves per radian of each joint; ref_lb (P,), ref_q (nq,): the pairs' lower bounds
+    at the configuration of the last evaluation with ``diff`` and ``bound`` (which writes them; ref_q nan:
+    none), that bound them anywhere else less the primitives' motion since (a calc without ``diff``
+    skips a pair whose multiplier is zero and whose bound so moved clears the margin); order, groups, spheres: the pairs' groups
     (:func:`capmap.dualarm.broadphase.pair_groups`): with ``bound``, a group whose pairs all have zero
     multipliers and whose bound clears the margin gets that bound as every pair's g."""
     dt, wv, wp, margin, scale = par[0], par[1], par[2], par[3], par[4]
@@ -162,10 +168,26 @@ def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tr
     npair = rows.shape[0]
     P, Q = np.empty((npair, 3)), np.empty((npair, 3))
     if npair:
-        A, B = np.empty((seg_f.shape[0], 3)), np.empty((seg_f.shape[0], 3))
-        V = np.empty((tri_f.shape[0], 3, 3))
-        place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
-        for gi in range(groups.shape[0]):
+        done = np.zeros(npair, np.bool_)
+        left = npair
+        if bound and not diff and not np.isnan(ref_q[0]):
+            # the bounds at ref_q less how far each primitive moved since (a point moves at most sum |dq_i| lever_i)
+            nS = seg_f.shape[0]
+            dm = np.zeros(lever.shape[0])
+            for e in range(lever.shape[0]):
+                for i in range(nq):
+                    dm[e] += lever[e, i] * abs(q[i] - ref_q[i])
+            for n in range(npair):
+                if lam_in[n] == 0.0:
+                    moved = dm[rows[n, 1]] + (dm[rows[n, 2]] if rows[n, 0] == 0 else dm[nS + rows[n, 2]])
+                    lb = ref_lb[n] - moved - margin
+                    if lb > 0.0:
+                        g[n] = lb
+                        done[n] = True
+                        left -= 1
+        if left:
+            place_moving(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
+        for gi in range(groups.shape[0] if left else 0):
             s0, s1 = groups[gi, 0], groups[gi, 1]
             # pairs with no multiplier whose lower bound clears the margin contribute nothing to the cost
             # or its derivatives: their g is that (positive) bound, the exact distance is skipped
@@ -183,8 +205,13 @@ def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tr
                         continue
             for t in range(s0, s1):
                 n = order[t]
+                if done[n]:
+                    continue
                 if bound and lam_in[n] == 0.0:
-                    lb = lower_bound(A, B, V, rows[n, 0], rows[n, 1], rows[n, 2]) - rsum[n] - margin
+                    if rows[n, 0] == 1 and tri_j[rows[n, 2]] == 0:  # a static triangle: its centre, reach, plane
+                        lb = static_bound(A, B, rows[n, 1], tri_f, rows[n, 2]) - rsum[n] - margin
+                    else:
+                        lb = lower_bound(A, B, V, rows[n, 0], rows[n, 1], rows[n, 2]) - rsum[n] - margin
                     if lb > 0.0:
                         g[n] = lb
                         continue
@@ -193,6 +220,11 @@ def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tr
                 else:
                     core = segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, n)
                 g[n] = core - rsum[n] - margin
+        if bound and diff:  # every pair's g + margin is a lower bound of its safety distance here
+            for n in range(npair):
+                ref_lb[n] = g[n] + margin
+            for i in range(nq):
+                ref_q[i] = q[i]
     if limits:
         for i in range(nq):
             g[npair + i] = q[i] - lim[1, i]

@@ -17,7 +17,7 @@ import crocoddyl
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.chain import Packed, groups_of, pack, pair_table
+from capmap.dualarm.chain import Packed, groups_of, joint_placements, levers, pack, pair_table
 from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
 from capmap.dualarm.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
 from capmap.dualarm.node_kernel import node_eval
@@ -56,8 +56,10 @@ def node_targets(task, k: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _compact(pk: Packed, rows: np.ndarray):
-    """(seg_f, seg_j, tri_f, tri_j, rows) with only the primitives that ``rows`` (P, 3) name, renumbered:
-    a node places the few its pairs use, not the whole scene's."""
+    """(seg_f, seg_j, tri_f, tri_j, A, B, V, rows, lever) with only the primitives that ``rows`` (P, 3) name,
+    renumbered (a node places the few its pairs use, not the whole scene's), their world coordinates
+    (segment ends A, B (S, 3), triangles V (T, 3, 3)) where static, and their levers (S + T, nv): how far
+    a point of each moves per radian of each column, at most."""
     seg = np.unique(np.concatenate([rows[:, 1], rows[rows[:, 0] == 0, 2]])).astype(np.int64)
     tri = np.unique(rows[rows[:, 0] == 1, 2]).astype(np.int64)
     seg_new, tri_new = np.zeros(len(pk.seg_f), np.int64), np.zeros(len(pk.tri_f), np.int64)
@@ -67,7 +69,11 @@ def _compact(pk: Packed, rows: np.ndarray):
     ss = rows[:, 0] == 0
     out[ss, 2], out[~ss, 2] = seg_new[rows[ss, 2]], tri_new[rows[~ss, 2]]
     c = np.ascontiguousarray
-    return c(pk.seg_f[seg]), c(pk.seg_j[seg]), c(pk.tri_f[tri]), c(pk.tri_j[tri]), c(out)
+    seg_f, seg_j, tri_f, tri_j = c(pk.seg_f[seg]), c(pk.seg_j[seg]), c(pk.tri_f[tri]), c(pk.tri_j[tri])
+    # world coordinates: the static primitives' (their joint-0 coordinates), the moving ones' written by each call
+    Aw, Bw, Vw = c(seg_f[:, :3] * (seg_j == 0)[:, None]), c(seg_f[:, 3:6] * (seg_j == 0)[:, None]), c(
+        tri_f[:, :9].reshape(-1, 3, 3) * (tri_j == 0)[:, None, None])
+    return seg_f, seg_j, tri_f, tri_j, Aw, Bw, Vw, c(out), levers(pk, seg, tri)
 
 
 class CompiledNodeModel(crocoddyl.ActionModelAbstract):
@@ -100,9 +106,12 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
         self._u0 = np.zeros(nq)
         self._vdata = None
         pk = packed
-        seg_f, seg_j, tri_f, tri_j, rows = _compact(pk, self.rows)
-        self._static = (pk.chain_f, pk.chain_i, pk.moves, pk.frame_f, pk.frame_j, seg_f, seg_j, tri_f, tri_j,
-                        rows, self.rsum, *groups_of(pk, self.rows), self.kind, self.tg, self.axis, self.par, self.lim)
+        seg_f, seg_j, tri_f, tri_j, Aw, Bw, Vw, rows, lever = _compact(pk, self.rows)
+        # the pairs' lower bounds at the last calcDiff's configuration ref_q (nan: none yet), for calc
+        self.ref_lb, self.ref_q = np.full(len(rows), -np.inf), np.full(nq, np.nan)
+        self._static = (pk.chain_f, pk.chain_i, pk.moves, pk.frame_f, pk.frame_j, seg_f, seg_j, tri_f, tri_j, Aw, Bw, Vw,
+                        lever, self.ref_lb, self.ref_q, rows, self.rsum, *groups_of(pk, self.rows), self.kind, self.tg,
+                        self.axis, self.par, self.lim)
         exact = self.par.copy()
         exact[8] = 0.0  # values(): every pair's exact distance
         self._static_exact = self._static[:-2] + (exact, self.lim)
@@ -183,6 +192,7 @@ def warm_up() -> None:
     fddp(P, 0.1, 0.005, Luu, x.copy(), xs, us, 2, False, 100.0, 1e-9, 1e3, ALPHAS)
     evaluate_nodes(P, xs)
     batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1, within=0.01)
+    joint_placements(packed.chain_f, packed.chain_i, np.zeros((2, 2)), np.empty((2, 3, 3, 3)), np.empty((2, 3, 3)))
     data = model.createData()  # the Pinocchio-side evaluation (key poses, the independent check)
     pin.computeJointJacobians(model, data, x[:2])
     CollisionModel(model, prims).evaluate(data, pairs, gradient=True)

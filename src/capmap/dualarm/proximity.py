@@ -11,11 +11,11 @@ import numba
 import numpy as np
 
 from capmap.dualarm.broadphase import group_bound
-from capmap.dualarm.chain import Packed, fk, groups_of, pair_table, place_primitives, plane_gap
+from capmap.dualarm.chain import Packed, _point_segment, fk, groups_of, pair_table, place_primitives, plane_gap
 from capmap.dualarm.collision import Pairs
 from capmap.dualarm.distance import segseg, segtri
 
-__all__ = ["batch_distances"]
+__all__ = ["batch_distances", "near_pairs"]
 
 _jit = numba.njit(cache=True)  # plain calls (see capmap.dualarm.chain)
 ROUNDING = 1e-9  # m: how far a lower bound may exceed the distance it bounds by rounding (~1e-15 here)
@@ -50,35 +50,37 @@ def _pair_distance(A, B, V, rows, rsum, n, P, Q):
 
 
 @_jit
-def _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, out, P, Q):
-    """out[n] for each pair row n: its safety distance (m), or inf when its group's ball, the bounding
-    spheres or the triangle's plane put it above ``cutoff``. One call per configuration (a call per
-    pair would pay numba's per-array argument overhead)."""
+def _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, idx, val, P, Q):
+    """The pairs whose group ball, bounding spheres and triangle plane do not put them above ``cutoff``:
+    their rows n in idx and safety distances (m) in val (from 0); returns how many. One call per
+    configuration (a call per pair would pay numba's per-array argument overhead)."""
     S = A.shape[0]
+    m = 0
     for gi in range(groups.shape[0]):
         if groups[gi, 2] > 0 and group_bound(A, B, V, rows, order, groups, spheres, gi) > cutoff:
-            for t in range(groups[gi, 0], groups[gi, 1]):
-                out[order[t]] = np.inf
             continue
         for t in range(groups[gi, 0], groups[gi, 1]):
             n = order[t]
             a, b = rows[n, 1], rows[n, 2] + (S if rows[n, 0] == 1 else 0)
             dx, dy, dz = ctr[a, 0] - ctr[b, 0], ctr[a, 1] - ctr[b, 1], ctr[a, 2] - ctr[b, 2]
             if np.sqrt(dx * dx + dy * dy + dz * dz) - rad[a] - rad[b] - rsum[n] > cutoff:
-                out[n] = np.inf
-            elif rows[n, 0] == 1 and plane_gap(A, B, rows[n, 1], V, rows[n, 2]) - rsum[n] > cutoff:
-                out[n] = np.inf  # both ends on one side of the triangle's plane, farther than the cutoff
-            else:
-                out[n] = _pair_distance(A, B, V, rows, rsum, n, P, Q)
+                continue
+            if _point_segment(A, B, rows[n, 1], ctr[b, 0], ctr[b, 1], ctr[b, 2]) - rad[b] - rsum[n] > cutoff:
+                continue  # the first segment itself, not its ball, far from the second primitive's ball
+            if rows[n, 0] == 1 and plane_gap(A, B, rows[n, 1], V, rows[n, 2]) - rsum[n] > cutoff:
+                continue  # both ends on one side of the triangle's plane, farther than the cutoff
+            idx[m], val[m] = n, _pair_distance(A, B, V, rows, rsum, n, P, Q)
+            m += 1
+    return m
 
 
 @numba.njit(cache=True)
-def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, groups, spheres, cutoff, within,
-           out):
-    """out[k, n]: pair n's safety distance at qs[k], or inf when it is above ``cutoff``; with
-    ``within`` >= 0 also inf when it is above both ``within`` and the least distance at qs[k] (the
-    previous configuration's nearest pair, evaluated first, bounds that least distance)."""
-    nj, S, T = chain_f.shape[0], seg_f.shape[0], tri_f.shape[0]
+def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, groups, spheres, cutoff, within):
+    """The pairs evaluated at each configuration qs[k], as (k, n, distance m) entries in configuration
+    order: every pair that is not shown above ``cutoff``; with ``within`` >= 0 only those not shown
+    above both ``within`` and the least distance at qs[k] (the previous configuration's nearest pair,
+    evaluated first, bounds that least distance), the nearest always."""
+    nj, S, T, NP = chain_f.shape[0], seg_f.shape[0], tri_f.shape[0], rows.shape[0]
     R, p = np.empty((nj, 3, 3)), np.empty((nj, 3))
     A, B, V = np.empty((S, 3)), np.empty((S, 3)), np.empty((T, 3, 3))
     ctr, rad = np.empty((S + T, 3)), np.empty(S + T)
@@ -92,6 +94,10 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
         fk(chain_f, chain_i, qs[0], R, p)
         place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
         _bounding_spheres(A, B, V, ctr, rad)
+    idx, val = np.empty(NP + 1, np.int64), np.empty(NP + 1)
+    cap = max(1024, 16 * qs.shape[0])
+    ok, on, od = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
+    count = 0
     nearest = -1
     for k in range(qs.shape[0]):
         fk(chain_f, chain_i, qs[k], R, p)
@@ -105,14 +111,43 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
         if within >= 0.0 and nearest >= 0:
             d0 = _pair_distance(A, B, V, rows, rsum, nearest, P, Q)
             # the bounds are computed otherwise than the distances and may exceed them by rounding: a pair at
-            # the threshold keeps its distance with ROUNDING to spare, and the nearest pair's is written
+            # the threshold keeps its distance with ROUNDING to spare, and the nearest pair is always kept
             cut = min(cutoff, max(within, d0) + ROUNDING)
-        _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cut, out[k], P, Q)
+        m = _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cut, idx, val, P, Q)
         if d0 <= cutoff:  # (d0 is nan unless the nearest pair was evaluated: False)
-            out[k, nearest] = d0
-        if within >= 0.0 and rows.shape[0] > 0:
-            n = np.argmin(out[k])
-            nearest = n if np.isfinite(out[k, n]) else -1
+            found = False
+            for i in range(m):
+                if idx[i] == nearest:
+                    found = True
+                    break
+            if not found:
+                idx[m], val[m] = nearest, d0
+                m += 1
+        if within >= 0.0:
+            nearest = -1
+            best = np.inf
+            for i in range(m):
+                if val[i] < best or (val[i] == best and idx[i] < nearest):
+                    best, nearest = val[i], idx[i]
+        if count + m > cap:
+            cap = max(2 * cap, count + m)
+            ok2, on2, od2 = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
+            ok2[:count], on2[:count], od2[:count] = ok[:count], on[:count], od[:count]
+            ok, on, od = ok2, on2, od2
+        for i in range(m):
+            ok[count], on[count], od[count] = k, idx[i], val[i]
+            count += 1
+    return ok[:count].copy(), on[:count].copy(), od[:count].copy()
+
+
+def near_pairs(packed: Packed, qs: np.ndarray, pairs: Pairs, cutoff: float = np.inf,
+               within: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pair distances :func:`batch_distances` leaves finite, as entries: configuration k (E,), pair n
+    (E,), safety distance m (E,), in configuration order."""
+    rows, rsum = pair_table(packed, pairs)
+    qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, packed.chain_f.shape[0] - 1)
+    return _batch(packed.chain_f, packed.chain_i, packed.seg_f, packed.seg_j, packed.tri_f, packed.tri_j, qs, rows, rsum,
+                  *groups_of(packed, rows), float(cutoff), -1.0 if within is None else float(within))
 
 
 def batch_distances(packed: Packed, qs: np.ndarray, pairs: Pairs, cutoff: float = np.inf,
@@ -121,9 +156,8 @@ def batch_distances(packed: Packed, qs: np.ndarray, pairs: Pairs, cutoff: float 
     distance is above ``cutoff`` m (bounding spheres or a triangle's plane show it); with ``within``
     m, inf also for the pairs above both ``within`` and the configuration's least distance, which
     stays exact (each row's minimum and every pair within ``within`` are exact)."""
-    rows, rsum = pair_table(packed, pairs)
-    qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, packed.chain_f.shape[0] - 1)
-    out = np.empty((len(qs), len(rows)))
-    _batch(packed.chain_f, packed.chain_i, packed.seg_f, packed.seg_j, packed.tri_f, packed.tri_j, qs, rows, rsum,
-           *groups_of(packed, rows), float(cutoff), -1.0 if within is None else float(within), out)
+    k, n, d = near_pairs(packed, qs, pairs, cutoff, within)
+    out = np.full((len(np.asarray(qs).reshape(-1, packed.chain_f.shape[0] - 1)), len(pairs)), np.inf)
+    out[k, n] = d
     return out
+

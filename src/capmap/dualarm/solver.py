@@ -22,10 +22,10 @@ import pinocchio as pin
 from capmap.dualarm.assembly import Assembly
 from capmap.dualarm.chain import pack
 from capmap.dualarm.collision import Pairs
-from capmap.dualarm.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
+from capmap.dualarm.fddp import ALPHAS, C_VALUES, EQ_AT, G_VALUES, IN_AT, LAM_EQ, LAM_IN, evaluate_nodes, fddp, pack_nodes
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
-from capmap.dualarm.proximity import batch_distances
+from capmap.dualarm.proximity import near_pairs
 from capmap.dualarm.settings import ALSettings, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
@@ -104,13 +104,15 @@ def all_distances(asm: Assembly, qs: np.ndarray, pairs: Pairs) -> np.ndarray:
     return out
 
 
-def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float, packed=None) -> list[np.ndarray]:
-    """Per node, which candidate pairs are within filter_m (safety distance) on the path qs."""
-    if packed is not None:
-        d = batch_distances(packed, qs, asm.pairs, cutoff=filter_m)
-    else:
-        d = all_distances(asm, qs, asm.pairs)
-    return [row < filter_m for row in d]
+def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float, packed=None) -> np.ndarray:
+    """(K, P) bool: per node, which candidate pairs are within filter_m (safety distance) on the path qs (K, nq)."""
+    if packed is None:
+        return all_distances(asm, qs, asm.pairs) < filter_m
+    k, n, d = near_pairs(packed, qs, asm.pairs, cutoff=filter_m)
+    keep = np.zeros((len(qs), len(asm.pairs)), dtype=bool)
+    near = d < filter_m
+    keep[k[near], n[near]] = True
+    return keep
 
 
 class _CrocoddylInner:
@@ -163,8 +165,8 @@ class _CompiledInner(_CrocoddylInner):
             self.packed = pack_nodes(self.models)
         else:  # the multipliers only
             P = self.packed
-            P[23][:] = np.concatenate([m.lam_eq for m in self.models])
-            P[25][:] = np.concatenate([m.lam_in for m in self.models])
+            P[LAM_EQ][:] = np.concatenate([m.lam_eq for m in self.models])
+            P[LAM_IN][:] = np.concatenate([m.lam_in for m in self.models])
         return self.packed
 
     def solve(self, xs: np.ndarray, us: np.ndarray, maxiter: int, feasible: bool, mu: float):
@@ -176,7 +178,7 @@ class _CompiledInner(_CrocoddylInner):
     def violations(self, xs: np.ndarray) -> tuple[list, list]:
         P = self._pack()
         evaluate_nodes(P, np.ascontiguousarray(xs, dtype=float))
-        c, g, eo, io = P[27], P[29], P[24], P[26]
+        c, g, eo, io = P[C_VALUES], P[G_VALUES], P[EQ_AT], P[IN_AT]
         return [c[eo[k]:eo[k + 1]].copy() for k in range(len(xs))], [g[io[k]:io[k + 1]].copy() for k in range(len(xs))]
 
 
@@ -190,8 +192,8 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
     ctx = context(asm, weights, limits, compiled, log, mu=float(st.mu0), with_limits=inequalities)
     if not inequalities:
         asm = replace(asm, pairs=NO_PAIRS)
-    N = asm.task.N
-    keep = node_pairs(asm, xs0[:, :asm.model.nq], st.filter_m, ctx.packed)
+    N, nq = asm.task.N, asm.model.nq
+    keep = node_pairs(asm, xs0[:, :nq], st.filter_m, ctx.packed)
     models = [node_model(ctx, k, asm.pairs.subset(keep[k])) for k in range(N + 1)]
     # after a multiplier update the full step is often rejected until the regularisation has grown enough: by
     # Crocoddyl's x10 per rejected line search (10 trial rollouts each) that took ~8 rejections per outer iteration
@@ -209,19 +211,18 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
         eq = max(float(np.abs(c).max()) for c in cs)
         ineq = max(float(np.maximum(-g, 0).max(initial=0.0)) for g in gs)
         # re-check every candidate pair on the solution; pairs that came near join their node
-        near = node_pairs(asm, xs[:, :asm.model.nq], st.filter_m, ctx.packed)
+        near = node_pairs(asm, xs[:, :nq], st.filter_m, ctx.packed)
+        grown = np.flatnonzero((near & ~keep).any(axis=1))
+        keep |= near
         added = 0
-        for k in range(N + 1):
-            new = near[k] & ~keep[k]
-            if new.any():
-                keep[k] |= new
-                old = models[k]
-                m = node_model(ctx, k, asm.pairs.subset(keep[k]))
-                m.lam_eq = old.lam_eq
-                m.lam_in[:len(m.pairs)] = _carry(old.pairs, m.pairs, old.lam_in[:len(old.pairs)])
-                m.lam_in[len(m.pairs):] = old.lam_in[len(old.pairs):]
-                inner.replace(k, m)
-                added += int(new.sum())
+        for k in grown:
+            old = models[k]
+            m = node_model(ctx, k, asm.pairs.subset(keep[k]))
+            m.lam_eq = old.lam_eq
+            m.lam_in[:len(m.pairs)] = _carry(old.pairs, m.pairs, old.lam_in[:len(old.pairs)])
+            m.lam_in[len(m.pairs):] = old.lam_in[len(old.pairs):]
+            inner.replace(k, m)
+            added += len(m.pairs) - len(old.pairs)
         stats.append(OuterStats(outer, ctx.mu, iters, cost, eq, ineq, int(sum(len(m.pairs) for m in models)), added,
                                 time.perf_counter() - t0))
         if log:

@@ -16,6 +16,7 @@ import pinocchio as pin
 from scipy.ndimage import distance_transform_edt
 
 from capmap.dualarm.assembly import Assembly
+from capmap.dualarm.chain import joint_placements, pack
 from capmap.dualarm.robot import DualArm
 from capmap.dualarm.unknown import Grid
 
@@ -27,7 +28,6 @@ def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np
     """Balls sampling the arms' capsules and the panel at configurations qs (K, nq): centres (K, n, 3) m,
     radii (n,) m, their bodies' names (n,) and each ball's slack (n,) m (see the module docstring)."""
     model = asm.model
-    data = model.createData()
     caps = [c for c in robot.capsules if c.part != "body"]
     local, radii, names, joints, slack = [], [], [], [], []
     for c in caps:
@@ -53,15 +53,23 @@ def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np
     slack += [np.hypot(h, asm.panel_radius) - asm.panel_radius] * len(grid)
     local, joints = np.concatenate(local), np.asarray(joints)
     used = np.unique(joints)
-    R, p = np.empty((len(qs), len(used), 3, 3)), np.empty((len(qs), len(used), 3))
-    for k, q in enumerate(qs):
-        pin.forwardKinematics(model, data, q)
-        for i, j in enumerate(used):
-            R[k, i], p[k, i] = data.oMi[int(j)].rotation, data.oMi[int(j)].translation
+    t = asm.task
+    packed = pack(model, (t.left, t.right, t.panel), asm.collision.prims)
+    qs = np.ascontiguousarray(qs, dtype=float)
+    if isinstance(packed, str):  # Pinocchio's placements
+        R, p = np.empty((len(qs), model.njoints, 3, 3)), np.empty((len(qs), model.njoints, 3))
+        data = model.createData()
+        for k, q in enumerate(qs):
+            pin.forwardKinematics(model, data, q)
+            for j in used:
+                R[k, j], p[k, j] = data.oMi[int(j)].rotation, data.oMi[int(j)].translation
+    else:  # the packed chain's, compiled (equal to Pinocchio's in tests/dualarm/test_nodes.py)
+        R, p = np.empty((len(qs), model.njoints, 3, 3)), np.empty((len(qs), model.njoints, 3))
+        joint_placements(packed.chain_f, packed.chain_i, qs, R, p)
     out = np.empty((len(qs), len(local), 3))
-    for i, j in enumerate(used):
+    for j in used:
         sel = joints == j
-        out[:, sel] = local[sel] @ R[:, i].transpose(0, 2, 1) + p[:, i, None, :]
+        out[:, sel] = local[sel] @ R[:, j].transpose(0, 2, 1) + p[:, j, None, :]
     return out, np.asarray(radii), np.asarray(names, dtype=object), np.asarray(slack)
 
 

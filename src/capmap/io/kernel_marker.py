@@ -1,11 +1,13 @@
-"""Which numba kernels are compiled already (:mod:`capmap.kernels` compiles them): a marker file beside
-numba's cache per hash of the kernels' source files, numba's version and the CPU, listing the runs
+"""Which numba kernels are compiled already (:mod:`capmap.kernels` compiles them): a marker file in
+numba's cache folder (one per content of the kernels' sources, :func:`capmap.numba_folder`) per
+numba version and CPU, listing the runs
 (robot file, locked joint and angle, dual-arm or not) whose kernels were warmed. Light on purpose: the
 workflow checks it before any job without importing the families (a second or two saved per run)."""
 
 from __future__ import annotations
 
 import hashlib
+import shutil
 import sys
 from pathlib import Path
 
@@ -16,23 +18,16 @@ from capmap.io.fingerprint import file_sha256
 
 __all__ = ["fingerprint", "run_key", "is_warm", "record"]
 
-PACKAGE = Path(__file__).resolve().parents[1]
-
-
 def fingerprint() -> str:
-    """Hash of what the compiled code depends on: every source file using numba, numba's version, the CPU."""
-    h = hashlib.sha256(f"{numba.__version__} {sys.version} {ll.get_host_cpu_name()}".encode())
-    for f in sorted(PACKAGE.rglob("*.py")):
-        text = f.read_bytes()
-        if b"import numba" in text:
-            h.update(str(f.relative_to(PACKAGE)).encode() + text)
+    """Hash of what the compiled code depends on: numba's cache folder (named by the content of every source
+    file using numba, :func:`capmap._numba_cache_dir`), numba's version, the CPU."""
+    h = hashlib.sha256(f"{numba.__version__} {sys.version} {ll.get_host_cpu_name()} {numba.config.CACHE_DIR}".encode())
     return h.hexdigest()[:16]
 
 
 def _marker() -> Path:
-    """Beside numba's cache: NUMBA_CACHE_DIR when set, else the package's __pycache__ folders."""
-    where = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else PACKAGE / "__pycache__"
-    return where / f"kernels-{fingerprint()}.ok"
+    """In numba's cache folder (capmap sets it per content of its compiled sources)."""
+    return Path(numba.config.CACHE_DIR) / f"kernels-{fingerprint()}.ok"
 
 
 def run_key(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> str:
@@ -53,10 +48,13 @@ def record(key: str) -> None:
     marker = _marker()
     done = marker.read_text().splitlines() if marker.is_file() else []
     try:
-        marker.parent.mkdir(exist_ok=True)
+        marker.parent.mkdir(parents=True, exist_ok=True)
         for old in marker.parent.glob("kernels-*.ok"):
             if old != marker:
                 old.unlink()
+        for old in marker.parent.parent.glob("numba-*"):  # the caches of earlier sources
+            if old != marker.parent and old.is_dir():
+                shutil.rmtree(old, ignore_errors=True)
         marker.write_text("".join(f"{k}\n" for k in (*done, key)))
     except OSError:
         pass
