@@ -215,7 +215,7 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
         grown = np.flatnonzero((near & ~keep).any(axis=1))
         keep |= near
         added = 0
-        for k in grown:
+        for k in map(int, grown):
             old = models[k]
             m = node_model(ctx, k, asm.pairs.subset(keep[k]))
             m.lam_eq = old.lam_eq
