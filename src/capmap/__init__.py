@@ -24,12 +24,13 @@ def numba_folder(package, base: str) -> str:
     """The cache folder under ``base`` for the compiled sources (the files importing numba) of ``package``
     (a folder): named by their content."""
     import hashlib
+    import re
     from pathlib import Path
 
     h = hashlib.sha256()
     for f in sorted(Path(package).rglob("*.py")):
         text = f.read_bytes()
-        if b"import numba" in text:
+        if re.search(rb"^import numba", text, re.MULTILINE):
             h.update(str(f.relative_to(package)).encode() + b"\0" + text)
     return str(Path(base) / f"numba-{h.hexdigest()[:16]}")
 
@@ -47,12 +48,15 @@ def _numba_cache_dir() -> None:
     from pathlib import Path
 
     package = Path(__file__).resolve().parent
-    base = os.environ.get("CAPMAP_NUMBA_BASE") or os.environ.get("NUMBA_CACHE_DIR")
-    if not base:
+    given = os.environ.get("NUMBA_CACHE_DIR")
+    if given and given == os.environ.get("CAPMAP_NUMBA_DIR"):  # inherited from a parent that imported capmap
+        base = os.environ["CAPMAP_NUMBA_BASE"]
+    elif given:
+        base = given
+    else:
         base = str(package / "__pycache__") if os.access(package, os.W_OK) else str(Path.home() / ".cache" / "capmap")
-    os.environ["CAPMAP_NUMBA_BASE"] = base  # child processes derive theirs from the same base
     folder = numba_folder(package, base)
-    os.environ["NUMBA_CACHE_DIR"] = folder
+    os.environ.update(NUMBA_CACHE_DIR=folder, CAPMAP_NUMBA_BASE=base, CAPMAP_NUMBA_DIR=folder)
     if "numba" in sys.modules:
         sys.modules["numba"].config.CACHE_DIR = folder
 
