@@ -116,7 +116,9 @@ def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float, packed=None) -> n
 
 
 class _CrocoddylInner:
-    """The inner solve by Crocoddyl's SolverFDDP on Python action models (the Pinocchio reference)."""
+    """The inner solve by Crocoddyl's SolverFDDP on Python action models (the Pinocchio reference); the
+    same interface as :class:`_CompiledInner`: replace a node's model, solve from a guess, the nodes'
+    constraint values."""
 
     def __init__(self, models: list, x0: np.ndarray, st: ALSettings):
         self.models = models
@@ -141,7 +143,7 @@ class _CrocoddylInner:
         return list(cs), list(gs)
 
 
-class _CompiledInner(_CrocoddylInner):
+class _CompiledInner:
     """The inner solve by the compiled FDDP (:func:`capmap.dualarm.fddp.fddp`, Crocoddyl's algorithm) on the
     compiled node models packed flat: no Python call per node."""
 
