@@ -52,7 +52,7 @@ def record(key: str) -> None:
         for old in marker.parent.glob("kernels-*.ok"):
             if old != marker:
                 old.unlink()
-        for old in marker.parent.parent.glob("numba-*"):  # the caches of earlier sources
+        for old in marker.parent.parent.glob("numba-" + "[0-9a-f]" * 16):  # capmap's caches of earlier sources
             if old != marker.parent and old.is_dir():
                 shutil.rmtree(old, ignore_errors=True)
         marker.write_text("".join(f"{k}\n" for k in (*done, key)))
