@@ -17,6 +17,7 @@ import pytest
 
 from capmap.dualarm.broadphase import MIN_GROUP, group_bound, pair_groups
 from capmap.dualarm.chain import fk, groups_of, joint_placements, levers, pair_table, place_primitives
+from capmap.dualarm.distance import segment_segment, segment_triangle
 from capmap.dualarm.fddp import ALPHAS, fddp, pack_nodes
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.proximity import batch_distances
@@ -221,3 +222,29 @@ def test_node_calc_with_the_bounds_of_its_last_calcdiff_equals_a_fresh_node(smal
             assert da.cost == db.cost and np.array_equal(da.xnext, db.xnext)
             penetrating += int((fresh.values(x)[1][:len(pairs)] < 0).any())
     assert penetrating > 0  # some motions did bring pairs within the margin
+
+
+def test_a_group_holds_one_kind_of_moving_primitive():
+    """Segment 2 and triangle 2 are different primitives: their pairs with one static body are two groups, and
+    each group's bound holds for its own pairs (found in review: one key for both hid a penetrating triangle)."""
+    seg_j, tri_j = np.array([0, 0, 1]), np.array([0, 0, 1])
+    seg_g, tri_g = np.array([0, 0, -1]), np.array([-1, -1, -1])
+    balls = np.array([[0.0, 0.0, 0.0, 0.2]])
+    rows = np.array([[0, 0, 2], [1, 1, 2], [0, 1, 2], [1, 0, 2]])  # static segments 0, 1 vs segment 2, triangle 2
+    order, groups, spheres = pair_groups(rows, seg_j, np.full(3, 0.01), tri_j, np.full(3, 0.01), seg_g, tri_g, balls)
+    for s0, s1, col, is_tri in groups:
+        kinds = rows[order[s0:s1], 0]
+        assert len(set(kinds)) == 1 and (not col or is_tri == (kinds[0] == 1))
+    A = np.array([[0.05, 0, 0], [-0.05, 0, 0], [5.0, 0, 0]])
+    B = np.array([[0.05, 0.1, 0], [-0.05, 0.1, 0], [5.0, 0.1, 0]])
+    V = np.zeros((3, 3, 3))
+    V[2] = [[0.0, 0.0, -0.05], [0.1, 0.0, 0.05], [-0.1, 0.0, 0.05]]  # through the body's segments
+    for gi in np.flatnonzero(groups[:, 2] > 0):
+        lb = group_bound(A, B, V, rows, order, groups, spheres, gi)
+        for n in order[groups[gi, 0]:groups[gi, 1]]:
+            a, b = rows[n, 1], rows[n, 2]
+            if rows[n, 0] == 0:
+                core = segment_segment(A[a:a + 1], B[a:a + 1], A[b:b + 1], B[b:b + 1]).distance[0]
+            else:
+                core = segment_triangle(A[a:a + 1], B[a:a + 1], V[b:b + 1, 0], V[b:b + 1, 1], V[b:b + 1, 2]).distance[0]
+            assert lb <= core - 0.02 + 1e-12

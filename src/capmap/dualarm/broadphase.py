@@ -61,10 +61,10 @@ def _pair_groups(rows, seg_j, seg_r, tri_j, tri_r, seg_g, tri_g, balls, min_grou
         a_static = seg_j[a] == 0
         if not a_static and b_static:
             col[n], body[n], rmov[n] = 1, seg_g[b] if kind == 0 else tri_g[b], seg_r[a]
-            key[n] = (1 << 60) + (a << 30) + body[n]
+            key[n] = (1 << 60) + (kind << 58) + (a << 30) + body[n]
         elif a_static and not b_static:
             col[n], body[n], rmov[n] = 2, seg_g[a], seg_r[b] if kind == 0 else tri_r[b]
-            key[n] = (2 << 60) + (b << 30) + body[n]
+            key[n] = (2 << 60) + (kind << 58) + (b << 30) + body[n]  # kind: b a segment or a triangle
         else:
             key[n] = -1
     order = np.argsort(key, kind="mergesort")  # stable: pairs keep their order within a group

@@ -28,6 +28,7 @@ ALPHAS = 0.5 ** np.arange(10)  # Crocoddyl's step lengths
 LAM_EQ, EQ_AT, LAM_IN, IN_AT, C_VALUES, G_VALUES = 29, 30, 31, 32, 33, 35
 REG_MIN, REG_MAX, REG_DEC = 1e-9, 1e9, 10.0
 TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEPINC = 0.1, 2.0, 1e-12, 0.5, 0.01
+HUGE = 1e30  # Crocoddyl's raiseIfNaN: nan, inf or >= 1e30 fails a rollout or a backward pass
 
 
 def _offsets(sizes) -> np.ndarray:
@@ -103,6 +104,15 @@ def _calc(P, xs, us, mu, cost, xnext, k, x, u):
     Lx, Lxx, Lu = np.empty(0), np.empty((0, 0)), np.empty(0)
     cost[k] = _eval(P, k, x, u, mu, False, False, Lx, Lxx, Lu, xnext[k])
     return cost[k]
+
+
+@numba.njit(cache=True)
+def _huge(a):
+    """Whether an entry of ``a`` is nan, inf or of magnitude >= HUGE."""
+    for v in a.ravel():
+        if not abs(v) < HUGE:
+            return True
+    return False
 
 
 @numba.njit(cache=True)
@@ -196,7 +206,7 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
             Vxx[t, i, i] += preg
         if not feasible:
             Vx[t] += Vxx[t] @ fs[t]
-        if not (np.all(np.isfinite(Vx[t])) and np.all(np.isfinite(Vxx[t]))):
+        if _huge(Vx[t]) or _huge(Vxx[t]):
             return False
     return True
 
@@ -217,11 +227,11 @@ def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try,
             us_try[t] = us[t] - k_[t] * alpha - K[t] @ dx
             total += _calc(P, xs, us, mu, cost, xnext, t, xs_try[t], us_try[t])
             xn = xnext[t].copy()
-            if not (np.isfinite(total) and np.all(np.isfinite(xn))):
+            if not abs(total) < HUGE or _huge(xn):
                 return np.nan
         else:
             total += _calc(P, xs, us, mu, cost, xnext, t, xs_try[t], np.zeros(us.shape[1]))
-            if not np.isfinite(total):
+            if not abs(total) < HUGE:
                 return np.nan
     return total
 

@@ -18,6 +18,8 @@ from capmap.io.fingerprint import file_sha256
 
 __all__ = ["fingerprint", "run_key", "is_warm", "record"]
 
+OWN_CACHES = Path(__file__).resolve().parents[1] / "__pycache__"  # capmap.numba_folder's base by default
+
 def fingerprint() -> str:
     """Hash of what the compiled code depends on: numba's cache folder (named by the content of every source
     file using numba, :func:`capmap._numba_cache_dir`), numba's version, the CPU."""
@@ -52,9 +54,10 @@ def record(key: str) -> None:
         for old in marker.parent.glob("kernels-*.ok"):
             if old != marker:
                 old.unlink()
-        for old in marker.parent.parent.glob("numba-" + "[0-9a-f]" * 16):  # capmap's caches of earlier sources
-            if old != marker.parent and old.is_dir():
-                shutil.rmtree(old, ignore_errors=True)
+        if marker.parent.parent == OWN_CACHES:  # this checkout's caches of earlier sources (a shared base is left alone)
+            for old in OWN_CACHES.glob("numba-" + "[0-9a-f]" * 16):
+                if old != marker.parent and old.is_dir():
+                    shutil.rmtree(old, ignore_errors=True)
         marker.write_text("".join(f"{k}\n" for k in (*done, key)))
     except OSError:
         pass
