@@ -6,7 +6,7 @@ there are at least :data:`MIN_GROUP` of them. The body's static primitives lie i
 reach rho (the farthest core point plus that primitive's radius, fixed at :func:`static_balls`), so
 every pair's safety distance is at least ``|c - moving core| - rho - r_moving`` (:func:`group_bound`):
 when that clears a threshold, every pair of the group does, and none needs its own bound or distance.
-Tested against every pair's exact distance in tests/dualarm/test_nodes.py.
+Tested against every pair's exact distance in tests/dualarm/test_fddp.py.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from capmap.dualarm.distance import _pointtri_uv
+from capmap.dualarm.distance import _pointtri_uv, segpoint
 
 __all__ = ["MIN_GROUP", "static_balls", "pair_groups", "group_bound"]
 
@@ -102,10 +102,5 @@ def group_bound(A, B, V, rows, order, groups, spheres, gi):
         for i in range(3):
             q = V[mi, 0, i] + u * (V[mi, 1, i] - V[mi, 0, i]) + w * (V[mi, 2, i] - V[mi, 0, i])
             d2 += (spheres[gi, i] - q) ** 2
-    else:
-        dx, dy, dz = B[mi, 0] - A[mi, 0], B[mi, 1] - A[mi, 1], B[mi, 2] - A[mi, 2]
-        ex, ey, ez = spheres[gi, 0] - A[mi, 0], spheres[gi, 1] - A[mi, 1], spheres[gi, 2] - A[mi, 2]
-        L2 = dx * dx + dy * dy + dz * dz
-        t = 0.0 if L2 == 0.0 else min(max((ex * dx + ey * dy + ez * dz) / L2, 0.0), 1.0)
-        d2 = (ex - t * dx) ** 2 + (ey - t * dy) ** 2 + (ez - t * dz) ** 2
-    return np.sqrt(d2) - spheres[gi, 3]
+        return np.sqrt(d2) - spheres[gi, 3]
+    return segpoint(A, B, mi, spheres[gi, 0], spheres[gi, 1], spheres[gi, 2]) - spheres[gi, 3]

@@ -20,7 +20,7 @@ import pinocchio as pin
 
 from capmap.dualarm.broadphase import pair_groups, static_balls
 from capmap.dualarm.collision import Pairs, Primitives
-from capmap.dualarm.distance import segseg, segtri
+from capmap.dualarm.distance import segpoint, segseg, segtri
 
 __all__ = ["Packed", "pack", "fk", "pair_table", "place_primitives", "plane_gap", "lower_bound", "distances",
            "groups_of", "joint_placements", "levers",
@@ -95,11 +95,11 @@ def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> P
     groups = static_balls(*seg, prims.seg_body, *tri, prims.tri_body)
     v = tri[0].reshape(-1, 3, 3)
     ctr = v.mean(axis=1)
-    reach = np.linalg.norm(v - ctr[:, None], axis=2).max(axis=1, initial=0.0)
+    tri_reach = np.linalg.norm(v - ctr[:, None], axis=2).max(axis=1, initial=0.0)
     nrm = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
     size = np.linalg.norm(nrm, axis=1)
     nrm = np.where(size[:, None] > 0, nrm / np.where(size > 0, size, 1.0)[:, None], 0.0)  # 0: no plane bound
-    ext = np.column_stack([ctr, reach, nrm, np.einsum("ij,ij->i", nrm, v[:, 0])])
+    ext = np.column_stack([ctr, tri_reach, nrm, np.einsum("ij,ij->i", nrm, v[:, 0])])
     tri = (np.ascontiguousarray(np.hstack([tri[0], ext])),) + tri[1:]
     reach = np.zeros((nj, model.nv))
     for j in range(1, nj):
@@ -177,22 +177,15 @@ def joint_placements(chain_f, chain_i, qs, R, p):
 def place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V):
     """World segment ends A, B (S, 3) and triangles V (T, 3, 3) at the joint placements R, p."""
     for s in range(seg_f.shape[0]):
-        j = seg_j[s]
-        for i in range(3):
-            if j == 0:
-                A[s, i], B[s, i] = seg_f[s, i], seg_f[s, 3 + i]
-            else:
-                A[s, i] = p[j, i] + R[j, i, 0] * seg_f[s, 0] + R[j, i, 1] * seg_f[s, 1] + R[j, i, 2] * seg_f[s, 2]
-                B[s, i] = p[j, i] + R[j, i, 0] * seg_f[s, 3] + R[j, i, 1] * seg_f[s, 4] + R[j, i, 2] * seg_f[s, 5]
-    for t in range(tri_f.shape[0]):
-        j = tri_j[t]
-        for k in range(3):
+        if seg_j[s] == 0:
             for i in range(3):
-                if j == 0:
+                A[s, i], B[s, i] = seg_f[s, i], seg_f[s, 3 + i]
+    for t in range(tri_f.shape[0]):
+        if tri_j[t] == 0:
+            for k in range(3):
+                for i in range(3):
                     V[t, k, i] = tri_f[t, 3 * k + i]
-                else:
-                    V[t, k, i] = (p[j, i] + R[j, i, 0] * tri_f[t, 3 * k] + R[j, i, 1] * tri_f[t, 3 * k + 1]
-                                  + R[j, i, 2] * tri_f[t, 3 * k + 2])
+    place_moving(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
 
 
 @_jit
@@ -232,17 +225,6 @@ def plane_gap(A, B, s, V, t):
 
 
 @_jit
-def _point_segment(A, B, s, x, y, z):
-    """Distance (m) from the point (x, y, z) to segment A[s] -> B[s]."""
-    dx, dy, dz = B[s, 0] - A[s, 0], B[s, 1] - A[s, 1], B[s, 2] - A[s, 2]
-    ex, ey, ez = x - A[s, 0], y - A[s, 1], z - A[s, 2]
-    L2 = dx * dx + dy * dy + dz * dz
-    t = 0.0 if L2 == 0.0 else min(max((ex * dx + ey * dy + ez * dz) / L2, 0.0), 1.0)
-    ex, ey, ez = ex - t * dx, ey - t * dy, ez - t * dz
-    return np.sqrt(ex * ex + ey * ey + ez * ez)
-
-
-@_jit
 def lower_bound(A, B, V, kind, a, b):
     """A lower bound (m) of the distance between primitives a and b of a pair row (kind 0: segments
     A[a] -> B[a] and A[b] -> B[b]; 1: segment a and triangle V[b]), at a few dozen flops: the distance
@@ -251,14 +233,14 @@ def lower_bound(A, B, V, kind, a, b):
     if kind == 0:
         cx, cy, cz = 0.5 * (A[b, 0] + B[b, 0]), 0.5 * (A[b, 1] + B[b, 1]), 0.5 * (A[b, 2] + B[b, 2])
         reach = 0.5 * np.sqrt((B[b, 0] - A[b, 0]) ** 2 + (B[b, 1] - A[b, 1]) ** 2 + (B[b, 2] - A[b, 2]) ** 2)
-        return _point_segment(A, B, a, cx, cy, cz) - reach
+        return segpoint(A, B, a, cx, cy, cz) - reach
     cx = (V[b, 0, 0] + V[b, 1, 0] + V[b, 2, 0]) / 3.0
     cy = (V[b, 0, 1] + V[b, 1, 1] + V[b, 2, 1]) / 3.0
     cz = (V[b, 0, 2] + V[b, 1, 2] + V[b, 2, 2]) / 3.0
     reach = 0.0
     for m in range(3):
         reach = max(reach, np.sqrt((V[b, m, 0] - cx) ** 2 + (V[b, m, 1] - cy) ** 2 + (V[b, m, 2] - cz) ** 2))
-    return max(_point_segment(A, B, a, cx, cy, cz) - reach, plane_gap(A, B, a, V, b))
+    return max(segpoint(A, B, a, cx, cy, cz) - reach, plane_gap(A, B, a, V, b))
 
 
 @_jit
@@ -266,7 +248,7 @@ def static_bound(A, B, s, tri_f, t):
     """A lower bound (m) of the distance from segment A[s] -> B[s] to the static triangle tri_f[t] (world
     coordinates, with its centroid, reach, normal and offset): the larger of the distance to its centroid
     less its reach and, when both ends lie on one side of its plane, the nearer end's distance to it."""
-    lb = _point_segment(A, B, s, tri_f[t, 9], tri_f[t, 10], tri_f[t, 11]) - tri_f[t, 12]
+    lb = segpoint(A, B, s, tri_f[t, 9], tri_f[t, 10], tri_f[t, 11]) - tri_f[t, 12]
     nx, ny, nz, off = tri_f[t, 13], tri_f[t, 14], tri_f[t, 15], tri_f[t, 16]
     if nx != 0.0 or ny != 0.0 or nz != 0.0:
         da = nx * A[s, 0] + ny * A[s, 1] + nz * A[s, 2] - off

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["Closest", "segment_segment", "point_triangle", "segment_triangle", "segseg", "segtri", "EPS"]
+__all__ = ["Closest", "segment_segment", "point_triangle", "segment_triangle", "segseg", "segtri", "segpoint", "EPS"]
 
 EPS = 1e-14  # a segment shorter than sqrt(EPS) m is a point
 _jit = numba.njit(cache=True)
@@ -181,6 +181,17 @@ def segtri(A, a, B, b, V, v, P, Q, n):
         P[n, i] = A[a, i] + s * (B[b, i] - A[a, i])
         Q[n, i] = V[v, 0, i] + u * (V[v, 1, i] - V[v, 0, i]) + w * (V[v, 2, i] - V[v, 0, i])
     return np.sqrt(dd)
+
+
+@_jit
+def segpoint(A, B, s, x, y, z):
+    """Distance (m) from the point (x, y, z) to segment A[s] -> B[s]."""
+    dx, dy, dz = B[s, 0] - A[s, 0], B[s, 1] - A[s, 1], B[s, 2] - A[s, 2]
+    ex, ey, ez = x - A[s, 0], y - A[s, 1], z - A[s, 2]
+    L2 = dx * dx + dy * dy + dz * dz
+    t = 0.0 if L2 == 0.0 else min(max((ex * dx + ey * dy + ez * dz) / L2, 0.0), 1.0)
+    ex, ey, ez = ex - t * dx, ey - t * dy, ez - t * dz
+    return np.sqrt(ex * ex + ey * ey + ez * ez)
 
 
 @_jit

@@ -9,8 +9,8 @@ alphas 1, 1/2, ..., 1/512 with its acceptance tests (th_acceptstep 0.1, th_accep
 decrease 10, thresholds 0.5 and 0.01) and stop (|d0 + d1 / 2| < th_stop once feasible). The problem
 is the one :class:`capmap.dualarm.nodes.CompiledNodeModel` states (linear dynamics x+ = Fx x + Fu u,
 Luu = dt diag(w_control), Lxu = 0), its nodes packed flat by :func:`pack_nodes`.
-tests/dualarm/test_nodes.py checks it against Crocoddyl's own solver on the Pinocchio node models:
-the same iterations and the same trajectory.
+tests/dualarm/test_fddp.py checks it step for step against Crocoddyl's own solver on the same nodes, and
+tests/dualarm/test_nodes.py the whole AL solve against Crocoddyl on the Pinocchio node models.
 """
 
 from __future__ import annotations
@@ -100,7 +100,8 @@ def evaluate_nodes(P, xs):
 
 
 @numba.njit(cache=True)
-def _calc(P, xs, us, mu, cost, xnext, k, x, u):
+def _calc(P, mu, cost, xnext, k, x, u):
+    """Node k's cost at (x, u) into cost[k], its next state into xnext[k]."""
     Lx, Lxx, Lu = np.empty(0), np.empty((0, 0)), np.empty(0)
     cost[k] = _eval(P, k, x, u, mu, False, False, Lx, Lxx, Lu, xnext[k])
     return cost[k]
@@ -150,8 +151,8 @@ def _chol_solve(A, L, B):
 @numba.njit(cache=True)
 def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, k_):
     """Crocoddyl's backwardPass for the dynamics Fx = [[I, h I], [0, I]], Fu = [[a I], [h I]] (the products
-    with Fx and Fu in closed form; Lxu = 0); False where Quu is not positive definite or a value is not
-    finite."""
+    with Fx and Fu in closed form; Lxu = 0); False where Quu is not positive definite or a value of Vx,
+    Vxx is nan, inf or >= HUGE."""
     N, n2 = Lx.shape[0] - 1, Lx.shape[1]
     n = n2 // 2
     Vxx[N] = Lxx[N]
@@ -213,7 +214,7 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
 
 @numba.njit(cache=True)
 def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try):
-    """Crocoddyl's FDDP forwardPass: the trial's cost, nan when a cost or state is not finite."""
+    """Crocoddyl's FDDP forwardPass: the trial's cost, nan when the cost or a state is nan, inf or >= HUGE."""
     N = xs.shape[0] - 1
     total = 0.0
     xn = x0.copy()
@@ -225,12 +226,12 @@ def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try,
         if t < N:
             dx = xs_try[t] - xs[t]
             us_try[t] = us[t] - k_[t] * alpha - K[t] @ dx
-            total += _calc(P, xs, us, mu, cost, xnext, t, xs_try[t], us_try[t])
+            total += _calc(P, mu, cost, xnext, t, xs_try[t], us_try[t])
             xn = xnext[t].copy()
             if not abs(total) < HUGE or _huge(xn):
                 return np.nan
         else:
-            total += _calc(P, xs, us, mu, cost, xnext, t, xs_try[t], np.zeros(us.shape[1]))
+            total += _calc(P, mu, cost, xnext, t, xs_try[t], np.zeros(us.shape[1]))
             if not abs(total) < HUGE:
                 return np.nan
     return total
@@ -261,7 +262,7 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
             if recalc:
                 if it == 0:
                     for t in range(N + 1):
-                        _calc(P, xs, us, mu, cost, xnext, t, xs[t], us[t] if t < N else u0)
+                        _calc(P, mu, cost, xnext, t, xs[t], us[t] if t < N else u0)
                 for t in range(N + 1):
                     _eval(P, t, xs[t], us[t] if t < N else u0, mu, True, False, Lx[t], Lxx[t], Lu[t], xnext[t])
                 total = 0.0

@@ -11,9 +11,9 @@ import numba
 import numpy as np
 
 from capmap.dualarm.broadphase import group_bound
-from capmap.dualarm.chain import Packed, _point_segment, fk, groups_of, pair_table, place_primitives, plane_gap
+from capmap.dualarm.chain import Packed, fk, groups_of, pair_table, place_primitives, plane_gap
 from capmap.dualarm.collision import Pairs
-from capmap.dualarm.distance import segseg, segtri
+from capmap.dualarm.distance import segpoint, segseg, segtri
 
 __all__ = ["batch_distances", "near_pairs"]
 
@@ -65,7 +65,7 @@ def _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, idx, val
             dx, dy, dz = ctr[a, 0] - ctr[b, 0], ctr[a, 1] - ctr[b, 1], ctr[a, 2] - ctr[b, 2]
             if np.sqrt(dx * dx + dy * dy + dz * dz) - rad[a] - rad[b] - rsum[n] > cutoff:
                 continue
-            if _point_segment(A, B, rows[n, 1], ctr[b, 0], ctr[b, 1], ctr[b, 2]) - rad[b] - rsum[n] > cutoff:
+            if segpoint(A, B, rows[n, 1], ctr[b, 0], ctr[b, 1], ctr[b, 2]) - rad[b] - rsum[n] > cutoff:
                 continue  # the first segment itself, not its ball, far from the second primitive's ball
             if rows[n, 0] == 1 and plane_gap(A, B, rows[n, 1], V, rows[n, 2]) - rsum[n] > cutoff:
                 continue  # both ends on one side of the triangle's plane, farther than the cutoff

@@ -56,15 +56,14 @@ def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np
     t = asm.task
     packed = pack(model, (t.left, t.right, t.panel), asm.collision.prims)
     qs = np.ascontiguousarray(qs, dtype=float)
+    R, p = np.empty((len(qs), model.njoints, 3, 3)), np.empty((len(qs), model.njoints, 3))
     if isinstance(packed, str):  # Pinocchio's placements
-        R, p = np.empty((len(qs), model.njoints, 3, 3)), np.empty((len(qs), model.njoints, 3))
         data = model.createData()
         for k, q in enumerate(qs):
             pin.forwardKinematics(model, data, q)
             for j in used:
                 R[k, j], p[k, j] = data.oMi[int(j)].rotation, data.oMi[int(j)].translation
     else:  # the packed chain's, compiled (equal to Pinocchio's in tests/dualarm/test_nodes.py)
-        R, p = np.empty((len(qs), model.njoints, 3, 3)), np.empty((len(qs), model.njoints, 3))
         joint_placements(packed.chain_f, packed.chain_i, qs, R, p)
     out = np.empty((len(qs), len(local), 3))
     for j in used:
