@@ -18,7 +18,7 @@ from capmap.dualarm.chain import fk, pack
 from capmap.dualarm.lie import jlog3, jlog6, log3, log6
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import NodeModel
-from capmap.dualarm.proximity import batch_distances
+from capmap.dualarm.proximity import PairFilter, batch_distances
 from capmap.dualarm.settings import ALSettings
 from capmap.dualarm.solver import solve, solve_csqp
 from tests.dualarm.conftest import W
@@ -166,6 +166,30 @@ def test_batch_distances_within_keep_each_minimum_and_every_near_pair_exact(smal
     assert np.array_equal(Dw[keep], D[keep])
     assert np.array_equal(keep | (D > np.maximum(0.01, D.min(axis=1))[:, None]), np.ones_like(keep))
     assert keep.mean() < 0.5  # it does skip most pairs
+
+
+def test_pair_filter_returns_exactly_the_pairs_that_come_within_its_cutoff(small):
+    """Over configurations that move by 1e-4 to 0.3 rad per joint and step (small steps: groups skipped on
+    their carried bounds; large ones: pairs crossing the cutoff), each update returns exactly the pairs below
+    the cutoff (every pair's exact distance, no bound) not returned before."""
+    asm, ctx, xs, _, _ = small
+    rng = np.random.default_rng(3)
+    cutoff = 0.06
+    f = PairFilter(ctx.packed, asm.pairs, len(xs), cutoff)
+    seen = np.zeros((len(xs), len(asm.pairs)), dtype=bool)
+    q = xs[:, :14].copy()
+    crossed = 0
+    for step in (0.0, 1e-4, 1e-3, 0.02, 1e-4, 0.05, 1e-3, 0.3, 0.01, 1e-4):
+        q = q + step * rng.standard_normal(q.shape)
+        D = batch_distances(ctx.packed, q, asm.pairs)
+        expect = (D < cutoff) & ~seen
+        assert np.array_equal(f.update(q), expect)
+        crossed += int(expect.sum()) if step else 0
+        seen |= expect
+        assert np.array_equal(f.keep, seen)
+        if step == 1e-4:
+            assert (f.lb > cutoff + 0.01).mean() > 0.5  # most groups are then far enough to be skipped
+    assert crossed > 100  # pairs did come near after the first call
 
 
 # ---------------------------------------------------------------------------------------------- node contract

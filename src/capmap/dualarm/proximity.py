@@ -11,11 +11,11 @@ import numba
 import numpy as np
 
 from capmap.dualarm.broadphase import group_bound
-from capmap.dualarm.chain import Packed, fk, groups_of, pair_table, place_primitives, plane_gap
+from capmap.dualarm.chain import Packed, fk, groups_of, levers, pair_table, place_primitives, plane_gap
 from capmap.dualarm.collision import Pairs
 from capmap.dualarm.distance import segpoint, segseg, segtri
 
-__all__ = ["batch_distances", "near_pairs"]
+__all__ = ["batch_distances", "near_pairs", "PairFilter"]
 
 _jit = numba.njit(cache=True)  # plain calls (see capmap.dualarm.chain)
 ROUNDING = 1e-9  # m: how far a lower bound may exceed the distance it bounds by rounding (~1e-15 here)
@@ -50,28 +50,76 @@ def _pair_distance(A, B, V, rows, rsum, n, P, Q):
 
 
 @_jit
-def _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, idx, val, P, Q):
+def _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, idx, val, P, Q, kept, lb):
     """The pairs whose group ball, bounding spheres and triangle plane do not put them above ``cutoff``:
-    their rows n in idx and safety distances (m) in val (from 0); returns how many. One call per
-    configuration (a call per pair would pay numba's per-array argument overhead)."""
+    their rows n in idx and safety distances (m) in val (from 0); returns how many. kept (P,) bool: pairs
+    not looked at; lb (G,): a group whose entry is above the cutoff is not looked at either; every other
+    entry becomes a lower bound of the distances of its group's pairs not kept and not returned below the
+    cutoff (inf: none). One call per configuration (a call per pair would pay numba's per-array argument
+    overhead: the pair's tests are written out here)."""
     S = A.shape[0]
     m = 0
     for gi in range(groups.shape[0]):
-        if groups[gi, 2] > 0 and group_bound(A, B, V, rows, order, groups, spheres, gi) > cutoff:
+        if lb[gi] > cutoff:
             continue
+        if groups[gi, 2] > 0:
+            x = group_bound(A, B, V, rows, order, groups, spheres, gi)
+            if x > cutoff:
+                lb[gi] = x - ROUNDING
+                continue
+        low = np.inf
         for t in range(groups[gi, 0], groups[gi, 1]):
             n = order[t]
+            if kept[n]:
+                continue
             a, b = rows[n, 1], rows[n, 2] + (S if rows[n, 0] == 1 else 0)
             dx, dy, dz = ctr[a, 0] - ctr[b, 0], ctr[a, 1] - ctr[b, 1], ctr[a, 2] - ctr[b, 2]
-            if np.sqrt(dx * dx + dy * dy + dz * dz) - rad[a] - rad[b] - rsum[n] > cutoff:
+            x = np.sqrt(dx * dx + dy * dy + dz * dz) - rad[a] - rad[b] - rsum[n]
+            if x <= cutoff:  # the first segment itself, not its ball, against the second primitive's ball
+                x = segpoint(A, B, rows[n, 1], ctr[b, 0], ctr[b, 1], ctr[b, 2]) - rad[b] - rsum[n]
+            if x <= cutoff and rows[n, 0] == 1:  # both ends on one side of the triangle's plane
+                x = plane_gap(A, B, rows[n, 1], V, rows[n, 2]) - rsum[n]
+            if x > cutoff:
+                low = min(low, x)
                 continue
-            if segpoint(A, B, rows[n, 1], ctr[b, 0], ctr[b, 1], ctr[b, 2]) - rad[b] - rsum[n] > cutoff:
-                continue  # the first segment itself, not its ball, far from the second primitive's ball
-            if rows[n, 0] == 1 and plane_gap(A, B, rows[n, 1], V, rows[n, 2]) - rsum[n] > cutoff:
-                continue  # both ends on one side of the triangle's plane, farther than the cutoff
-            idx[m], val[m] = n, _pair_distance(A, B, V, rows, rsum, n, P, Q)
+            x = _pair_distance(A, B, V, rows, rsum, n, P, Q)
+            idx[m], val[m] = n, x
             m += 1
+            if x >= cutoff:
+                low = min(low, x)
+        lb[gi] = low - ROUNDING
     return m
+
+
+@_jit
+def _place(chain_f, chain_i, q, R, p, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad, A, B, V, ctr, rad):
+    """The moving segments ms and triangles mt (their rows mseg_f, ... and scratch mA, ...) placed at q into
+    the world coordinates A, B, V and bounding spheres ctr, rad of all primitives (the static ones stay)."""
+    S = A.shape[0]
+    fk(chain_f, chain_i, q, R, p)
+    place_primitives(mseg_f, mseg_j, mtri_f, mtri_j, R, p, mA, mB, mV)
+    _bounding_spheres(mA, mB, mV, mctr, mrad)
+    for i in range(len(ms)):
+        A[ms[i]], B[ms[i]], ctr[ms[i]], rad[ms[i]] = mA[i], mB[i], mctr[i], mrad[i]
+    for i in range(len(mt)):
+        V[mt[i]], ctr[S + mt[i]], rad[S + mt[i]] = mV[i], mctr[len(ms) + i], mrad[len(ms) + i]
+
+
+@_jit
+def _scratch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j):
+    """Placement scratch for :func:`_place`: (R, p, A, B, V, ctr, rad, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j,
+    mA, mB, mV, mctr, mrad), the static primitives (joint 0) placed once in A, B, V, ctr, rad."""
+    nj, S, T = chain_f.shape[0], seg_f.shape[0], tri_f.shape[0]
+    R, p = np.empty((nj, 3, 3)), np.empty((nj, 3))
+    A, B, V = np.empty((S, 3)), np.empty((S, 3)), np.empty((T, 3, 3))
+    ctr, rad = np.empty((S + T, 3)), np.empty(S + T)
+    fk(chain_f, chain_i, np.zeros(chain_f.shape[0] - 1), R, p)  # any configuration: the moving ones are placed again
+    place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
+    _bounding_spheres(A, B, V, ctr, rad)
+    ms, mt = np.flatnonzero(seg_j != 0), np.flatnonzero(tri_j != 0)
+    mA, mB, mV = np.empty((len(ms), 3)), np.empty((len(ms), 3)), np.empty((len(mt), 3, 3))
+    mctr, mrad = np.empty((len(ms) + len(mt), 3)), np.empty(len(ms) + len(mt))
+    return R, p, A, B, V, ctr, rad, ms, mt, seg_f[ms], seg_j[ms], tri_f[mt], tri_j[mt], mA, mB, mV, mctr, mrad
 
 
 @numba.njit(cache=True)
@@ -80,40 +128,27 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
     order: every pair that is not shown above ``cutoff``; with ``within`` >= 0 only those not shown
     above both ``within`` and the least distance at qs[k] (the previous configuration's nearest pair,
     evaluated first, bounds that least distance), the nearest always."""
-    nj, S, T, NP = chain_f.shape[0], seg_f.shape[0], tri_f.shape[0], rows.shape[0]
-    R, p = np.empty((nj, 3, 3)), np.empty((nj, 3))
-    A, B, V = np.empty((S, 3)), np.empty((S, 3)), np.empty((T, 3, 3))
-    ctr, rad = np.empty((S + T, 3)), np.empty(S + T)
+    NP = rows.shape[0]
+    R, p, A, B, V, ctr, rad, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad = _scratch(
+        chain_f, chain_i, seg_f, seg_j, tri_f, tri_j)
     P, Q = np.empty((1, 3)), np.empty((1, 3))
-    # the static primitives (joint 0) are placed once; each configuration places the moving ones
-    ms, mt = np.flatnonzero(seg_j != 0), np.flatnonzero(tri_j != 0)
-    mseg_f, mseg_j, mtri_f, mtri_j = seg_f[ms], seg_j[ms], tri_f[mt], tri_j[mt]
-    mA, mB, mV = np.empty((len(ms), 3)), np.empty((len(ms), 3)), np.empty((len(mt), 3, 3))
-    mctr, mrad = np.empty((len(ms) + len(mt), 3)), np.empty(len(ms) + len(mt))
-    if qs.shape[0]:
-        fk(chain_f, chain_i, qs[0], R, p)
-        place_primitives(seg_f, seg_j, tri_f, tri_j, R, p, A, B, V)
-        _bounding_spheres(A, B, V, ctr, rad)
     idx, val = np.empty(NP + 1, np.int64), np.empty(NP + 1)
+    kept, lb = np.zeros(NP, np.bool_), np.empty(groups.shape[0])
     cap = max(1024, 16 * qs.shape[0])
     ok, on, od = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
     count = 0
     nearest = -1
     for k in range(qs.shape[0]):
-        fk(chain_f, chain_i, qs[k], R, p)
-        place_primitives(mseg_f, mseg_j, mtri_f, mtri_j, R, p, mA, mB, mV)
-        _bounding_spheres(mA, mB, mV, mctr, mrad)
-        for i in range(len(ms)):
-            A[ms[i]], B[ms[i]], ctr[ms[i]], rad[ms[i]] = mA[i], mB[i], mctr[i], mrad[i]
-        for i in range(len(mt)):
-            V[mt[i]], ctr[S + mt[i]], rad[S + mt[i]] = mV[i], mctr[len(ms) + i], mrad[len(ms) + i]
+        _place(chain_f, chain_i, qs[k], R, p, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad, A, B, V,
+               ctr, rad)
         cut, d0 = cutoff, np.nan
         if within >= 0.0 and nearest >= 0:
             d0 = _pair_distance(A, B, V, rows, rsum, nearest, P, Q)
             # the bounds are computed otherwise than the distances and may exceed them by rounding: a pair at
             # the threshold keeps its distance with ROUNDING to spare, and the nearest pair is always kept
             cut = min(cutoff, max(within, d0) + ROUNDING)
-        m = _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cut, idx, val, P, Q)
+        lb[:] = -np.inf
+        m = _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cut, idx, val, P, Q, kept, lb)
         if d0 <= cutoff:  # (d0 is nan unless the nearest pair was evaluated: False)
             found = False
             for i in range(m):
@@ -138,6 +173,93 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
             ok[count], on[count], od[count] = k, idx[i], val[i]
             count += 1
     return ok[:count].copy(), on[:count].copy(), od[:count].copy()
+
+
+@numba.njit(cache=True)
+def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, groups, spheres, cutoff, keep, lb,
+             ref_q, lever, movers, gm):
+    """The pairs not in ``keep`` (K, P) whose safety distance at qs[k] is below ``cutoff``, as (k, n, distance
+    m) entries. lb (K, G), ref_q (K, nq): per configuration and group, a lower bound of the distance of the
+    group's pairs not kept, valid at ref_q[k] (nan: none); a group whose bound, less how far its moving
+    primitives (rows gm (G, 2) of ``lever``, -1: none) can have moved since, clears the cutoff is not looked
+    at; both are updated to qs."""
+    K, nq, G = qs.shape[0], qs.shape[1], groups.shape[0]
+    R, p, A, B, V, ctr, rad, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad = _scratch(
+        chain_f, chain_i, seg_f, seg_j, tri_f, tri_j)
+    P, Q = np.empty((1, 3)), np.empty((1, 3))
+    dm, lbk = np.zeros(lever.shape[0]), np.empty(G)
+    idx, val = np.empty(rows.shape[0], np.int64), np.empty(rows.shape[0])
+    cap = 1024
+    ok, on, od = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
+    count = 0
+    for k in range(K):
+        if not np.isnan(ref_q[k, 0]):  # a point of primitive e moves at most sum_i lever[e, i] |dq_i| (chain.levers)
+            for e in movers:
+                x = 0.0
+                for i in range(nq):
+                    x += lever[e, i] * abs(qs[k, i] - ref_q[k, i])
+                dm[e] = x
+        look = False
+        for gi in range(G):
+            lbk[gi] = lb[k, gi] - (dm[gm[gi, 0]] if gm[gi, 0] >= 0 else 0.0) - (dm[gm[gi, 1]] if gm[gi, 1] >= 0 else 0.0)
+            look = look or lbk[gi] <= cutoff
+        if look:
+            _place(chain_f, chain_i, qs[k], R, p, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad, A, B, V,
+                   ctr, rad)
+            m = _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, idx, val, P, Q, keep[k], lbk)
+            if count + m > cap:
+                cap = max(2 * cap, count + m)
+                ok2, on2, od2 = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
+                ok2[:count], on2[:count], od2[:count] = ok[:count], on[:count], od[:count]
+                ok, on, od = ok2, on2, od2
+            for i in range(m):
+                if val[i] < cutoff:  # those at or above it are in their group's bound
+                    ok[count], on[count], od[count] = k, idx[i], val[i]
+                    count += 1
+        for gi in range(G):
+            lb[k, gi] = lbk[gi]  # the pairs found below the cutoff are kept from now on (PairFilter.update)
+        for i in range(nq):
+            ref_q[k, i] = qs[k, i]
+        dm[:] = 0.0
+    return ok[:count].copy(), on[:count].copy(), od[:count].copy()
+
+
+class PairFilter:
+    """The optimiser's pair filter over its outer iterations: which pairs come within ``cutoff`` m at K
+    configurations that change a little from call to call. Each call returns the pairs newly within the
+    cutoff; they join ``keep`` (K, P) bool, which is never looked at again. In between, each (configuration,
+    pair group) keeps a lower bound of its other pairs' distances, less how far its moving primitives can
+    have moved since (:func:`capmap.dualarm.chain.levers`), so a group far from the cutoff costs a
+    comparison, not a test (the same pairs as :func:`near_pairs` with the same cutoff, tested against it in
+    tests/dualarm/test_nodes.py)."""
+
+    def __init__(self, packed: Packed, pairs: Pairs, K: int, cutoff: float):
+        self.packed, self.cutoff = packed, float(cutoff)
+        self.rows, self.rsum = pair_table(packed, pairs)
+        self.order, self.groups, self.spheres = groups_of(packed, self.rows)
+        S, T = len(packed.seg_f), len(packed.tri_f)
+        self.lever = levers(packed, np.arange(S), np.arange(T))
+        self.movers = np.flatnonzero(self.lever.any(axis=1)).astype(np.int64)
+        first = self.rows[self.order[self.groups[:, 0]]]
+        second = np.where(first[:, 0] == 1, S + first[:, 2], first[:, 2])
+        col = self.groups[:, 2]
+        # the moving primitive of a group (col 1: the segment, col 2: the second, a triangle when kind 1), both of a pair
+        self.gm = np.column_stack([np.where(col == 2, second, first[:, 1]), np.where(col == 0, second, -1)]).astype(np.int64)
+        self.lb = np.full((K, len(self.groups)), -np.inf)
+        self.ref_q = np.full((K, packed.chain_f.shape[0] - 1), np.nan)
+        self.keep = np.zeros((K, len(self.rows)), dtype=bool)
+
+    def update(self, qs: np.ndarray) -> np.ndarray:
+        """(K, P) bool: the pairs not kept before whose safety distance at qs (K, nq) is below the cutoff
+        (they are kept from now on)."""
+        pk = self.packed
+        k, n, _ = _recheck(pk.chain_f, pk.chain_i, pk.seg_f, pk.seg_j, pk.tri_f, pk.tri_j,
+                           np.ascontiguousarray(qs, dtype=float), self.rows, self.rsum, self.order, self.groups,
+                           self.spheres, self.cutoff, self.keep, self.lb, self.ref_q, self.lever, self.movers, self.gm)
+        new = np.zeros_like(self.keep)
+        new[k, n] = True
+        self.keep |= new
+        return new
 
 
 def near_pairs(packed: Packed, qs: np.ndarray, pairs: Pairs, cutoff: float = np.inf,

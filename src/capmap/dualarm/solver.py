@@ -5,8 +5,10 @@ Outer iteration: solve the augmented problem (FDDP from the previous solution, t
 threshold) -> measure the violation (largest equality residual; largest shortfall of an
 inequality) -> lambda_eq <- lambda_eq + mu c, lambda_in <- max(0, lambda_in - mu g) -> mu <-
 10 mu when the violation has not dropped ``decrease`` times. Collision pairs are filtered per
-node by their distance on the warm start; after each outer iteration every candidate pair is
-re-checked on the solution and any within ``filter_m`` joins its node's set.
+node by their distance on the warm start; after each outer iteration the candidate pairs not yet in
+a node's set are re-checked on the solution and any within ``filter_m`` joins it (a
+:class:`capmap.dualarm.proximity.PairFilter`: a group of pairs whose last bound, less how far the
+node has moved since, clears ``filter_m`` is not looked at).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from capmap.dualarm.collision import Pairs
 from capmap.dualarm.fddp import ALPHAS, C_VALUES, EQ_AT, G_VALUES, IN_AT, LAM_EQ, LAM_IN, evaluate_nodes, fddp, pack_nodes
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
-from capmap.dualarm.proximity import near_pairs
+from capmap.dualarm.proximity import PairFilter, near_pairs
 from capmap.dualarm.settings import ALSettings, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
@@ -115,6 +117,20 @@ def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float, packed=None) -> n
     return keep
 
 
+class _ReferenceFilter:
+    """:class:`capmap.dualarm.proximity.PairFilter`'s interface on Pinocchio's placements (every candidate pair
+    at every call)."""
+
+    def __init__(self, asm: Assembly, K: int, cutoff: float):
+        self.asm, self.cutoff = asm, cutoff
+        self.keep = np.zeros((K, len(asm.pairs)), dtype=bool)
+
+    def update(self, qs: np.ndarray) -> np.ndarray:
+        new = node_pairs(self.asm, qs, self.cutoff) & ~self.keep
+        self.keep |= new
+        return new
+
+
 class _CrocoddylInner:
     """The inner solve by Crocoddyl's SolverFDDP on Python action models (the Pinocchio reference); the
     same interface as :class:`_CompiledInner`: replace a node's model, solve from a guess, the nodes'
@@ -195,7 +211,10 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
     if not inequalities:
         asm = replace(asm, pairs=NO_PAIRS)
     N, nq = asm.task.N, asm.model.nq
-    keep = node_pairs(asm, xs0[:, :nq], st.filter_m, ctx.packed)
+    watch = (PairFilter(ctx.packed, asm.pairs, N + 1, st.filter_m) if ctx.packed is not None
+             else _ReferenceFilter(asm, N + 1, st.filter_m))
+    watch.update(xs0[:, :nq])
+    keep = watch.keep
     models = [node_model(ctx, k, asm.pairs.subset(keep[k])) for k in range(N + 1)]
     # after a multiplier update the full step is often rejected until the regularisation has grown enough: by
     # Crocoddyl's x10 per rejected line search (10 trial rollouts each) that took ~8 rejections per outer iteration
@@ -213,9 +232,7 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
         eq = max(float(np.abs(c).max()) for c in cs)
         ineq = max(float(np.maximum(-g, 0).max(initial=0.0)) for g in gs)
         # re-check every candidate pair on the solution; pairs that came near join their node
-        near = node_pairs(asm, xs[:, :nq], st.filter_m, ctx.packed)
-        grown = np.flatnonzero((near & ~keep).any(axis=1))
-        keep |= near
+        grown = np.flatnonzero(watch.update(xs[:, :nq]).any(axis=1))
         added = 0
         for k in map(int, grown):
             old = models[k]
