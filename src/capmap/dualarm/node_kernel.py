@@ -46,8 +46,9 @@ def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tr
     coordinates, the static ones' given, the moving ones' written here; lever (S + T, nq): how far a point
     of each primitive moves per radian of each joint; ref_lb (P,), ref_q (nq,): the pairs' lower bounds
     at the configuration of the last evaluation with ``diff`` and ``bound`` (which writes them; ref_q nan:
-    none), that bound them anywhere else less the primitives' motion since (a calc without ``diff``
-    skips a pair whose multiplier is zero and whose bound so moved clears the margin); order, groups, spheres: the pairs' groups
+    none), that bound them anywhere else less the primitives' motion since (a calc or calcDiff skips a
+    pair whose multiplier is zero and whose bound so moved clears the margin: its g is that bound, and
+    its penalty and derivatives are zero either way); order, groups, spheres: the pairs' groups
     (:func:`capmap.dualarm.broadphase.pair_groups`): with ``bound``, a group whose pairs all have zero
     multipliers and whose bound clears the margin gets that bound as every pair's g."""
     dt, wv, wp, margin, scale = par[0], par[1], par[2], par[3], par[4]
@@ -170,13 +171,15 @@ def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tr
     if npair:
         done = np.zeros(npair, np.bool_)
         left = npair
-        if bound and not diff and not np.isnan(ref_q[0]):
-            # the bounds at ref_q less how far each primitive moved since (a point moves at most sum |dq_i| lever_i)
+        if bound and not np.isnan(ref_q[0]):
+            # the bounds at ref_q less how far each primitive moved since (a point moves at most sum |dq_i| lever_i;
+            # a static primitive's lever is 0)
             nS = seg_f.shape[0]
             dm = np.zeros(lever.shape[0])
             for e in range(lever.shape[0]):
-                for i in range(nq):
-                    dm[e] += lever[e, i] * abs(q[i] - ref_q[i])
+                if (seg_j[e] if e < nS else tri_j[e - nS]) != 0:
+                    for i in range(nq):
+                        dm[e] += lever[e, i] * abs(q[i] - ref_q[i])
             for n in range(npair):
                 if lam_in[n] == 0.0:
                     moved = dm[rows[n, 1]] + (dm[rows[n, 2]] if rows[n, 0] == 0 else dm[nS + rows[n, 2]])
