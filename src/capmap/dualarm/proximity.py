@@ -54,9 +54,9 @@ def _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, idx, val
     """The pairs whose group ball, bounding spheres and triangle plane do not put them above ``cutoff``:
     their rows n in idx and safety distances (m) in val (from 0); returns how many. kept (P,) bool: pairs
     not looked at; lb (G,): a group whose entry is above the cutoff is not looked at either; every other
-    entry becomes a lower bound of the distances of its group's pairs not kept and not returned below the
-    cutoff (inf: none). One call per configuration (a call per pair would pay numba's per-array argument
-    overhead: the pair's tests are written out here)."""
+    entry becomes a lower bound of the distances of its group's pairs not kept (inf: none). One call per
+    configuration (a call per pair would pay numba's per-array argument overhead: the pair's tests are
+    written out here)."""
     S = A.shape[0]
     m = 0
     for gi in range(groups.shape[0]):
@@ -85,10 +85,32 @@ def _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, idx, val
             x = _pair_distance(A, B, V, rows, rsum, n, P, Q)
             idx[m], val[m] = n, x
             m += 1
-            if x >= cutoff:
-                low = min(low, x)
+            low = min(low, x)
         lb[gi] = low - ROUNDING
     return m
+
+
+@_jit
+def _grow(ok, on, od, count, need):
+    """The entry arrays (k, n, distance) with their first ``count`` entries, room for ``need`` or twice as many."""
+    cap = max(2 * ok.shape[0], need)
+    ok2, on2, od2 = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
+    ok2[:count], on2[:count], od2[:count] = ok[:count], on[:count], od[:count]
+    return ok2, on2, od2
+
+
+@_jit
+def _carry(lever, movers, gm, q, q_ref, dm, lb):
+    """lb (G,) valid at q_ref (nq,) made valid at q: less how far each group's moving primitives (rows gm (G,
+    2) of ``lever``, -1: none) can have moved (a point of primitive e moves at most sum_i lever[e, i] |dq_i|,
+    :func:`capmap.dualarm.chain.levers`); dm (S + T,): scratch, 0 but for ``movers``."""
+    for e in movers:
+        x = 0.0
+        for i in range(q.shape[0]):
+            x += lever[e, i] * abs(q[i] - q_ref[i])
+        dm[e] = x
+    for gi in range(lb.shape[0]):
+        lb[gi] -= (dm[gm[gi, 0]] if gm[gi, 0] >= 0 else 0.0) + (dm[gm[gi, 1]] if gm[gi, 1] >= 0 else 0.0)
 
 
 @_jit
@@ -123,17 +145,20 @@ def _scratch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j):
 
 
 @numba.njit(cache=True)
-def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, groups, spheres, cutoff, within):
+def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, groups, spheres, cutoff, within, lever,
+           movers, gm):
     """The pairs evaluated at each configuration qs[k], as (k, n, distance m) entries in configuration
     order: every pair that is not shown above ``cutoff``; with ``within`` >= 0 only those not shown
     above both ``within`` and the least distance at qs[k] (the previous configuration's nearest pair,
-    evaluated first, bounds that least distance), the nearest always."""
+    evaluated first, bounds that least distance), the nearest always. What shows a pair above: its group's
+    ball, its own bounding spheres and triangle plane, or its group's bound at the previous configuration
+    less how far the group can have moved since (:func:`_carry`)."""
     NP = rows.shape[0]
     R, p, A, B, V, ctr, rad, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad = _scratch(
         chain_f, chain_i, seg_f, seg_j, tri_f, tri_j)
     P, Q = np.empty((1, 3)), np.empty((1, 3))
     idx, val = np.empty(NP + 1, np.int64), np.empty(NP + 1)
-    kept, lb = np.zeros(NP, np.bool_), np.empty(groups.shape[0])
+    kept, lb, dm = np.zeros(NP, np.bool_), np.full(groups.shape[0], -np.inf), np.zeros(lever.shape[0])
     cap = max(1024, 16 * qs.shape[0])
     ok, on, od = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
     count = 0
@@ -147,7 +172,8 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
             # the bounds are computed otherwise than the distances and may exceed them by rounding: a pair at
             # the threshold keeps its distance with ROUNDING to spare, and the nearest pair is always kept
             cut = min(cutoff, max(within, d0) + ROUNDING)
-        lb[:] = -np.inf
+        if k:
+            _carry(lever, movers, gm, qs[k], qs[k - 1], dm, lb)
         m = _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cut, idx, val, P, Q, kept, lb)
         if d0 <= cutoff:  # (d0 is nan unless the nearest pair was evaluated: False)
             found = False
@@ -164,11 +190,8 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
             for i in range(m):
                 if val[i] < best or (val[i] == best and idx[i] < nearest):
                     best, nearest = val[i], idx[i]
-        if count + m > cap:
-            cap = max(2 * cap, count + m)
-            ok2, on2, od2 = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
-            ok2[:count], on2[:count], od2[:count] = ok[:count], on[:count], od[:count]
-            ok, on, od = ok2, on2, od2
+        if count + m > ok.shape[0]:
+            ok, on, od = _grow(ok, on, od, count, count + m)
         for i in range(m):
             ok[count], on[count], od[count] = k, idx[i], val[i]
             count += 1
@@ -189,39 +212,44 @@ def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order
     P, Q = np.empty((1, 3)), np.empty((1, 3))
     dm, lbk = np.zeros(lever.shape[0]), np.empty(G)
     idx, val = np.empty(rows.shape[0], np.int64), np.empty(rows.shape[0])
-    cap = 1024
-    ok, on, od = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
+    ok, on, od = np.empty(1024, np.int64), np.empty(1024, np.int64), np.empty(1024)
     count = 0
     for k in range(K):
-        if not np.isnan(ref_q[k, 0]):  # a point of primitive e moves at most sum_i lever[e, i] |dq_i| (chain.levers)
-            for e in movers:
-                x = 0.0
-                for i in range(nq):
-                    x += lever[e, i] * abs(qs[k, i] - ref_q[k, i])
-                dm[e] = x
+        lbk[:] = lb[k]
+        if not np.isnan(ref_q[k, 0]):
+            _carry(lever, movers, gm, qs[k], ref_q[k], dm, lbk)
         look = False
         for gi in range(G):
-            lbk[gi] = lb[k, gi] - (dm[gm[gi, 0]] if gm[gi, 0] >= 0 else 0.0) - (dm[gm[gi, 1]] if gm[gi, 1] >= 0 else 0.0)
             look = look or lbk[gi] <= cutoff
         if look:
             _place(chain_f, chain_i, qs[k], R, p, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad, A, B, V,
                    ctr, rad)
             m = _row(A, B, V, ctr, rad, rows, rsum, order, groups, spheres, cutoff, idx, val, P, Q, keep[k], lbk)
-            if count + m > cap:
-                cap = max(2 * cap, count + m)
-                ok2, on2, od2 = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
-                ok2[:count], on2[:count], od2[:count] = ok[:count], on[:count], od[:count]
-                ok, on, od = ok2, on2, od2
+            if count + m > ok.shape[0]:
+                ok, on, od = _grow(ok, on, od, count, count + m)
             for i in range(m):
-                if val[i] < cutoff:  # those at or above it are in their group's bound
+                if val[i] < cutoff:
                     ok[count], on[count], od[count] = k, idx[i], val[i]
                     count += 1
         for gi in range(G):
-            lb[k, gi] = lbk[gi]  # the pairs found below the cutoff are kept from now on (PairFilter.update)
+            lb[k, gi] = lbk[gi]  # (a group with a pair found now is looked at once more: then that pair is kept)
         for i in range(nq):
             ref_q[k, i] = qs[k, i]
-        dm[:] = 0.0
     return ok[:count].copy(), on[:count].copy(), od[:count].copy()
+
+
+def _movers(packed: Packed, rows: np.ndarray, order: np.ndarray, groups: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(lever (S + T, nq) of every segment, then triangle (:func:`capmap.dualarm.chain.levers`), the rows
+    of those that move, gm (G, 2): the rows of each group's moving primitives, -1: none)."""
+    S, T = len(packed.seg_f), len(packed.tri_f)
+    lever = levers(packed, np.arange(S), np.arange(T))
+    first = rows[order[groups[:, 0]]].reshape(-1, 3)
+    second = np.where(first[:, 0] == 1, S + first[:, 2], first[:, 2])
+    col = groups[:, 2]
+    # the moving primitive of a group (col 1: the segment, col 2: the second, a triangle when kind 1), both of a pair
+    gm = np.column_stack([np.where(col == 2, second, first[:, 1]), np.where(col == 0, second, -1)]).astype(np.int64)
+    return lever, np.flatnonzero(lever.any(axis=1)).astype(np.int64), gm
 
 
 class PairFilter:
@@ -237,14 +265,7 @@ class PairFilter:
         self.packed, self.cutoff = packed, float(cutoff)
         self.rows, self.rsum = pair_table(packed, pairs)
         self.order, self.groups, self.spheres = groups_of(packed, self.rows)
-        S, T = len(packed.seg_f), len(packed.tri_f)
-        self.lever = levers(packed, np.arange(S), np.arange(T))
-        self.movers = np.flatnonzero(self.lever.any(axis=1)).astype(np.int64)
-        first = self.rows[self.order[self.groups[:, 0]]]
-        second = np.where(first[:, 0] == 1, S + first[:, 2], first[:, 2])
-        col = self.groups[:, 2]
-        # the moving primitive of a group (col 1: the segment, col 2: the second, a triangle when kind 1), both of a pair
-        self.gm = np.column_stack([np.where(col == 2, second, first[:, 1]), np.where(col == 0, second, -1)]).astype(np.int64)
+        self.lever, self.movers, self.gm = _movers(packed, self.rows, self.order, self.groups)
         self.lb = np.full((K, len(self.groups)), -np.inf)
         self.ref_q = np.full((K, packed.chain_f.shape[0] - 1), np.nan)
         self.keep = np.zeros((K, len(self.rows)), dtype=bool)
@@ -268,8 +289,10 @@ def near_pairs(packed: Packed, qs: np.ndarray, pairs: Pairs, cutoff: float = np.
     (E,), safety distance m (E,), in configuration order."""
     rows, rsum = pair_table(packed, pairs)
     qs = np.ascontiguousarray(qs, dtype=float).reshape(-1, packed.chain_f.shape[0] - 1)
+    order, groups, spheres = groups_of(packed, rows)
     return _batch(packed.chain_f, packed.chain_i, packed.seg_f, packed.seg_j, packed.tri_f, packed.tri_j, qs, rows, rsum,
-                  *groups_of(packed, rows), float(cutoff), -1.0 if within is None else float(within))
+                  order, groups, spheres, float(cutoff), -1.0 if within is None else float(within),
+                  *_movers(packed, rows, order, groups))
 
 
 def batch_distances(packed: Packed, qs: np.ndarray, pairs: Pairs, cutoff: float = np.inf,
