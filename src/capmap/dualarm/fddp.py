@@ -79,8 +79,9 @@ def _eval(P, k, x, u, mu, diff, exact, Lx, Lxx, Lu, xnext):
      rows, rsum, po, order, groups, spheres, go, kind, tg, axis, par, lim, lam_eq, eo, lam_in, io, c, C, g) = P
     s0, s1, t0, t1, p0, p1 = so[k], so[k + 1], to[k], to[k + 1], po[k], po[k + 1]
     g0, g1, e0, e1, i0, i1 = go[k], go[k + 1], eo[k], eo[k + 1], io[k], io[k + 1]
-    pr = par[k].copy()
+    pr = par[k]
     if exact:
+        pr = pr.copy()
         pr[8] = 0.0
     return node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f[s0:s1], seg_j[s0:s1], tri_f[t0:t1], tri_j[t0:t1],
                      Aw[s0:s1], Bw[s0:s1], Vw[t0:t1], lever[s0 + t0:s1 + t1], ref_lb[p0:p1], ref_q[k], rows[p0:p1],
@@ -214,24 +215,26 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
 
 @numba.njit(cache=True)
 def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try):
-    """Crocoddyl's FDDP forwardPass: the trial's cost, nan when the cost or a state is nan, inf or >= HUGE."""
-    N = xs.shape[0] - 1
+    """Crocoddyl's FDDP forwardPass: the trial's cost, nan when the cost or a state is nan, inf or >= HUGE
+    (the products written out: no allocation per node)."""
+    N, n2, nu = xs.shape[0] - 1, xs.shape[1], us.shape[1]
     total = 0.0
-    xn = x0.copy()
+    shift = not (feasible or alpha == 1.0)
     for t in range(N + 1):
-        if feasible or alpha == 1.0:
-            xs_try[t] = xn
-        else:
-            xs_try[t] = xn + fs[t] * (alpha - 1.0)
+        for i in range(n2):
+            xn = x0[i] if t == 0 else xnext[t - 1, i]
+            xs_try[t, i] = xn + fs[t, i] * (alpha - 1.0) if shift else xn
         if t < N:
-            dx = xs_try[t] - xs[t]
-            us_try[t] = us[t] - k_[t] * alpha - K[t] @ dx
+            for r in range(nu):
+                s = 0.0
+                for i in range(n2):
+                    s += K[t, r, i] * (xs_try[t, i] - xs[t, i])
+                us_try[t, r] = us[t, r] - k_[t, r] * alpha - s
             total += _calc(P, mu, cost, xnext, t, xs_try[t], us_try[t])
-            xn = xnext[t].copy()
-            if not abs(total) < HUGE or _huge(xn):
+            if not abs(total) < HUGE or _huge(xnext[t]):
                 return np.nan
         else:
-            total += _calc(P, mu, cost, xnext, t, xs_try[t], np.zeros(us.shape[1]))
+            total += _calc(P, mu, cost, xnext, t, xs_try[t], np.zeros(nu))
             if not abs(total) < HUGE:
                 return np.nan
     return total
