@@ -29,6 +29,7 @@ LAM_EQ, EQ_AT, LAM_IN, IN_AT, C_VALUES, G_VALUES = 29, 30, 31, 32, 33, 35
 REG_MIN, REG_MAX, REG_DEC = 1e-9, 1e9, 10.0
 TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEPINC = 0.1, 2.0, 1e-12, 0.5, 0.01
 HUGE = 1e30  # Crocoddyl's raiseIfNaN: nan, inf or >= 1e30 fails a rollout or a backward pass
+STOPPED = -1.0  # a trial stopped by its partial cost (_forward; a cost is >= 0)
 
 
 def _offsets(sizes) -> np.ndarray:
@@ -214,9 +215,11 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
 
 
 @numba.njit(cache=True)
-def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try):
+def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total0, limit):
     """Crocoddyl's FDDP forwardPass: the trial's cost, nan when the cost or a state is nan, inf or >= HUGE
-    (the products written out: no allocation per node)."""
+    (the products written out: no allocation per node); STOPPED as soon as total0 - (the cost so far) <=
+    limit (not nan): the trial's cost can only grow (every node's is >= 0), so its dV = total0 - cost would
+    fail Crocoddyl's test dV > limit (rounding is monotone: the same outcome in floating point)."""
     N, n2, nu = xs.shape[0] - 1, xs.shape[1], us.shape[1]
     total = 0.0
     shift = not (feasible or alpha == 1.0)
@@ -233,6 +236,8 @@ def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try,
             total += _calc(P, mu, cost, xnext, t, xs_try[t], us_try[t])
             if not abs(total) < HUGE or _huge(xnext[t]):
                 return np.nan
+            if total0 - total <= limit:
+                return STOPPED
         else:
             total += _calc(P, mu, cost, xnext, t, xs_try[t], np.zeros(nu))
             if not abs(total) < HUGE:
@@ -293,7 +298,22 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
         recalc = False
         alpha = alphas[0]
         for alpha in alphas:
-            trial = _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try)
+            # once feasible, a trial's expected improvement is known before its rollout (dv = 0) and every node's
+            # cost is >= 0: a trial that cannot be accepted is not rolled out, or stops as soon as its partial cost
+            # shows it (_forward); it sets d0, d1 as a completed one would (Crocoddyl's decisions, unless the
+            # completed rollout would have overflowed: then Crocoddyl keeps the previous d0, d1)
+            limit = np.nan
+            if feasible:
+                dVexp = alpha * ((dg + 0.0) + 0.5 * alpha * (dq - 0.0))
+                if not dVexp >= 0.0:
+                    d0, d1 = dg + 0.0, dq - 0.0
+                    continue
+                if not abs(dg + 0.0) < TH_GRAD:
+                    limit = TH_ACCEPT * dVexp
+            trial = _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total, limit)
+            if trial == STOPPED:
+                d0, d1 = dg + 0.0, dq - 0.0
+                continue
             if np.isnan(trial):
                 continue
             dV = total - trial
