@@ -47,9 +47,9 @@ def _compiled(models, xs, us, maxiter, feasible, alphas=ALPHAS):
     nq = m.Fu.shape[1]
     Luu = np.ascontiguousarray(np.broadcast_to(m.ctx.task.dt * np.diag(m.lim[0]), (len(models) - 1, nq, nq)))
     xs, us = xs.copy(), us.copy()
-    ok, it, cost = fddp(pack_nodes(models), m.Fx[0, nq], m.Fu[0, 0], Luu, xs[0].copy(), xs, us, maxiter, feasible,
-                        m.ctx.mu, 1e-9, REG_INCREASE, np.asarray(alphas, dtype=float))
-    return ok, it, cost, xs, us
+    ok, it, cost, stopped = fddp(pack_nodes(models), m.Fx[0, nq], m.Fu[0, 0], Luu, xs[0].copy(), xs, us, maxiter,
+                                 feasible, m.ctx.mu, 1e-9, REG_INCREASE, np.asarray(alphas, dtype=float))
+    return ok, it, cost, xs, us, stopped
 
 
 # the feasible start perturbs the controls by 0.005 rad/s^2: larger steps drive cores through each other, where a
@@ -72,6 +72,27 @@ def test_compiled_fddp_takes_crocoddyls_steps(small, maxiter, feasible, perturb)
     assert np.abs(fast[3] - ref[3]).max() < 1e-8 and np.abs(fast[4] - ref[4]).max() < 1e-6
     if maxiter == 30:
         assert ref[1] > 2  # the comparison covered many steps, not one
+
+
+def test_compiled_fddp_stops_only_trials_that_crocoddyl_rejects(small):
+    """At a penalty where many feasible trials fail (mu = 1e6 with multipliers on), the trials the compiled
+    FDDP does not roll out or stops by their partial cost are ones Crocoddyl rejects: the same iterations,
+    cost and states as Crocoddyl's, which rolls every trial out."""
+    asm, ctx, xs, us, _ = small
+    models = _models(small, 7)
+    us = us + 0.005 * np.random.default_rng(8).normal(size=us.shape)
+    xs = xs.copy()
+    for k, m in enumerate(models[:-1]):  # a feasible start
+        xs[k + 1] = m.Fx @ xs[k] + m.Fu @ us[k]
+    mu = ctx.mu
+    ctx.mu = 1e6
+    try:
+        ref, fast = _crocoddyl(models, xs, us, 30, True), _compiled(models, xs, us, 30, True)
+    finally:
+        ctx.mu = mu
+    assert fast[5] > 20  # trials were stopped (56 here)
+    assert fast[:2] == ref[:2] and fast[2] == pytest.approx(ref[2], rel=1e-9)
+    assert np.abs(fast[3] - ref[3]).max() < 1e-8 and np.abs(fast[4] - ref[4]).max() < 1e-6
 
 
 def test_compiled_fddp_takes_crocoddyls_partial_steps_across_gaps(small):

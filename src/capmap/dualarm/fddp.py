@@ -250,7 +250,7 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
     """Crocoddyl's SolverFDDP.solve from xs (N + 1, 2 nq), us (N, nq) (both updated in place) on the packed
     nodes P at penalty mu; the dynamics Fx = [[I, h I], [0, I]], Fu = [[a I], [h I]] (h: the nodes'
     dt in s, a = dt^2 / 2 in s^2); Luu (N, nq, nq). Returns (converged, iterations as Crocoddyl's ``iter``,
-    cost)."""
+    cost, trials not rolled out or stopped by their partial cost)."""
     N, n2, nu = xs.shape[0] - 1, xs.shape[1], us.shape[1]
     cost, xnext = np.zeros(N + 1), np.zeros((N + 1, n2))
     Lx, Lxx, Lu = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2)), np.zeros((N + 1, nu))
@@ -262,6 +262,7 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
     u0 = np.zeros(nu)
     preg = REG_MIN
     was_feasible = False
+    stopped = 0
     recalc = True
     total = 0.0
     d0 = d1 = 0.0
@@ -284,7 +285,7 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
             recalc = False
             preg = min(preg * reg_inc, REG_MAX)
             if preg == REG_MAX:
-                return False, it, total
+                return False, it, total, stopped
         dg, dq = 0.0, 0.0
         if not feasible:
             dg -= Vx[N] @ fs[N]
@@ -307,12 +308,14 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
                 dVexp = alpha * ((dg + 0.0) + 0.5 * alpha * (dq - 0.0))
                 if not dVexp >= 0.0:
                     d0, d1 = dg + 0.0, dq - 0.0
+                    stopped += 1
                     continue
                 if not abs(dg + 0.0) < TH_GRAD:
                     limit = TH_ACCEPT * dVexp
             trial = _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total, limit)
             if trial == STOPPED:
                 d0, d1 = dg + 0.0, dq - 0.0
+                stopped += 1
                 continue
             if np.isnan(trial):
                 continue
@@ -338,7 +341,7 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
         if alpha <= TH_STEPINC:
             preg = min(preg * reg_inc, REG_MAX)
             if preg == REG_MAX:
-                return False, it, total
+                return False, it, total, stopped
         if was_feasible and abs(d0 + 0.5 * d1) < th_stop:
-            return True, it, total
-    return False, maxiter, total
+            return True, it, total, stopped
+    return False, maxiter, total, stopped

@@ -189,7 +189,7 @@ class _CompiledInner:
 
     def solve(self, xs: np.ndarray, us: np.ndarray, maxiter: int, feasible: bool, mu: float):
         xs, us = np.array(xs, dtype=float), np.array(us, dtype=float)
-        _, it, cost = fddp(self._pack(), self.h, self.a, self.Luu, self.x0, xs, us, maxiter, feasible, mu,
+        _, it, cost, _ = fddp(self._pack(), self.h, self.a, self.Luu, self.x0, xs, us, maxiter, feasible, mu,
                            self.st.inner_stop, REG_INCREASE, ALPHAS)
         return xs, us, int(it), float(cost)
 
