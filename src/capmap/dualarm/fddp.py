@@ -91,14 +91,15 @@ def _eval(P, k, x, u, mu, diff, exact, Lx, Lxx, Lu, xnext):
 
 
 @numba.njit(cache=True)
-def evaluate_nodes(P, xs):
-    """Every node's equality values c and inequality values g (exact distances) at the states xs (N + 1,
-    2 nq), written into the packed nodes' c and g (flat, by node offsets eo, io)."""
+def evaluate_nodes(P, xs, exact):
+    """Every node's equality values c and inequality values g at the states xs (N + 1, 2 nq), written into
+    the packed nodes' c and g (flat, by node offsets eo, io); ``exact``: every pair's distance, else a pair
+    with no multiplier whose lower bound clears the margin has that bound in g (as in a calc)."""
     n2 = xs.shape[1]
     Lx, Lxx, Lu, xn = np.empty(n2), np.empty((n2, n2)), np.empty(n2 // 2), np.empty(n2)
     u0 = np.zeros(n2 // 2)
     for k in range(xs.shape[0]):
-        _eval(P, k, xs[k], u0, 1.0, False, True, Lx, Lxx, Lu, xn)
+        _eval(P, k, xs[k], u0, 1.0, False, exact, Lx, Lxx, Lu, xn)
 
 
 @numba.njit(cache=True)

@@ -62,11 +62,13 @@ class AssemblyMotion:
 
 
 def plan_assembly(asm: Assembly, robot: DualArm, weights: Weights, solver: ALSettings, fine_factor: int,
-                  progress: Callable[[str], None] = lambda _: None, compiled: bool = True) -> AssemblyMotion:
-    """Key poses, warm start, solve within the joint limits, evaluation on the nodes and on a grid
-    ``fine_factor`` times finer; ``compiled=False``: Pinocchio's node models (the reference)."""
+                  progress: Callable[[str], None] = lambda _: None, compiled: bool = True,
+                  warm: np.ndarray | None = None) -> AssemblyMotion:
+    """Key poses, warm start (``warm`` (N + 1, nq) rad: :func:`capmap.dualarm.assembly.warm_start`'s, when
+    already computed), solve within the joint limits, evaluation on the nodes and on a grid ``fine_factor``
+    times finer; ``compiled=False``: Pinocchio's node models (the reference)."""
     t0 = time.perf_counter()
-    qs = warm_start(asm)
+    qs = warm_start(asm) if warm is None else warm
     clear = key_poses(asm, qs, progress)
     xs0, us0 = initial_guess(qs, asm.task.dt)
     t1 = time.perf_counter()

@@ -154,9 +154,22 @@ class _CrocoddylInner:
         self.solver.solve(list(xs), list(us), maxiter, feasible)
         return np.array(self.solver.xs), np.array(self.solver.us), int(self.solver.iter), float(self.solver.cost)
 
-    def violations(self, xs: np.ndarray) -> tuple[list, list]:
-        cs, gs = zip(*(m.values(x) for m, x in zip(self.models, xs)))
-        return list(cs), list(gs)
+    def violations(self, xs: np.ndarray) -> tuple[float, float]:
+        """The largest equality residual and inequality shortfall at xs; the values are kept for
+        :meth:`update`."""
+        self.cs, self.gs = zip(*(m.values(x) for m, x in zip(self.models, xs)))
+        return (max(float(np.abs(c).max()) for c in self.cs),
+                max(float(np.maximum(-g, 0).max(initial=0.0)) for g in self.gs))
+
+    def update(self, mu: float, keep_in: np.ndarray) -> None:
+        """lambda_eq <- lambda_eq + mu c, lambda_in <- max(0, lambda_in - mu g) at the values of the last
+        :meth:`violations`, but the inequality multipliers of the nodes ``keep_in`` (their pairs are about
+        to change)."""
+        keep = set(map(int, keep_in))
+        for k, (m, c, g) in enumerate(zip(self.models, self.cs, self.gs)):
+            m.lam_eq = m.lam_eq + mu * c
+            if k not in keep:
+                m.lam_in = np.maximum(m.lam_in - mu * g, 0.0)
 
 
 class _CompiledInner:
@@ -180,11 +193,10 @@ class _CompiledInner:
 
     def _pack(self):
         if self.packed is None:
-            self.packed = pack_nodes(self.models)
-        else:  # the multipliers only
-            P = self.packed
-            P[LAM_EQ][:] = np.concatenate([m.lam_eq for m in self.models])
-            P[LAM_IN][:] = np.concatenate([m.lam_in for m in self.models])
+            P = self.packed = pack_nodes(self.models)
+            eo, io = P[EQ_AT], P[IN_AT]
+            for k, m in enumerate(self.models):  # the nodes' multipliers become views of the packed ones
+                m.lam_eq, m.lam_in = P[LAM_EQ][eo[k]:eo[k + 1]], P[LAM_IN][io[k]:io[k + 1]]
         return self.packed
 
     def solve(self, xs: np.ndarray, us: np.ndarray, maxiter: int, feasible: bool, mu: float):
@@ -193,11 +205,22 @@ class _CompiledInner:
                            self.st.inner_stop, REG_INCREASE, ALPHAS)
         return xs, us, int(it), float(cost)
 
-    def violations(self, xs: np.ndarray) -> tuple[list, list]:
+    def violations(self, xs: np.ndarray) -> tuple[float, float]:
+        """As :meth:`_CrocoddylInner.violations`; a pair with no multiplier whose lower bound clears the margin
+        has that bound as its value (its shortfall and its multiplier's update are 0 either way)."""
         P = self._pack()
-        evaluate_nodes(P, np.ascontiguousarray(xs, dtype=float))
-        c, g, eo, io = P[C_VALUES], P[G_VALUES], P[EQ_AT], P[IN_AT]
-        return [c[eo[k]:eo[k + 1]].copy() for k in range(len(xs))], [g[io[k]:io[k + 1]].copy() for k in range(len(xs))]
+        evaluate_nodes(P, np.ascontiguousarray(xs, dtype=float), False)
+        return float(np.abs(P[C_VALUES]).max(initial=0.0)), float(np.maximum(-P[G_VALUES], 0).max(initial=0.0))
+
+    def update(self, mu: float, keep_in: np.ndarray) -> None:
+        """As :meth:`_CrocoddylInner.update`, on the packed multipliers (the nodes' are views of them)."""
+        P = self._pack()
+        P[LAM_EQ][:] += mu * P[C_VALUES]
+        new = np.maximum(P[LAM_IN] - mu * P[G_VALUES], 0.0)
+        io = P[IN_AT]
+        for k in keep_in:
+            new[io[k]:io[k + 1]] = P[LAM_IN][io[k]:io[k + 1]]
+        P[LAM_IN][:] = new
 
 
 def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], settings: ALSettings,
@@ -228,33 +251,26 @@ def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray,
         t0 = time.perf_counter()
         xs, us, iters, cost = inner.solve(xs, us, st.max_inner, feasible, ctx.mu)
         feasible = True
-        cs, gs = inner.violations(xs)
-        eq = max(float(np.abs(c).max()) for c in cs)
-        ineq = max(float(np.maximum(-g, 0).max(initial=0.0)) for g in gs)
-        # re-check every candidate pair on the solution; pairs that came near join their node
-        grown = np.flatnonzero(watch.update(xs[:, :nq]).any(axis=1))
-        added = 0
-        for k in map(int, grown):
-            old = models[k]
-            m = node_model(ctx, k, asm.pairs.subset(keep[k]))
-            m.lam_eq = old.lam_eq
-            m.lam_in[:len(m.pairs)] = _carry(old.pairs, m.pairs, old.lam_in[:len(old.pairs)])
-            m.lam_in[len(m.pairs):] = old.lam_in[len(old.pairs):]
-            inner.replace(k, m)
-            added += len(m.pairs) - len(old.pairs)
-        stats.append(OuterStats(outer, ctx.mu, iters, cost, eq, ineq, int(sum(len(m.pairs) for m in models)), added,
-                                time.perf_counter() - t0))
+        eq, ineq = inner.violations(xs)
+        new = watch.update(xs[:, :nq])  # every candidate pair re-checked on the solution: those that came near join
+        grown, added = np.flatnonzero(new.any(axis=1)), int(new.sum())
+        violation = max(eq, ineq)
+        converged = violation < st.tolerance and added == 0
+        if not converged:
+            inner.update(ctx.mu, grown)
+            for k in map(int, grown):  # the grown nodes keep their inequality multipliers, moved to their new places
+                old = models[k]
+                m = node_model(ctx, k, asm.pairs.subset(keep[k]))
+                m.lam_eq = old.lam_eq.copy()
+                m.lam_in[:len(m.pairs)] = _carry(old.pairs, m.pairs, old.lam_in[:len(old.pairs)])
+                m.lam_in[len(m.pairs):] = old.lam_in[len(old.pairs):]
+                inner.replace(k, m)
+        stats.append(OuterStats(outer, ctx.mu, iters, cost, eq, ineq, int(keep.sum()), added, time.perf_counter() - t0))
         if log:
             log(f"outer {outer}: mu {ctx.mu:.0e}, {iters} FDDP iterations, cost {cost:.6g}, equality "
                 f"violation {eq:.2e}, inequality {ineq:.2e}, {added} pairs added ({time.perf_counter() - t0:.1f} s)")
-        violation = max(eq, ineq)
-        if violation < st.tolerance and added == 0:
-            converged = True
+        if converged:
             break
-        for m, c, g in zip(models, cs, gs):
-            m.lam_eq = m.lam_eq + ctx.mu * c
-            if len(g) == len(m.lam_in):
-                m.lam_in = np.maximum(m.lam_in - ctx.mu * g, 0.0)
         if violation > prev / st.decrease:
             if ctx.mu >= st.mu_max:
                 message = f"the penalty reached mu = {st.mu_max:g} with the violation at {violation:.2e}"

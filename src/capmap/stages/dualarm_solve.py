@@ -32,14 +32,27 @@ from capmap.stages.dualarm import robot_from
 __all__ = ["setup", "stage_dualarm_optimise", "stage_dualarm_check"]
 
 
+def _inputs(da: DualArmConfig, environment: str, capsules: str) -> tuple:
+    """(robot, envelope, its labels, scene) of a dual-arm job: ``da`` names the robot and scene files."""
+    robot = robot_from(da.robot, datasets.read(capsules))
+    env, labels = envelope_from(datasets.read(environment))
+    return robot, env, labels, load_scene(da.scene)
+
+
+def _assembly(da: DualArmConfig, inputs: tuple, h: Horizon, boxes: np.ndarray | None = None):
+    """The assembly of :func:`_inputs` on horizon ``h``; ``boxes`` (B, 2, 3) m of unknown space join the
+    environment."""
+    robot, env, labels, scene = inputs
+    if boxes is not None and len(boxes):
+        env, labels = with_boxes(env, labels, boxes, da.unknown.voxel_m)
+    return assemble(robot, scene, env, labels, h.nodes, h.dt_s, h.pre_insertion_node)
+
+
 def setup(da: DualArmConfig, environment: str, capsules: str, h: Horizon, boxes: np.ndarray | None = None):
     """(robot, assembly) of a dual-arm job on horizon ``h``: ``da`` names the robot and scene files;
     ``boxes`` (B, 2, 3) m of unknown space join the environment."""
-    robot = robot_from(da.robot, datasets.read(capsules))
-    env, labels = envelope_from(datasets.read(environment))
-    if boxes is not None and len(boxes):
-        env, labels = with_boxes(env, labels, boxes, da.unknown.voxel_m)
-    return robot, assemble(robot, load_scene(da.scene), env, labels, h.nodes, h.dt_s, h.pre_insertion_node)
+    inputs = _inputs(da, environment, capsules)
+    return inputs[0], _assembly(da, inputs, h, boxes)
 
 
 def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, unknown: str, log):
@@ -51,15 +64,16 @@ def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, un
     boxes = unknown_boxes(datasets.read(unknown))
     grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
     mask = unknown_mask(grid, boxes)
-    corners = load_scene(da.scene).panel.corners()
-    robot, asm = setup(da, environment, capsules, da.horizon)
-    qs = warm_start(asm)[::5]
-    balls, radii, _, slack = swept_balls(asm, robot, corners, qs)
-    use = near_boxes(boxes, balls.reshape(-1, 3), np.tile(radii + slack, len(qs)), u.near_m)
+    inputs = _inputs(da, environment, capsules)
+    robot, corners = inputs[0], inputs[3].panel.corners()
+    asm = _assembly(da, inputs, da.horizon)
+    warm = warm_start(asm)  # the boxes do not change it
+    balls, radii, _, slack = swept_balls(asm, robot, corners, warm[::5])
+    use = near_boxes(boxes, balls.reshape(-1, 3), np.tile(radii + slack, len(balls)), u.near_m)
     for attempt in range(3):
         log.info(f"unknown space: {int(use.sum())} of {len(boxes)} boxes near the motion go to the optimiser")
-        robot, asm = setup(da, environment, capsules, da.horizon, boxes[use])
-        m = plan_assembly(asm, robot, da.weights, da.solver, da.fine_factor, log.info)
+        asm = _assembly(da, inputs, da.horizon, boxes[use])
+        m = plan_assembly(asm, robot, da.weights, da.solver, da.fine_factor, log.info, warm=warm)
         balls, radii, names, slack = swept_balls(asm, robot, corners, fine_grid(m.sol.xs, m.sol.us, asm.task.dt,
                                                                                  da.fine_factor)[1])
         check = unobserved_check(balls, radii, names, grid, mask, slack=slack)
