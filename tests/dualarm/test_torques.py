@@ -2,7 +2,8 @@
 panel's wrench against the finite-difference rate of its momentum, the torques against a second
 formulation (the panel's inertia appended to the left arm, the right gripper's wrench as an external
 force, Pinocchio's own RNEA), the least-norm distribution against numpy's minimum-norm solution, and the
-peak-minimising one against random internal wrenches."""
+peak-minimising one against random internal wrenches; its solver (the active rows carried from node to
+node) against HiGHS's linear programmes."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from capmap.dualarm import torques
 from capmap.dualarm.torques import HeldPart, held_torques, part_wrench
 
 
@@ -132,3 +134,65 @@ def test_peak_minimising_distribution_beats_random_internal_wrenches(setting):
             trial = out.tau_nm[k][None, :] + (JT @ N @ rng.normal(0, scale, (6, 200))).T
             assert (np.abs(trial / effort).max(axis=1) >= best - 1e-7).all()
         assert np.allclose(G @ W, out.f_part[k], atol=1e-9 * (1 + np.abs(out.f_part[k]).max()))
+
+
+def _peaks(A, b, z):
+    return np.abs(np.einsum("kij,kj->ki", A, z) + b).max(axis=1)
+
+
+@pytest.mark.parametrize("drift", [0.0, 1e-3, 1.0])
+def test_active_rows_carried_along_a_motion_give_the_linear_programmes_optimum(drift, monkeypatch):
+    """min_z max_i |A z + b|_i along a sequence of problems (A 14 x 6 as the torque LP's): the vertex of the
+    previous node's active rows, accepted by its KKT conditions, has HiGHS's optimum (relative 1e-9: both
+    are vertices up to HiGHS's 1e-7 tolerances, measured 3e-14 on the default task); drift 0 repeats one
+    problem, 1e-3 moves it slowly (the carried rows mostly hold), 1 draws each anew (they mostly do not)."""
+    rng = np.random.default_rng(11)
+    K, n, m = 200, 14, 6
+    A0, b0 = rng.normal(size=(n, m)), rng.normal(size=n)
+    steps = np.cumsum(drift * rng.normal(size=(K, n, m + 1)), axis=0) if drift < 1 else rng.normal(size=(K, n, m + 1))
+    if drift < 1:
+        A, b = A0 + steps[:, :, :m], b0 + steps[:, :, m]
+    else:
+        A, b = steps[:, :, :m], steps[:, :, m]
+    calls = []
+    lp = torques._minimax_lp
+    monkeypatch.setattr(torques, "_minimax_lp", lambda A_, b_: calls.append(len(A_)) or lp(A_, b_))
+    z = torques._minimax(A, b)
+    ref = _peaks(A, b, lp(A, b))
+    assert np.allclose(_peaks(A, b, z), ref, rtol=1e-9, atol=0)
+    if drift < 1:
+        assert len(calls) < K / 4  # the carried rows did the work
+    else:
+        assert len(calls) > K / 2  # and were refused where they are not optimal
+
+
+def test_degenerate_problems_fall_back_to_the_linear_programme():
+    """Rows repeated (more than m + 1 active at the optimum): no vertex to carry, each node's LP."""
+    rng = np.random.default_rng(12)
+    A1, b1 = rng.normal(size=(7, 6)), rng.normal(size=7)
+    A, b = np.tile(np.vstack([A1, A1])[None], (5, 1, 1)), np.tile(np.r_[b1, b1][None], (5, 1))
+    z = torques._minimax(A, b)
+    assert np.allclose(_peaks(A, b, z), _peaks(A, b, torques._minimax_lp(A, b)), rtol=1e-9, atol=0)
+
+
+def test_a_vertex_is_accepted_only_at_the_optimum():
+    """Vertices of min t s.t. |A z + b| <= t (any m + 1 rows and signs): _vertex accepts the optimal one
+    (HiGHS's) and refuses those within every row's bound that are not optimal (a worse t), found by search."""
+    rng = np.random.default_rng(13)
+    A, b = rng.normal(size=(14, 6)), rng.normal(size=14)
+    best = _peaks(A[None], b[None], torques._minimax_lp(A[None], b[None]))[0]
+    refused = 0
+    for _ in range(20000):
+        rows = np.sort(rng.choice(14, 7, replace=False))
+        signs = rng.choice([-1.0, 1.0], 7)
+        M = np.hstack([signs[:, None] * A[rows], -np.ones((7, 1))])
+        x = np.linalg.solve(M, -signs * b[rows])
+        if x[6] <= 0 or np.abs(A @ x[:6] + b).max() > x[6] * (1 + 1e-12):
+            continue  # not a vertex of the feasible set
+        z = torques._vertex(A, b, rows, signs)
+        if x[6] > best * (1 + 1e-6):
+            assert z is None
+            refused += 1
+        else:
+            assert z is not None and np.abs(A @ z + b).max() == pytest.approx(best, rel=1e-9)
+    assert refused > 3

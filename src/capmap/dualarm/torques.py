@@ -72,7 +72,7 @@ def part_wrench(model: pin.Model, data: pin.Data, part: HeldPart) -> np.ndarray:
     return (inertia * a + vP.cross(inertia * vP)).vector
 
 
-def _minimax(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _minimax_lp(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     """z (K, m) minimising max_i |A[k] z[k] + b[k]|_i for each k (A (K, n, m), b (K, n)): the linear
     programmes min t_k s.t. -t_k <= A[k] z[k] + b[k] <= t_k, independent, solved as one block-diagonal
     programme (HiGHS; minimising the sum of the t_k minimises each); if that fails, each alone, and
@@ -91,7 +91,48 @@ def _minimax(A: np.ndarray, b: np.ndarray) -> np.ndarray:
         return res.x.reshape(K, m + 1)[:, :m]
     if K == 1:
         return np.zeros((1, m))
-    return np.vstack([_minimax(A[k:k + 1], b[k:k + 1]) for k in range(K)])  # each alone: one failure costs one
+    return np.vstack([_minimax_lp(A[k:k + 1], b[k:k + 1]) for k in range(K)])  # each alone: one failure costs one
+
+
+VERTEX_TOL = 1e-9  # relative: a vertex's dual multipliers >= -tol, its rows within (1 + tol) t (HiGHS's own: 1e-7)
+
+
+def _vertex(A: np.ndarray, b: np.ndarray, rows: np.ndarray, signs: np.ndarray) -> np.ndarray | None:
+    """The z (m,) of the vertex of min t s.t. |A z + b| <= t (A (n, m), b (n,)) where the m + 1 ``rows`` hold
+    with ``signs`` (sigma_i (a_i z + b_i) = t), when it is the optimum: every row within t and the dual
+    multipliers (sum lambda_i sigma_i a_i = 0, sum lambda_i = 1) >= 0, the programme's KKT conditions; else
+    None."""
+    m = A.shape[1]
+    M = np.hstack([signs[:, None] * A[rows], -np.ones((m + 1, 1))])
+    try:
+        x = np.linalg.solve(M, -signs * b[rows])
+        lam = np.linalg.solve(M.T, np.r_[np.zeros(m), -1.0])
+    except np.linalg.LinAlgError:
+        return None
+    z, t = x[:m], x[m]
+    if not (lam >= -VERTEX_TOL).all() or not (np.abs(A @ z + b) <= t * (1 + VERTEX_TOL) + VERTEX_TOL).all():
+        return None
+    return z
+
+
+def _minimax(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`_minimax_lp`'s z (K, m), the nodes in order: each node first tries the vertex of the previous
+    node's active rows (:func:`_vertex`: the optimum when its KKT conditions hold); where they do not, its
+    own linear programme, whose active rows (m + 1 of them when not degenerate) the next nodes try. Along a
+    motion the active rows change a few times (8 times in 501 nodes on the default task)."""
+    K, n, m = A.shape
+    z = np.zeros((K, m))
+    rows = signs = None
+    for k in range(K):
+        zk = None if rows is None else _vertex(A[k], b[k], rows, signs)
+        if zk is None:
+            zk = _minimax_lp(A[k:k + 1], b[k:k + 1])[0]
+            r = A[k] @ zk + b[k]
+            t = np.abs(r).max()
+            act = np.flatnonzero(np.abs(r) >= t * (1 - VERTEX_TOL) - VERTEX_TOL)
+            rows, signs = (act, np.sign(r[act])) if len(act) == m + 1 else (None, None)
+        z[k] = zk
+    return z
 
 
 def held_torques(model: pin.Model, grippers: tuple[int, int], part: HeldPart, q: np.ndarray, v: np.ndarray,
