@@ -22,7 +22,7 @@ from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
 from capmap.dualarm.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
 from capmap.dualarm.node_kernel import node_eval
 from capmap.dualarm.ocp import Context, equality_size
-from capmap.dualarm.proximity import batch_distances
+from capmap.dualarm.proximity import PairFilter, batch_distances
 from capmap.dualarm.settings import Weights
 from capmap.dualarm.task import AssemblyTask
 
@@ -160,9 +160,9 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
 
 
 def warm_up() -> None:
-    """Compile (or load from numba's cache) the node kernel, the pair filter and the collision model's
-    distances and gradients, on a two-joint chain with the argument types of a real run (Crocoddyl's
-    own data arrays)."""
+    """Compile (or load from numba's cache) the node kernel, the compiled FDDP, the pair filters and the
+    collision model's distances and gradients, on a two-joint chain with the argument types of a real run
+    (Crocoddyl's own data arrays)."""
     model = pin.Model()
     j1 = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "a")
     j2 = model.addJoint(j1, pin.JointModelRX(), pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.5])), "b")
@@ -193,6 +193,7 @@ def warm_up() -> None:
     evaluate_nodes(P, xs, True)
     evaluate_nodes(P, xs, False)
     batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1, within=0.01)
+    PairFilter(packed, pairs, 2, 0.1).update(np.zeros((2, 2)))
     joint_placements(packed.chain_f, packed.chain_i, np.zeros((2, 2)), np.empty((2, 3, 3, 3)), np.empty((2, 3, 3)))
     data = model.createData()  # the Pinocchio-side evaluation (key poses, the independent check)
     pin.computeJointJacobians(model, data, x[:2])
