@@ -15,7 +15,7 @@ from capmap.config.dualarm import cloud_source, fit_settings, unknown_settings
 from capmap.dualarm.cloud import depth, fit_envelope
 from capmap.dualarm.distance import segment_triangle
 from capmap.dualarm.scene import Box, scan, surface_points
-from capmap.dualarm.unknown import Grid, box_rectangles, merge_boxes, unknown_space
+from capmap.dualarm.unknown import Grid, box_rectangles, merge_boxes, near_boxes, unknown_space
 from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check, viewpoints_that_see
 from tests.dualarm.conftest import SECTION
 
@@ -175,3 +175,19 @@ def test_suggested_viewpoints_see_the_region_past_every_obstacle():
         pts = pts[~np.all((pts >= region[0]) & (pts <= region[1]), axis=1)]
         assert (depth_fn(pts) > 0).all()
         assert not np.any(np.all((pts >= other[0]) & (pts <= other[1]), axis=1))
+
+
+def test_near_boxes_equal_every_ball_against_every_box():
+    """The boxes near a set of balls (a k-d tree's candidates, then the exact gap) against every ball's gap to
+    every box, with balls placed just inside and just outside the distance."""
+    rng = np.random.default_rng(21)
+    lo = rng.uniform(-1, 1, (60, 3))
+    boxes = np.stack([lo, lo + rng.uniform(0.02, 0.3, (60, 3))], axis=1)
+    pts, radii = rng.uniform(-1.3, 1.5, (3000, 3)), rng.uniform(0.0, 0.08, 3000)
+    gap = (np.maximum(boxes[None, :, 0] - pts[:, None], 0) + np.maximum(pts[:, None] - boxes[None, :, 1], 0))
+    dist = np.linalg.norm(gap, axis=2) - radii[:, None]  # (balls, boxes)
+    for within in (0.0, 0.05, 0.1):
+        expect = (dist <= within).any(axis=0)
+        assert np.array_equal(near_boxes(boxes, pts, radii, within), expect)
+        assert 0 < expect.sum() < len(boxes)
+    assert not near_boxes(boxes, pts[:0], radii[:0], 0.1).any()

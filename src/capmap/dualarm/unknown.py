@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.ndimage import binary_dilation
+from scipy.spatial import cKDTree
 
 from capmap.dualarm.cloud import Envelope
 
@@ -200,10 +201,14 @@ def near_boxes(boxes: np.ndarray, points: np.ndarray, radii: np.ndarray, within_
     if not len(boxes) or not len(points):
         return np.zeros(len(boxes), dtype=bool)
     out = np.zeros(len(boxes), dtype=bool)
-    for s in range(0, len(points), 2048):
-        p, r = points[s:s + 2048], radii[s:s + 2048]
-        gap = np.maximum(boxes[None, :, 0, :] - p[:, None, :], 0) + np.maximum(p[:, None, :] - boxes[None, :, 1, :], 0)
-        out |= (np.linalg.norm(gap, axis=2) - r[:, None] <= within_m).any(axis=0)
+    # candidates: the balls whose centre lies within the box's circumscribed ball grown by within_m and the
+    # largest radius (every ball that comes within within_m of the box does), then the exact gap
+    centre, half = boxes.mean(axis=1), 0.5 * np.linalg.norm(boxes[:, 1] - boxes[:, 0], axis=1)
+    near = cKDTree(points).query_ball_point(centre, half + within_m + radii.max())
+    for b, idx in enumerate(near):
+        p, r = points[idx], radii[idx]
+        gap = np.maximum(boxes[b, 0] - p, 0) + np.maximum(p - boxes[b, 1], 0)
+        out[b] = bool((np.linalg.norm(gap, axis=1) - r <= within_m).any())
     return out
 
 
