@@ -107,12 +107,19 @@ def test_swept_rectangles_hold_their_boxes():
         assert d.max() <= 1e-9
 
 
-def test_the_motion_check_is_a_lower_bound_of_the_brute_force_distance():
-    rng = np.random.default_rng(6)
+@pytest.mark.parametrize("seed, near", [(6, 0.0), (7, 0.06), (8, 0.07), (9, 0.08)])
+def test_the_motion_check_is_a_lower_bound_of_the_brute_force_distance(seed, near):
+    """Balls anywhere in the work volume (near 0) or within ``near`` m of the first box's faces (where the
+    exact distance is taken: the least distance is under 1 cm)."""
+    rng = np.random.default_rng(seed)
     grid = Grid.over([0, 0, 0], [0.4, 0.4, 0.4], 0.02)
     boxes = np.array([[[0.1, 0.1, 0.1], [0.16, 0.3, 0.2]], [[0.3, 0.0, 0.3], [0.4, 0.08, 0.4]]])
     mask = unknown_mask(grid, boxes)
-    balls = rng.uniform(0.0, 0.4, (40, 12, 3))
+    lo, hi = (boxes[0, 0] - near, boxes[0, 1] + near) if near else (np.zeros(3), np.full(3, 0.4))
+    balls = rng.uniform(lo, hi, (40, 12, 3))
+    if near:  # outside the box: pushed out along the axis of the least penetration
+        inside = np.all((balls > boxes[0, 0]) & (balls < boxes[0, 1]), axis=2)
+        balls[inside] = boxes[0, 0] - 0.061
     radii = rng.uniform(0.01, 0.05, 12)
     check = unobserved_check(balls, radii, np.array(["b"] * 12, dtype=object), grid, mask)
     out = np.maximum(np.maximum(boxes[None, :, 0] - balls.reshape(-1, 1, 3), balls.reshape(-1, 1, 3) - boxes[None, :, 1]),
@@ -122,6 +129,7 @@ def test_the_motion_check_is_a_lower_bound_of_the_brute_force_distance():
     assert check.distance >= brute - 0.02 * np.sqrt(3) - 1e-12  # at most a voxel diagonal below
     if brute < 0.01:
         assert check.distance == pytest.approx(brute, abs=1e-12)  # exact where it matters
+    assert brute < 0.01 or not near
 
 
 def test_swept_balls_with_their_slack_hold_the_whole_volumes(robot, scene, make_assembly):

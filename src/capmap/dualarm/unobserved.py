@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import pinocchio as pin
 from scipy.ndimage import distance_transform_edt
@@ -72,6 +73,26 @@ def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np
     return out, np.asarray(radii), np.asarray(names, dtype=object), np.asarray(slack)
 
 
+@numba.njit(cache=True)
+def _cube_distances(pts, near, reach, ijk, mask, lower, voxel):
+    """For each ball centre pts[near[n]] (m): the distance (m) to the nearest unknown voxel of ``mask`` (a cube
+    of side ``voxel`` m) within reach[n] voxels of its voxel ijk[near[n]]; inf when none."""
+    out = np.full(len(near), np.inf)
+    for n in range(len(near)):
+        c = near[n]
+        lo = np.maximum(ijk[c] - reach[n], 0)
+        hi = np.minimum(ijk[c] + reach[n] + 1, np.array(mask.shape))
+        for i in range(lo[0], hi[0]):
+            for j in range(lo[1], hi[1]):
+                for k in range(lo[2], hi[2]):
+                    if mask[i, j, k]:
+                        dx = max(abs(pts[c, 0] - (lower[0] + (i + 0.5) * voxel)) - voxel / 2, 0.0)
+                        dy = max(abs(pts[c, 1] - (lower[1] + (j + 0.5) * voxel)) - voxel / 2, 0.0)
+                        dz = max(abs(pts[c, 2] - (lower[2] + (k + 0.5) * voxel)) - voxel / 2, 0.0)
+                        out[n] = min(out[n], np.sqrt(dx * dx + dy * dy + dz * dz))
+    return out
+
+
 def unknown_mask(grid: Grid, boxes: np.ndarray) -> np.ndarray:
     """The voxels (nx, ny, nz) bool of ``grid`` that boxes (B, 2, 3) m (made of its voxels) fill."""
     mask = np.zeros(grid.shape, dtype=bool)
@@ -115,17 +136,11 @@ def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, gr
     pts = balls.reshape(-1, 3)
     if slack is not None:  # the volumes between the balls (module docstring)
         gap -= np.tile(slack, len(balls))
-    for c in np.flatnonzero(gap < 0.01):
-        reach = int(np.ceil((r_all[c] + 0.01) / grid.voxel)) + 1
-        lo = np.maximum(ijk[c] - reach, 0)
-        hi = np.minimum(ijk[c] + reach + 1, np.array(grid.shape))
-        local = np.argwhere(mask[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]]) + lo
-        if not len(local):
-            gap[c] = min(0.01, beyond_m)
-            continue
-        out = np.maximum(np.abs(pts[c] - grid.centres(local)) - grid.voxel / 2, 0.0)
-        gap[c] = float(np.sqrt((out * out).sum(axis=1)).min()) - r_all[c] - (0.0 if slack is None else
-                                                                             slack[c % balls.shape[1]])
+    near = np.flatnonzero(gap < 0.01)
+    reach = (np.ceil((r_all[near] + 0.01) / grid.voxel)).astype(np.int64) + 1
+    exact = _cube_distances(pts, near, reach, ijk, mask, np.asarray(grid.lower, float), float(grid.voxel))
+    extra = r_all[near] + (0.0 if slack is None else np.tile(slack, len(balls))[near])
+    gap[near] = np.where(np.isfinite(exact), exact - extra, min(0.01, beyond_m))
     i = int(np.argmin(gap))
     if not gap[i] < beyond_m:
         return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))
