@@ -100,6 +100,15 @@ def _grow(ok, on, od, count, need):
 
 
 @_jit
+def _subset(a, b):
+    """Whether every True of the bool array a is True in b."""
+    for i in range(a.shape[0]):
+        if a[i] and not b[i]:
+            return False
+    return True
+
+
+@_jit
 def _carry(lever, movers, gm, q, q_ref, dm, lb):
     """lb (G,) valid at q_ref (nq,) made valid at q: less how far each group's moving primitives (rows gm (G,
     2) of ``lever``, -1: none) can have moved (a point of primitive e moves at most sum_i lever[e, i] |dq_i|,
@@ -205,7 +214,8 @@ def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order
     m) entries. lb (K, G), ref_q (K, nq): per configuration and group, a lower bound of the distance of the
     group's pairs not kept, valid at ref_q[k] (nan: none); a group whose bound, less how far its moving
     primitives (rows gm (G, 2) of ``lever``, -1: none) can have moved since, clears the cutoff is not looked
-    at; both are updated to qs."""
+    at (nor one whose bound at the previous configuration, so carried, does, when that configuration kept no
+    pair this one does not); both are updated to qs."""
     K, nq, G = qs.shape[0], qs.shape[1], groups.shape[0]
     R, p, A, B, V, ctr, rad, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad = _scratch(
         chain_f, chain_i, seg_f, seg_j, tri_f, tri_j)
@@ -214,10 +224,18 @@ def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order
     idx, val = np.empty(rows.shape[0], np.int64), np.empty(rows.shape[0])
     ok, on, od = np.empty(1024, np.int64), np.empty(1024, np.int64), np.empty(1024)
     count = 0
+    nb = np.empty(G)
     for k in range(K):
         lbk[:] = lb[k]
         if not np.isnan(ref_q[k, 0]):
             _carry(lever, movers, gm, qs[k], ref_q[k], dm, lbk)
+        if k > 0 and _subset(keep[k - 1], keep[k]):
+            # the previous configuration's bounds (now at qs[k - 1]) cover every pair not kept here too: carried
+            # to qs[k], they bound them as well, and the larger of two lower bounds is one
+            nb[:] = lb[k - 1]
+            _carry(lever, movers, gm, qs[k], qs[k - 1], dm, nb)
+            for gi in range(G):
+                lbk[gi] = max(lbk[gi], nb[gi])
         look = False
         for gi in range(G):
             look = look or lbk[gi] <= cutoff
