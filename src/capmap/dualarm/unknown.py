@@ -19,9 +19,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy.ndimage import binary_dilation
-from scipy.spatial import cKDTree
 
 from capmap.dualarm.cloud import Envelope
 
@@ -200,15 +200,23 @@ def near_boxes(boxes: np.ndarray, points: np.ndarray, radii: np.ndarray, within_
     """Which boxes (B, 2, 3) m come within ``within_m`` of any ball (points (n, 3) m, radii (n,) m) (B,) bool."""
     if not len(boxes) or not len(points):
         return np.zeros(len(boxes), dtype=bool)
-    out = np.zeros(len(boxes), dtype=bool)
-    # candidates: the balls whose centre lies within the box's circumscribed ball grown by within_m and the
-    # largest radius (every ball that comes within within_m of the box does), then the exact gap
-    centre, half = boxes.mean(axis=1), 0.5 * np.linalg.norm(boxes[:, 1] - boxes[:, 0], axis=1)
-    near = cKDTree(points).query_ball_point(centre, half + within_m + radii.max())
-    for b, idx in enumerate(near):
-        p, r = points[idx], radii[idx]
-        gap = np.maximum(boxes[b, 0] - p, 0) + np.maximum(p - boxes[b, 1], 0)
-        out[b] = bool((np.linalg.norm(gap, axis=1) - r <= within_m).any())
+    return _near_boxes(np.ascontiguousarray(boxes, dtype=float), np.ascontiguousarray(points, dtype=float),
+                       np.ascontiguousarray(radii, dtype=float), float(within_m))
+
+
+@numba.njit(cache=True)
+def _near_boxes(boxes, points, radii, within):
+    """near_boxes, compiled: each box's gap to the balls in turn, up to the first within ``within``."""
+    out = np.zeros(boxes.shape[0], np.bool_)
+    for b in range(boxes.shape[0]):
+        for i in range(points.shape[0]):
+            s = 0.0
+            for d in range(3):
+                g = max(boxes[b, 0, d] - points[i, d], 0.0) + max(points[i, d] - boxes[b, 1, d], 0.0)
+                s += g * g
+            if np.sqrt(s) - radii[i] <= within:
+                out[b] = True
+                break
     return out
 
 
