@@ -40,7 +40,8 @@ class Packed:
     tri_g (T,), balls (G, 4): the static primitives' bodies and their balls
     (:func:`capmap.dualarm.broadphase.static_balls`); reach (nj, nv):
     a bound on the distance from joint j's origin to the origin of column i's joint, in any configuration
-    (the lengths of the placements between them), where column i moves joint j."""
+    (the lengths of the placements between them), where column i moves joint j; lever (S + T, nv): every
+    segment's, then triangle's :func:`levers`."""
 
     chain_f: np.ndarray
     chain_i: np.ndarray
@@ -57,6 +58,7 @@ class Packed:
     tri_g: np.ndarray
     balls: np.ndarray
     reach: np.ndarray
+    lever: np.ndarray
 
 
 def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> Packed | str:
@@ -108,7 +110,8 @@ def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> P
             reach[j, chain_i[l, 1]] = length
             length += np.linalg.norm(chain_f[l, 9:12])
             l = chain_i[l, 0]
-    return Packed(chain_f, chain_i, moves, frame_f, frame_j, *seg, *tri, *groups, reach)
+    return Packed(chain_f, chain_i, moves, frame_f, frame_j, *seg, *tri, *groups, reach,
+                  _lever_table(seg[0], seg[1], tri[0], tri[1], moves, reach))
 
 
 def pair_table(packed: Packed, pairs: Pairs) -> tuple[np.ndarray, np.ndarray]:
@@ -126,11 +129,16 @@ def levers(packed: Packed, seg: np.ndarray, tri: np.ndarray) -> np.ndarray:
     radian of each column, at most, in any configuration: the reach from its joint's origin to the column's
     joint plus its own extent from its joint's origin (a rotation dq about an axis through o moves X by at
     most |dq| |X - o|); 0 for a static primitive or a column that does not move it."""
-    pk = packed
-    far = np.concatenate([np.maximum(np.linalg.norm(pk.seg_f[seg, :3], axis=1), np.linalg.norm(pk.seg_f[seg, 3:6], axis=1)),
-                          np.linalg.norm(pk.tri_f[tri, :9].reshape(-1, 3, 3), axis=2).max(axis=1, initial=0.0)])
-    joint = np.concatenate([pk.seg_j[seg], pk.tri_j[tri]])
-    return np.ascontiguousarray(np.where(pk.moves[joint], pk.reach[joint] + far[:, None], 0.0) * (joint > 0)[:, None])
+    return np.ascontiguousarray(packed.lever[np.concatenate([seg, len(packed.seg_f) + np.asarray(tri, np.int64)])])
+
+
+def _lever_table(seg_f: np.ndarray, seg_j: np.ndarray, tri_f: np.ndarray, tri_j: np.ndarray, moves: np.ndarray,
+                 reach: np.ndarray) -> np.ndarray:
+    """:func:`levers` of every segment, then every triangle (S + T, nv)."""
+    far = np.concatenate([np.maximum(np.linalg.norm(seg_f[:, :3], axis=1), np.linalg.norm(seg_f[:, 3:6], axis=1)),
+                          np.linalg.norm(tri_f[:, :9].reshape(-1, 3, 3), axis=2).max(axis=1, initial=0.0)])
+    joint = np.concatenate([seg_j, tri_j])
+    return np.where(moves[joint], reach[joint] + far[:, None], 0.0) * (joint > 0)[:, None]
 
 
 def groups_of(packed: Packed, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
