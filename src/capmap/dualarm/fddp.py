@@ -74,39 +74,35 @@ def pack_nodes(models: list) -> tuple:
 
 
 @numba.njit(cache=True)
-def _eval(P, k, x, u, mu, diff, exact, Lx, Lxx, Lu, xnext):
-    """Node k's cost (node_eval on its slice of the packed nodes ``P``); ``exact``: every pair's distance."""
+def _eval(P, k, x, u, mu, diff, Lx, Lxx, Lu, xnext):
+    """Node k's cost (node_eval on its slice of the packed nodes ``P``)."""
     (chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, so, tri_f, tri_j, to, Aw, Bw, Vw, lever, ref_lb, ref_q,
      rows, rsum, po, order, groups, spheres, go, kind, tg, axis, par, lim, lam_eq, eo, lam_in, io, c, C, g) = P
     s0, s1, t0, t1, p0, p1 = so[k], so[k + 1], to[k], to[k + 1], po[k], po[k + 1]
     g0, g1, e0, e1, i0, i1 = go[k], go[k + 1], eo[k], eo[k + 1], io[k], io[k + 1]
-    pr = par[k]
-    if exact:
-        pr = pr.copy()
-        pr[8] = 0.0
     return node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f[s0:s1], seg_j[s0:s1], tri_f[t0:t1], tri_j[t0:t1],
                      Aw[s0:s1], Bw[s0:s1], Vw[t0:t1], lever[s0 + t0:s1 + t1], ref_lb[p0:p1], ref_q[k], rows[p0:p1],
-                     rsum[p0:p1], order[p0:p1], groups[g0:g1], spheres[g0:g1], kind[k], tg[k], axis[k], pr,
+                     rsum[p0:p1], order[p0:p1], groups[g0:g1], spheres[g0:g1], kind[k], tg[k], axis[k], par[k],
                      lim, lam_eq[e0:e1], lam_in[i0:i1], x, u, mu, diff, c[e0:e1], C[e0:e1], g[i0:i1], Lx, Lxx, Lu, xnext)
 
 
 @numba.njit(cache=True)
-def evaluate_nodes(P, xs, exact):
+def evaluate_nodes(P, xs):
     """Every node's equality values c and inequality values g at the states xs (N + 1, 2 nq), written into
-    the packed nodes' c and g (flat, by node offsets eo, io); ``exact``: every pair's distance, else a pair
-    with no multiplier whose lower bound clears the margin has that bound in g (as in a calc)."""
+    the packed nodes' c and g (flat, by node offsets eo, io); as in a calc, a pair with no multiplier whose
+    lower bound clears the margin has that bound in g."""
     n2 = xs.shape[1]
     Lx, Lxx, Lu, xn = np.empty(n2), np.empty((n2, n2)), np.empty(n2 // 2), np.empty(n2)
     u0 = np.zeros(n2 // 2)
     for k in range(xs.shape[0]):
-        _eval(P, k, xs[k], u0, 1.0, False, exact, Lx, Lxx, Lu, xn)
+        _eval(P, k, xs[k], u0, 1.0, False, Lx, Lxx, Lu, xn)
 
 
 @numba.njit(cache=True)
 def _calc(P, mu, cost, xnext, k, x, u):
     """Node k's cost at (x, u) into cost[k], its next state into xnext[k]."""
     Lx, Lxx, Lu = np.empty(0), np.empty((0, 0)), np.empty(0)
-    cost[k] = _eval(P, k, x, u, mu, False, False, Lx, Lxx, Lu, xnext[k])
+    cost[k] = _eval(P, k, x, u, mu, False, Lx, Lxx, Lu, xnext[k])
     return cost[k]
 
 
@@ -274,7 +270,7 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
                     for t in range(N + 1):
                         _calc(P, mu, cost, xnext, t, xs[t], us[t] if t < N else u0)
                 for t in range(N + 1):
-                    _eval(P, t, xs[t], us[t] if t < N else u0, mu, True, False, Lx[t], Lxx[t], Lu[t], xnext[t])
+                    _eval(P, t, xs[t], us[t] if t < N else u0, mu, True, Lx[t], Lxx[t], Lu[t], xnext[t])
                 total = 0.0
                 for t in range(N + 1):  # in Crocoddyl's order
                     total += cost[t]

@@ -192,8 +192,7 @@ def warm_up() -> None:
     xs, us = np.tile(x, (4, 1)), np.tile(u, (3, 1))
     Luu = np.ascontiguousarray(np.broadcast_to(np.eye(2), (3, 2, 2)))
     fddp(P, 0.1, 0.005, Luu, x.copy(), xs, us, 2, False, 100.0, 1e-9, 1e3, ALPHAS)
-    evaluate_nodes(P, xs, True)
-    evaluate_nodes(P, xs, False)
+    evaluate_nodes(P, xs)
     batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1, within=0.01)
     PairFilter(packed, pairs, 2, 0.1).update(np.zeros((2, 2)))
     _cube_distances(np.zeros((1, 3)), np.zeros(1, np.int64), np.ones(1, np.int64), np.zeros((1, 3), np.int64),

@@ -11,7 +11,7 @@ import numba
 import numpy as np
 
 from capmap.dualarm.broadphase import group_bound
-from capmap.dualarm.chain import Packed, fk, groups_of, levers, pair_table, place_primitives, plane_gap
+from capmap.dualarm.chain import Packed, fk, groups_of, pair_table, place_primitives, plane_gap
 from capmap.dualarm.collision import Pairs
 from capmap.dualarm.distance import segpoint, segseg, segtri
 
@@ -260,8 +260,7 @@ def _movers(packed: Packed, rows: np.ndarray, order: np.ndarray, groups: np.ndar
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(lever (S + T, nq) of every segment, then triangle (:func:`capmap.dualarm.chain.levers`), the rows
     of those that move, gm (G, 2): the rows of each group's moving primitives, -1: none)."""
-    S, T = len(packed.seg_f), len(packed.tri_f)
-    lever = levers(packed, np.arange(S), np.arange(T))
+    S, lever = len(packed.seg_f), packed.lever
     first = rows[order[groups[:, 0]]].reshape(-1, 3)
     second = np.where(first[:, 0] == 1, S + first[:, 2], first[:, 2])
     col = groups[:, 2]

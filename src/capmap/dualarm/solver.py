@@ -27,7 +27,7 @@ from capmap.dualarm.collision import Pairs
 from capmap.dualarm.fddp import ALPHAS, C_VALUES, EQ_AT, G_VALUES, IN_AT, LAM_EQ, LAM_IN, evaluate_nodes, fddp, pack_nodes
 from capmap.dualarm.nodes import CompiledNodeModel
 from capmap.dualarm.ocp import Context, NodeModel
-from capmap.dualarm.proximity import PairFilter, near_pairs
+from capmap.dualarm.proximity import PairFilter
 from capmap.dualarm.settings import ALSettings, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
@@ -106,15 +106,10 @@ def all_distances(asm: Assembly, qs: np.ndarray, pairs: Pairs) -> np.ndarray:
     return out
 
 
-def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float, packed=None) -> np.ndarray:
-    """(K, P) bool: per node, which candidate pairs are within filter_m (safety distance) on the path qs (K, nq)."""
-    if packed is None:
-        return all_distances(asm, qs, asm.pairs) < filter_m
-    k, n, d = near_pairs(packed, qs, asm.pairs, cutoff=filter_m)
-    keep = np.zeros((len(qs), len(asm.pairs)), dtype=bool)
-    near = d < filter_m
-    keep[k[near], n[near]] = True
-    return keep
+def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float) -> np.ndarray:
+    """(K, P) bool: per node, which candidate pairs are within filter_m (safety distance) on the path qs (K, nq),
+    on Pinocchio's placements (the compiled filter: :class:`capmap.dualarm.proximity.PairFilter`)."""
+    return all_distances(asm, qs, asm.pairs) < filter_m
 
 
 class _ReferenceFilter:
@@ -209,7 +204,7 @@ class _CompiledInner:
         """As :meth:`_CrocoddylInner.violations`; a pair with no multiplier whose lower bound clears the margin
         has that bound as its value (its shortfall and its multiplier's update are 0 either way)."""
         P = self._pack()
-        evaluate_nodes(P, np.ascontiguousarray(xs, dtype=float), False)
+        evaluate_nodes(P, np.ascontiguousarray(xs, dtype=float))
         return float(np.abs(P[C_VALUES]).max(initial=0.0)), float(np.maximum(-P[G_VALUES], 0).max(initial=0.0))
 
     def update(self, mu: float, keep_in: np.ndarray) -> None:

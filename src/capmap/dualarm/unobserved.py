@@ -134,13 +134,12 @@ def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, gr
     # where the bound is small, the exact distance to the unknown voxels (cubes) around the ball
     r_all = np.tile(radii, len(balls))
     pts = balls.reshape(-1, 3)
-    if slack is not None:  # the volumes between the balls (module docstring)
-        gap -= np.tile(slack, len(balls))
+    s_all = 0.0 if slack is None else np.tile(slack, len(balls))
+    gap -= s_all  # the volumes between the balls (module docstring)
     near = np.flatnonzero(gap < 0.01)
     reach = (np.ceil((r_all[near] + 0.01) / grid.voxel)).astype(np.int64) + 1
     exact = _cube_distances(pts, near, reach, ijk, mask, np.asarray(grid.lower, float), float(grid.voxel))
-    extra = r_all[near] + (0.0 if slack is None else np.tile(slack, len(balls))[near])
-    gap[near] = np.where(np.isfinite(exact), exact - extra, min(0.01, beyond_m))
+    gap[near] = np.where(np.isfinite(exact), exact - (r_all + s_all)[near], min(0.01, beyond_m))
     i = int(np.argmin(gap))
     if not gap[i] < beyond_m:
         return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))

@@ -20,6 +20,7 @@ __all__ = ["fingerprint", "run_key", "is_warm", "record"]
 
 OWN_CACHES = Path(__file__).resolve().parents[1] / "__pycache__"  # capmap.numba_folder's base by default
 
+
 def fingerprint() -> str:
     """Hash of what the compiled code depends on: numba's cache folder (named by the content of every source
     file using numba, :func:`capmap._numba_cache_dir`), numba's version, the CPU."""
