@@ -5,10 +5,11 @@ writes the cache, the others load it. Parallel jobs started together (the capaci
 each compile the same kernels; :func:`warm` compiles those a run uses once, before its jobs, by
 running the stages' compiled calls on a few inputs of their types: the locked arm's IK (whichever
 method its chain takes), the capacity kernels, and the dual-arm distances and node models when the
-run has that family. ``python -m capmap.kernels [--configfile FILE]`` (the README's install command; Snakemake's
-``onstart`` runs it for the run's own config). A marker per hash of the kernels' source files, numba's
-version and the CPU lists what was warmed, so the next call is a check of milliseconds (after its
-imports, about a second).
+run has that family. ``python -m capmap.kernels [--configfile FILE]`` (the README's install command;
+Snakemake's ``onstart`` runs it for the run's own config). With a config, the dual-arm robot's
+pre-run build is done and remembered as well (:func:`remember_dual_arm`). A marker per hash of the
+kernels' source files, numba's version and the CPU lists what was warmed, so the next call is a
+check of milliseconds (after its imports, about a second).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from capmap.core.reduction import lock
 from capmap.dualarm import distance, nodes
 from capmap.io.kernel_marker import is_warm, record, run_key
 
-__all__ = ["warm", "ensure_warm", "main"]
+__all__ = ["warm", "ensure_warm", "remember_dual_arm", "main"]
 
 
 def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
@@ -63,6 +64,19 @@ def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) ->
     return True
 
 
+def remember_dual_arm(robot_file: str, scene_file: str) -> None:
+    """The pre-run check's dual-arm build (every visual mesh loaded, ~1.4 s), done now and remembered
+    (:func:`capmap.config.checks.dual_arm_limits`); an error is left to the workflow's check to report."""
+    from capmap.config.checks import dual_arm_limits
+    from capmap.config.scene_file import load_scene
+    from capmap.errors import CapmapError
+
+    try:
+        dual_arm_limits(robot_file, float(load_scene(scene_file).panel.size[0]))
+    except CapmapError:
+        pass
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m capmap.kernels", description=__doc__.splitlines()[0])
     ap.add_argument("--configfile", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
@@ -80,6 +94,8 @@ def main(argv: list[str] | None = None) -> int:
             robot, joint, dualarm = run.robot, run.lock.joint, run.dualarm is not None
             angle = run.lock.angle_deg if run.lock.angle_deg is not None else run.task.q_ini_deg[joint - 1]
         ran = ensure_warm(robot, joint, np.deg2rad(angle), dualarm)
+        if not args.robot and run.dualarm is not None:
+            remember_dual_arm(run.dualarm.robot, run.dualarm.scene)
     except Exception as exc:  # best effort: the workflow's own checks say what is wrong, and the jobs compile
         why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         print(f"capmap: kernels not compiled before the jobs ({why}); each job compiles its own", file=sys.stderr)

@@ -5,10 +5,15 @@ here their messages are re-worded with the config keys (:meth:`CapmapError.in_te
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 from contextlib import contextmanager
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 
 from capmap.config.atlas import AtlasConfig
 from capmap.config.capacity import DirectionsConfig, TaskConfig
@@ -20,7 +25,7 @@ from capmap.config.inputs import check_cloud_file
 from capmap.config.jobs import PlanTask
 from capmap.config.parse import parse_config
 from capmap.config.reconfig import rate_limits, reconfig_problem
-from capmap.config.robot_file import load
+from capmap.config.robot_file import load, referenced_files
 from capmap.config.run import RunConfig
 from capmap.config.scene_file import load_scene
 from capmap.config.validation import per_item
@@ -32,9 +37,10 @@ from capmap.core.tracking import nearest_branch
 from capmap.dualarm.robot import build_dual_arm
 from capmap.dualarm.scene import surface_points
 from capmap.errors import CapmapError, ConfigError
+from capmap.io.fingerprint import code_fingerprint, file_sha256
 
 __all__ = ["check_run_config", "check_goal", "check_dt", "check_follow", "check_atlas", "check_on_grid", "check_motions",
-           "check_dualarm"]
+           "check_dualarm", "dual_arm_limits"]
 
 
 @contextmanager
@@ -244,18 +250,60 @@ def check_dualarm(cfg: RunConfig, source: str = "config") -> None:
     da = cfg.dualarm
     scene = load_scene(da.scene)
     try:
-        robot = build_dual_arm(load_dual_arm_file(da.robot), float(scene.panel.size[0]))
+        name, q_lower, q_upper = dual_arm_limits(da.robot, float(scene.panel.size[0]))
     except ConfigError:
         raise
     except CapmapError as exc:
         raise ConfigError(f"{source}: dualarm.robot = {da.robot!r} with dualarm.scene = {da.scene!r}: "
                           f"{exc.in_terms(urdf='its URDF')}") from None
-    if len(scene.q_start) != len(robot.q_lower) or np.any(scene.q_start < robot.q_lower) or \
-            np.any(scene.q_start > robot.q_upper):
+    if len(scene.q_start) != len(q_lower) or np.any(scene.q_start < q_lower) or np.any(scene.q_start > q_upper):
         raise ConfigError(f"{source}: dualarm.scene = {da.scene!r}: start_configuration_rad is outside the joint limits "
-                          f"of {robot.description.name} (or has not {len(robot.q_lower)} values)")
+                          f"of {name} (or has not {len(q_lower)} values)")
     with _named(source):
         _dualarm_sizes(da, scene)
+
+
+def _memo_file(robot_file: str, thickness_m: float) -> Path | None:
+    """Where a successful dual-arm build of ``robot_file`` holding a part ``thickness_m`` thick is remembered:
+    named by the content of every file the build reads (the robot file, its URDF and meshes:
+    :func:`capmap.config.robot_file.referenced_files`), the thickness, Pinocchio's version and the code that
+    loads and builds it (:func:`capmap.io.fingerprint.code_fingerprint`), in capmap's cache folder (beside
+    numba's); None when there is none."""
+    base = os.environ.get("CAPMAP_NUMBA_BASE")
+    if not base:
+        return None
+    h = hashlib.sha256(f"{pin.__version__} {thickness_m!r}".encode())
+    for mod in ("capmap.dualarm.robot", "capmap.config.dualarm"):
+        h.update(f" {mod} {code_fingerprint(mod)}".encode())
+    for f in referenced_files(robot_file):
+        h.update(f" {Path(f).resolve()} {file_sha256(f)}".encode())
+    return Path(base) / "checks" / f"dual-arm-{h.hexdigest()[:24]}.json"
+
+
+def dual_arm_limits(robot_file: str, thickness_m: float) -> tuple[str, np.ndarray, np.ndarray]:
+    """(the robot's name, its joint limits lower, upper (n,) rad) when the dual-arm robot of ``robot_file``
+    builds with its fingers closed on a part ``thickness_m`` thick (:func:`build_dual_arm`: the URDF, every
+    collision and visual mesh, the joints and frames the file names); its errors as they are. The build
+    loads every visual mesh (~1.4 s for the default robot): a success is remembered (:func:`_memo_file`), so
+    the runs after the first that build the same robot from the same files and code read it instead."""
+    memo = _memo_file(robot_file, thickness_m)
+    if memo is not None and memo.is_file():
+        try:
+            d = json.loads(memo.read_text())
+            return str(d["name"]), np.asarray(d["q_lower"], float), np.asarray(d["q_upper"], float)
+        except (OSError, ValueError, KeyError, TypeError):
+            pass  # unreadable: built again (and written again)
+    robot = build_dual_arm(load_dual_arm_file(robot_file), thickness_m)
+    out = robot.description.name, robot.q_lower, robot.q_upper
+    if memo is not None:
+        try:
+            memo.parent.mkdir(parents=True, exist_ok=True)
+            tmp = memo.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_text(json.dumps({"name": out[0], "q_lower": out[1].tolist(), "q_upper": out[2].tolist()}))
+            tmp.replace(memo)
+        except OSError:
+            pass  # a read-only cache: built each time
+    return out
 
 
 def _dualarm_sizes(da, scene) -> None:
