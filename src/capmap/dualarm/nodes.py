@@ -26,7 +26,7 @@ from capmap.dualarm.proximity import PairFilter, batch_distances
 from capmap.dualarm.settings import Weights
 from capmap.dualarm.task import AssemblyTask
 from capmap.dualarm.unknown import near_boxes
-from capmap.dualarm.unobserved import _cube_distances
+from capmap.dualarm.unobserved import _bound_gaps, _cube_distances
 
 __all__ = ["CompiledNodeModel", "node_kind", "node_targets", "warm_up"]
 
@@ -197,6 +197,7 @@ def warm_up() -> None:
     PairFilter(packed, pairs, 2, 0.1).update(np.zeros((2, 2)))
     _cube_distances(np.zeros((1, 3)), np.zeros(1, np.int64), np.ones(1, np.int64), np.zeros((1, 3), np.int64),
                     np.ones((2, 2, 2), dtype=bool), np.zeros(3), 0.02)  # the unknown-space check
+    _bound_gaps(np.zeros((2, 3)), np.ones(1), np.zeros(1), np.zeros(3), 0.02, np.ones((2, 2, 2)), 0.3)
     near_boxes(np.zeros((1, 2, 3)), np.zeros((1, 3)), np.zeros(1), 0.1)
     joint_placements(packed.chain_f, packed.chain_i, np.zeros((2, 2)), np.empty((2, 3, 3, 3)), np.empty((2, 3, 3)))
     data = model.createData()  # the Pinocchio-side evaluation (key poses, the independent check)

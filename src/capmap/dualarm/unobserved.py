@@ -74,6 +74,30 @@ def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np
 
 
 @numba.njit(cache=True)
+def _bound_gaps(pts, radii, slack, lower, voxel, edt, beyond):
+    """Per ball centre pts (M, 3) m (ball i has radius radii[i % n] and slack slack[i % n], m): the
+    transform's bound on its gap to unknown space, edt (the distance in voxels from each voxel to the nearest
+    unknown voxel centre) x voxel - a voxel diagonal - radius, at most ``beyond`` (``beyond`` outside the
+    grid), less the slack; and its voxel (M, 3), clipped to the grid. The arithmetic of numpy's
+    edt[ijk] * voxel - voxel sqrt(3) - r, term for term."""
+    M, n = pts.shape[0], radii.shape[0]
+    gap, ijk = np.empty(M), np.empty((M, 3), np.int64)
+    diag = voxel * np.sqrt(3.0)
+    for m in range(M):
+        inside = True
+        for a in range(3):
+            v = np.int64(np.floor((pts[m, a] - lower[a]) / voxel))
+            if v < 0 or v >= edt.shape[a]:
+                inside = False
+            ijk[m, a] = min(max(v, 0), edt.shape[a] - 1)
+        g = beyond
+        if inside:
+            g = min(edt[ijk[m, 0], ijk[m, 1], ijk[m, 2]] * voxel - diag - radii[m % n], beyond)
+        gap[m] = g - slack[m % n]
+    return gap, ijk
+
+
+@numba.njit(cache=True)
 def _cube_distances(pts, near, reach, ijk, mask, lower, voxel):
     """For each ball centre pts[near[n]] (m): the distance (m) to the nearest unknown voxel of ``mask`` (a cube
     of side ``voxel`` m) within reach[n] voxels of its voxel ijk[near[n]]; inf when none."""
@@ -127,15 +151,13 @@ def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, gr
     if not mask.any():
         return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))
     edt, nearest = distance_transform_edt(~mask, return_indices=True)
-    ijk, inside = grid.index(balls.reshape(-1, 3))
-    ijk = np.clip(ijk, 0, np.array(grid.shape) - 1)
-    gap = edt[tuple(ijk.T)] * grid.voxel - grid.voxel * np.sqrt(3) - np.tile(radii, len(balls))
-    gap = np.where(inside, np.minimum(gap, beyond_m), beyond_m)
+    pts = np.ascontiguousarray(balls, dtype=float).reshape(-1, 3)
+    sl = np.zeros(len(radii)) if slack is None else np.asarray(slack, dtype=float)
+    gap, ijk = _bound_gaps(pts, np.asarray(radii, dtype=float), sl, np.asarray(grid.lower, float), float(grid.voxel),
+                           edt, float(beyond_m))
     # where the bound is small, the exact distance to the unknown voxels (cubes) around the ball
     r_all = np.tile(radii, len(balls))
-    pts = balls.reshape(-1, 3)
-    s_all = 0.0 if slack is None else np.tile(slack, len(balls))
-    gap -= s_all  # the volumes between the balls (module docstring)
+    s_all = np.tile(sl, len(balls))
     near = np.flatnonzero(gap < 0.01)
     reach = (np.ceil((r_all[near] + 0.01) / grid.voxel)).astype(np.int64) + 1
     exact = _cube_distances(pts, near, reach, ijk, mask, np.asarray(grid.lower, float), float(grid.voxel))
