@@ -21,13 +21,16 @@ import time
 import numpy as np
 
 from capmap.capacity import directions, engine
+from capmap.config.checks import dual_arm_limits
 from capmap.config.parse import parse_config
 from capmap.config.robot_file import load
 from capmap.config.run import DEFAULT_CONFIG, run_document
+from capmap.config.scene_file import load_scene
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.dualarm import distance, nodes
+from capmap.errors import CapmapError
 from capmap.io.kernel_marker import is_warm, record, run_key
 
 __all__ = ["warm", "ensure_warm", "remember_dual_arm", "main"]
@@ -67,10 +70,6 @@ def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) ->
 def remember_dual_arm(robot_file: str, scene_file: str) -> None:
     """The pre-run check's dual-arm build (every visual mesh loaded, ~1.4 s), done now and remembered
     (:func:`capmap.config.checks.dual_arm_limits`); an error is left to the workflow's check to report."""
-    from capmap.config.checks import dual_arm_limits
-    from capmap.config.scene_file import load_scene
-    from capmap.errors import CapmapError
-
     try:
         dual_arm_limits(robot_file, float(load_scene(scene_file).panel.size[0]))
     except CapmapError:

@@ -92,19 +92,14 @@ EXACT_WITHIN = 100.0  # ... unless the violation is within this many tolerances:
 
 
 def inner_stop(st: ALSettings, mu: float, violation: float) -> float:
-    """FDDP's stop threshold (on its expected improvement |d0 + d1 / 2|, cost units) for an inner solve at
-    penalty mu from a point whose constraint violation is ``violation`` (m or rad): the penalty cost
-    mu / 2 (INEXACT violation)^2 of a residual a fraction INEXACT of that violation, at least
-    ``st.inner_stop``; ``st.inner_stop`` itself once the violation is within EXACT_WITHIN tolerances.
-
-    The augmented-Lagrangian outer loop needs inner solves accurate relative to the violation it is
-    reducing (the inexact AL of Conn, Gould and Toint; Bertsekas 1982, 2.5): the multiplier update
-    lambda + mu c is only as good as c. Far from the tolerance the last FDDP iterations (expected
-    improvement 1e-7 .. 1e-10 while the violation is 1e-2 .. 1e-5) do not change the next outer iteration;
-    near it the tight stop keeps the converged solution the exact one. On the default problem: 91 -> 69
-    FDDP iterations, the same outer iterations, penalties and active pairs, the solution within 3e-7 rad.
-    A larger fraction (0.03) left the outer loop short of the tolerance at mu_max when applied to every
-    outer iteration, hence the exact ones near the end."""
+    """FDDP's stop threshold (on its expected improvement |d0 + d1 / 2|) at penalty mu from a point whose violation
+    is ``violation`` (m or rad): the penalty cost mu / 2 (INEXACT violation)^2, at least ``st.inner_stop``, which
+    applies alone within EXACT_WITHIN tolerances. The inexact augmented Lagrangian (Conn, Gould and Toint;
+    Bertsekas 1982, 2.5): the multiplier update is only as good as c, so an inner solve need only be accurate
+    relative to the violation; FDDP's last iterations far from the tolerance (expected improvement 1e-7 .. 1e-10,
+    violation 1e-2 .. 1e-5) do not change the next outer iteration. Default problem: 91 -> 69 FDDP iterations,
+    the same outer iterations, penalties and active pairs, solution within 2.1e-7 rad. INEXACT = 0.03 at every
+    outer iteration ended at mu_max short of the tolerance, hence the exact ones near the end."""
     if violation <= EXACT_WITHIN * st.tolerance:
         return st.inner_stop
     return max(st.inner_stop, 0.5 * mu * (INEXACT * violation) ** 2)
