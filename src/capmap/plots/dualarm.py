@@ -133,12 +133,15 @@ def torques(tq: pd.DataFrame, meta: dict, t_pre: float, out_png: str | Path) -> 
     save(fig, out_png)
 
 
-def convergence(outer: pd.DataFrame, out_png: str | Path) -> None:
+def convergence(outer: pd.DataFrame, out_png: str | Path, tolerance: float | None = None) -> None:
     """Per outer iteration of the augmented-Lagrangian loop: the constraint violations (m or rad, the
-    largest residual of either kind) and, on its own axis, the penalty mu (dimensionless weight)."""
+    largest residual of either kind) against the loop's ``tolerance`` (m or rad: it stops below it) and, on
+    its own axis, the penalty mu (dimensionless weight)."""
     fig, (ax, ax2) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, height_ratios=[2, 1])
     ax.semilogy(outer.outer, outer.eq_violation, "o-", label="equality violation (closed chain, path)")
     ax.semilogy(outer.outer, np.maximum(outer.in_violation, 1e-16), "s-", label="inequality violation (distances, limits)")
+    if tolerance is not None:
+        ax.axhline(tolerance, color="k", ls=":", lw=1, label=f"tolerance {tolerance:g} (converged below both)")
     ax.set(ylabel="largest violation [m or rad]",
            title=f"Augmented Lagrangian: {len(outer)} outer, {int(outer.inner_iterations.sum())} FDDP iterations")
     ax.grid(alpha=0.3, which="both")

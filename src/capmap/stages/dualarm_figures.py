@@ -36,7 +36,8 @@ def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: st
     joints(traj, meta, "qd", out_velocities)
     t_pre = float(traj.t_s[traj.phase == "pre_insertion"].iloc[0])
     torques(tq, tq.attrs["capmap"], t_pre, out_torques)
-    convergence(outer_df, out_convergence)
+    solver = outer_df.attrs["capmap"]["config"]["run"]["dualarm"]["solver"]  # the run's, in its provenance
+    convergence(outer_df, out_convergence, solver["tolerance"])
     stage_logger(__name__, "dualarm plots").info(f"-> {out_errors}, {out_distances}, {out_joints}, {out_velocities}, "
                                                  f"{out_torques}, {out_convergence}")
 
