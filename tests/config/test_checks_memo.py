@@ -72,3 +72,26 @@ def test_an_unreadable_memo_is_built_again(local, cache):  # noqa: F811
     name, lo, hi = checks.dual_arm_limits(str(robot), 0.016)
     assert name and len(lo) == len(hi) == 14
     assert memo.read_text().startswith("{\"name\"")  # written again
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_special_robot_file_is_one_line_before_any_hashing(tmp_path, cache, kind):
+    """The robot file's own checks come before its content is hashed for the memo: a FIFO (which would
+    block a read) or a device (endless) is the loader's one-line error, not a hang."""
+    import os
+    import signal
+
+    from capmap.errors import ConfigError
+
+    if kind == "fifo":
+        path = tmp_path / "robot.yaml"
+        os.mkfifo(path)
+    else:
+        path = "/dev/zero"
+    signal.signal(signal.SIGALRM, lambda *a: (_ for _ in ()).throw(TimeoutError("hung on the robot file")))
+    signal.alarm(20)
+    try:
+        with pytest.raises(ConfigError, match="not a regular file|special file|device|FIFO"):
+            checks.dual_arm_limits(str(path), 0.016)
+    finally:
+        signal.alarm(0)

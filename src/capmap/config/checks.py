@@ -286,6 +286,7 @@ def dual_arm_limits(robot_file: str, thickness_m: float) -> tuple[str, np.ndarra
     collision and visual mesh, the joints and frames the file names); its errors as they are. The build
     loads every visual mesh (~1.4 s for the default robot): a success is remembered (:func:`_memo_file`), so
     the runs after the first that build the same robot from the same files and code read it instead."""
+    desc = load_dual_arm_file(robot_file)  # first: the files' own checks (regular, bounded, found) before hashing them
     memo = _memo_file(robot_file, thickness_m)
     if memo is not None and memo.is_file():
         try:
@@ -293,7 +294,7 @@ def dual_arm_limits(robot_file: str, thickness_m: float) -> tuple[str, np.ndarra
             return str(d["name"]), np.asarray(d["q_lower"], float), np.asarray(d["q_upper"], float)
         except (OSError, ValueError, KeyError, TypeError):
             pass  # unreadable: built again (and written again)
-    robot = build_dual_arm(load_dual_arm_file(robot_file), thickness_m)
+    robot = build_dual_arm(desc, thickness_m)
     out = robot.description.name, robot.q_lower, robot.q_upper
     if memo is not None:
         try:
