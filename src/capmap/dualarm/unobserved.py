@@ -156,12 +156,11 @@ def unobserved_check(balls: np.ndarray, radii: np.ndarray, names: np.ndarray, gr
     gap, ijk = _bound_gaps(pts, np.asarray(radii, dtype=float), sl, np.asarray(grid.lower, float), float(grid.voxel),
                            edt, float(beyond_m))
     # where the bound is small, the exact distance to the unknown voxels (cubes) around the ball
-    r_all = np.tile(radii, len(balls))
-    s_all = np.tile(sl, len(balls))
     near = np.flatnonzero(gap < 0.01)
-    reach = (np.ceil((r_all[near] + 0.01) / grid.voxel)).astype(np.int64) + 1
+    r_near, s_near = np.asarray(radii, dtype=float)[near % len(radii)], sl[near % len(radii)]  # ball i: body i % n
+    reach = (np.ceil((r_near + 0.01) / grid.voxel)).astype(np.int64) + 1
     exact = _cube_distances(pts, near, reach, ijk, mask, np.asarray(grid.lower, float), float(grid.voxel))
-    gap[near] = np.where(np.isfinite(exact), exact - (r_all + s_all)[near], min(0.01, beyond_m))
+    gap[near] = np.where(np.isfinite(exact), exact - (r_near + s_near), min(0.01, beyond_m))
     i = int(np.argmin(gap))
     if not gap[i] < beyond_m:
         return UnobservedCheck(beyond_m, -1, "", np.full(3, np.nan))

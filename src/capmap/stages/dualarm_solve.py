@@ -58,8 +58,8 @@ def setup(da: DualArmConfig, environment: str, capsules: str, h: Horizon, boxes:
 def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, unknown: str, log):
     """Plan with the unknown boxes near the motion in the environment: first those within ``near_m``
     of the warm start; after each solve the motion (finer grid) is checked against every unknown voxel
-    and the boxes near it are added, up to three solves. Returns (robot, assembly, motion, the check,
-    boxes used, boxes in all)."""
+    and the boxes near it are added, up to three solves. Returns (robot, scene, assembly, motion, the
+    check, boxes used, boxes in all)."""
     u = da.unknown
     boxes = unknown_boxes(datasets.read(unknown))
     grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
@@ -84,7 +84,7 @@ def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, un
         if not more.any():
             break
         use |= more
-    return robot, asm, m, check, int(use.sum()), len(boxes)
+    return robot, inputs[3], asm, m, check, int(use.sum()), len(boxes)
 
 
 def _suggest(da: DualArmConfig, environment: str, unknown: str, msg: str) -> str:
@@ -113,7 +113,7 @@ def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_tr
     da = sc.run.dualarm
     log = stage_logger(__name__, "dualarm optimise")
     try:
-        robot, asm, m, check, used, n_boxes = _plan_outside_unknown(da, environment, capsules, unknown, log)
+        robot, scene, asm, m, check, used, n_boxes = _plan_outside_unknown(da, environment, capsules, unknown, log)
     except CapmapError as exc:  # a key pose in collision: the scene's, or the cameras' (unknown space)
         msg = exc.in_terms(scene=f"dualarm.scene = {da.scene!r}")
         if "unknown [" in msg:
@@ -126,7 +126,7 @@ def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_tr
                         f"unknown boxes near it; add a viewpoint of dualarm.cloud.viewpoints_m that sees that region")
     traj, fine_df, outer = motion_tables(asm, robot, m)
     sol, err = m.sol, m.errors
-    torques, torque_rows = torque_table(asm, robot, load_scene(da.scene), m)
+    torques, torque_rows = torque_table(asm, robot, scene, m)
     prov = datasets.provenance("dualarm_optimise", sc.doc, converged=sol.converged, message=sol.message,
                                joints=list(robot.joint_names), q_lower=robot.q_lower.tolist(),
                                q_upper=robot.q_upper.tolist(), v_max=robot.v_max.tolist(), margin_m=da.weights.margin_m,
@@ -136,7 +136,7 @@ def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_tr
     datasets.write(outer, out_outer, prov)
     datasets.write(torques, out_torques, datasets.provenance(
         "dualarm_optimise", sc.doc, joints=list(robot.joint_names), effort_nm=asm.model.effortLimit.tolist(),
-        panel_kg=load_scene(da.scene).panel.mass))
+        panel_kg=scene.panel.mass))
     unknown_rows = [("unknown-space boxes given to the optimiser", f"{used} of {n_boxes}"),
                     ("min distance to unknown space, finer grid [m]", check.distance),
                     ("body nearest unknown space", check.body)]
@@ -147,7 +147,7 @@ def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_tr
              f"{1e3 * m.fine.min_distance.min():.2f} mm on the finer grid; active: "
              f"{', '.join(a[0] for a in m.active) or 'none'}")
     peak = dict(torque_rows)
-    line = (f"joint torques with the {load_scene(da.scene).panel.mass:g} kg panel: peak "
+    line = (f"joint torques with the {scene.panel.mass:g} kg panel: peak "
             f"{peak['peak torque / effort limit, least-norm internal force [%]']:.0f} % of the effort limit "
             f"({peak['joint at the peak (least-norm)']}), {peak['peak torque / effort limit, best internal force [%]']:.0f} % "
             "with the best internal force")
