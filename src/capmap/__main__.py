@@ -25,7 +25,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from capmap.config.checks import check_run_config
+from capmap.checks import check_run_config
 from capmap.config.robot_file import load, lock_classes
 from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.errors import CapmapError

@@ -21,13 +21,13 @@ import time
 import numpy as np
 
 from capmap.capacity import directions, engine
-from capmap.config.checks import dual_arm_limits
+from capmap.capacity.problem import CapacityProblem
+from capmap.checks import dual_arm_limits
 from capmap.config.parse import parse_config
 from capmap.config.robot_file import load
 from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.config.scene_file import load_scene
 from capmap.core import ik
-from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.dualarm import distance, nodes
 from capmap.errors import CapmapError
@@ -42,13 +42,12 @@ def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
     rng = np.random.default_rng(0)
     arm = lock(load(robot_file), joint, angle_rad)
     T = arm.fk(rng.uniform(np.maximum(arm.q_lower, -np.pi), np.minimum(arm.q_upper, np.pi), (8, arm.n_active)))
-    sol = ik.solve(arm, T[:, :3, 3], T[:, :3, :3])
-    dyn = ArmDynamics(arm)
     limits = engine.LoadLimits.uniform(arm.robot.n_joints, 700, 200, 500).for_arm(arm)
     for dirs in (directions.exact(), directions.sphere(12)):
-        engine.point_capacity(dyn, sol.q, sol.n_solutions, dirs, engine.Motion(0.15, 0.03), limits,
-                              directions.grid_axes())
-    dyn.batch.coefficients(sol.q[:, 0], np.full(len(sol.q), angle_rad))  # the baseline's held angles
+        problem = CapacityProblem(arm, T[0, :3, :3], engine.Motion(0.15, 0.03), limits, dirs, directions.grid_axes())
+        sol = ik.solve(arm, T[:, :3, 3], T[:, :3, :3])  # each its own orientation: every IK branch kind
+        problem.capacity(sol)
+    problem.dyn.batch.coefficients(sol.q[:, 0], np.full(len(sol.q), angle_rad))  # the baseline's held angles
     if dualarm:
         p = rng.normal(size=(4, 3))
         distance.segment_segment(p, p + 1, p + 2, p + 3)
@@ -69,7 +68,7 @@ def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) ->
 
 def remember_dual_arm(robot_file: str, scene_file: str) -> None:
     """The pre-run check's dual-arm build (every visual mesh loaded, ~1.4 s), done now and remembered
-    (:func:`capmap.config.checks.dual_arm_limits`); an error is left to the workflow's check to report."""
+    (:func:`capmap.checks.dual_arm_limits`); an error is left to the workflow's check to report."""
     try:
         dual_arm_limits(robot_file, float(load_scene(scene_file).panel.size[0]))
     except CapmapError:

@@ -23,13 +23,13 @@ import numpy as np
 from capmap.capacity import planning
 from capmap.capacity.branch_moves import MoveCache
 from capmap.capacity.branch_planning import BranchProblem, _result, _search
+from capmap.capacity.build import capacity_problem
 from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.capacity.verification import judge, verify_path
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.errors import NoPath
 from capmap.io import datasets
-from capmap.stages.arm import arm_task_from
 from capmap.stages.common import stage_config
 from capmap.stages.verify import branch_deviation_deg
 from tests.benchmarks.machine import machine
@@ -43,7 +43,7 @@ def main() -> None:
     a = ap.parse_args()
     print(f"machine: {machine()}")
     deps = datasets.read("results/default/verify/payload_1500kg/timeseries.parquet").attrs["capmap"]["config"]
-    at = arm_task_from(stage_config(json.dumps(deps)).run)
+    at = capacity_problem(stage_config(json.dumps(deps)).run)
     arm, rot, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
     vox = datasets.read("results/default/voxels/voxels.parquet")

@@ -28,7 +28,7 @@ import yaml  # noqa: E402
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, ROOT)  # tests.reference: the coal shapes of the distance tests
 
-from capmap.config.checks import check_run_config  # noqa: E402
+from capmap.checks import check_run_config  # noqa: E402
 from capmap.config.dualarm import cloud_source, fit_settings, horizon, load_dual_arm_file, weights  # noqa: E402
 from capmap.config.scene_file import load_scene  # noqa: E402
 from capmap.dualarm.assembly import assemble, warm_start  # noqa: E402

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from capmap.config.capacity import rotation_from_rpy
+from capmap.capacity.build import rotation_from_rpy
 from capmap.config.robot_file import load
 from capmap.core.limits import AffineLimits
 from capmap.core.profiles import scurve

@@ -20,16 +20,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.directions import grid_axes
-from capmap.capacity.engine import point_capacity
-from capmap.capacity.refine import Evaluation, VoxelMinima, refine
+from capmap.capacity.build import capacity_problem, refine_settings
+from capmap.capacity.evaluator import LockedEvaluator
+from capmap.capacity.refine import VoxelMinima, refine
 from capmap.capacity.tables import grid_of
-from capmap.config.checks import check_run_config
+from capmap.checks import check_run_config
 from capmap.config.run import run_document
-from capmap.core import ik
-from capmap.core.configuration import arm_configurations
-from capmap.core.dynamics import ArmDynamics
-from capmap.stages.arm import arm_task_from
 from tests.benchmarks.machine import machine
 
 
@@ -49,17 +45,11 @@ def main():
     args = ap.parse_args()
     print(f"machine: {machine()}")
     run = check_run_config(run_document([args.configfile]), args.configfile)
-    at = arm_task_from(run)
-    arm, rot, motion, limits = at.arm, at.rotation, at.motion, at.limits
-    dyn, axes, labels, dirs = ArmDynamics(arm), grid_axes(), arm_configurations(arm), run.directions.build()
-    settings = run.refine.settings(sorted(run.task.payload_kg))
-    C = len(labels.names)
-
-    def evaluate(points, *_):
-        sol = ik.solve(arm, points, rot)
-        pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits, axes, labels)
-        return Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions, pc.config_capacity_kg,
-                          pc.config_axis_capacity_kg, pc.config_binding, pc.config_branches)
+    problem = capacity_problem(run, per_configuration=True)
+    evaluator = LockedEvaluator(problem)
+    evaluate = evaluator.evaluate
+    settings = refine_settings(run.refine, run.task.payload_kg)
+    C = len(problem.labels.names)
 
     vox = pd.read_parquet(args.run / "voxels" / "sampled.parquet")
     grid = grid_of(vox)
@@ -79,7 +69,7 @@ def main():
             n_points=np.ones(n, dtype=int), n_reachable=np.ones(n, dtype=int), last_change=np.zeros(n),
             converged=np.zeros(n, dtype=bool), worst_m=ctr, binding=ev0.binding[keep], rounds=0, n_evaluated=0)
         t = time.perf_counter()
-        res = refine(grid, start, evaluate, settings, np.random.default_rng(seed))
+        res = refine(grid, start, evaluator, settings, np.random.default_rng(seed))
         dt = time.perf_counter() - t
         m = 300
         rng = np.random.default_rng(1000 + seed)

@@ -9,10 +9,10 @@ import yaml
 
 from capmap.capacity.directions import sphere
 from capmap.capacity.engine import LoadLimits, Motion
-from capmap.capacity.query import ArmQuestion, line_query, point_query
+from capmap.capacity.problem import CapacityProblem
+from capmap.capacity.query import line_query, point_query
 from capmap.config.robot_file import load
 from capmap.core.configuration import arm_configurations
-from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
 from tests.reference.ik_oracle import DHArm, solve_all
@@ -28,7 +28,7 @@ def question():
     robot = load(SSRMS_YAML)
     arm = lock(robot, 1, np.deg2rad(100))
     limits = LoadLimits.uniform(7, 700, 200, 500).for_arm(arm)
-    return robot, ArmQuestion(ArmDynamics(arm), TASK_R, MOTION, limits, arm_configurations(arm))
+    return robot, CapacityProblem(arm, TASK_R, MOTION, limits, DIRS, labels=arm_configurations(arm))
 
 
 def _reference_capacity(robot, arm, q_active: np.ndarray, limit: np.ndarray) -> float:
@@ -40,7 +40,7 @@ def _reference_capacity(robot, arm, q_active: np.ndarray, limit: np.ndarray) -> 
 def test_point_query_equals_an_independent_computation_on_every_configuration(question, point):
     robot, q = question
     arm = q.dyn.arm
-    ans = point_query(q, DIRS, point)
+    ans = point_query(q, point)
     # the branches: those of a random-restart solver on the DH arm, no more, no fewer
     oracle = solve_all(DHArm(yaml.safe_load(SSRMS_YAML.read_text()), 1, 100.0),
                        _pose(point)[None], 64, np.random.default_rng(5))[0]
@@ -68,6 +68,6 @@ def test_line_query_on_a_configuration_and_bad_questions(question):
     with pytest.raises(CapmapError, match="not one of this arm's"):
         line_query(q, X_INI, X_DES, 1500.0, 0.5, "elbow-up")
     with pytest.raises(CapmapError, match="not reachable"):
-        point_query(q, DIRS, [100.0, 0, 0])
+        point_query(q, [100.0, 0, 0])
     with pytest.raises(CapmapError, match="distinct finite"):
         line_query(q, X_INI, X_INI, 1500.0, 0.5, "S+E-W+")

@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 
 from capmap.capacity import directions
-from capmap.capacity.engine import LoadLimits, Motion, point_capacity
-from capmap.capacity.refine import Evaluation, RefineSettings, VoxelMinima, refine
+from capmap.capacity.engine import LoadLimits, Motion
+from capmap.capacity.evaluator import LockedEvaluator
+from capmap.capacity.problem import CapacityProblem
+from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
 from capmap.capacity.voxels import Grid
 from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
-from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
 from tests.scenario import SSRMS_YAML, TASK_R
@@ -25,32 +26,18 @@ AXES = directions.grid_axes()
 @pytest.fixture(scope="module")
 def scenario():
     arm = lock(load(SSRMS_YAML), 1, np.deg2rad(100))
-    dyn = ArmDynamics(arm)
     limits = LoadLimits.uniform(7, 700, 200, 500).for_arm(arm)
-
-    def evaluate(p, *_):
-        sol = ik.solve(arm, p, TASK_R)
-        pc = point_capacity(dyn, sol.q, sol.n_solutions, DIRS, Motion(0.15, 0.03), limits, AXES)
-        return Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions)
-
-    return arm, evaluate
+    return arm, LockedEvaluator(CapacityProblem(arm, TASK_R, Motion(0.15, 0.03), limits, DIRS, AXES))
 
 
 @pytest.fixture(scope="module")
 def scenario_configurations():
     """The paper's scenario with every point's results per configuration (S/E/W flags: 8 labels)."""
     arm = lock(load(SSRMS_YAML), 1, np.deg2rad(100))
-    dyn = ArmDynamics(arm)
     limits = LoadLimits.uniform(7, 700, 200, 500).for_arm(arm)
     labels = arm_configurations(arm)
-
-    def evaluate(p, *_):
-        sol = ik.solve(arm, p, TASK_R)
-        pc = point_capacity(dyn, sol.q, sol.n_solutions, DIRS, Motion(0.15, 0.03), limits, AXES, labels)
-        return Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions, pc.config_capacity_kg,
-                          pc.config_axis_capacity_kg, pc.config_binding, pc.config_branches)
-
-    return arm, evaluate, len(labels.names)
+    problem = CapacityProblem(arm, TASK_R, Motion(0.15, 0.03), limits, DIRS, AXES, labels)
+    return arm, LockedEvaluator(problem), len(labels.names)
 
 
 def _voxels(arm, evaluate, n, rng):
@@ -78,11 +65,12 @@ def _voxels(arm, evaluate, n, rng):
 
 
 def test_refined_minimum_is_attained_and_within_one_percent_of_brute_force(scenario):
-    arm, evaluate = scenario
+    arm, evaluator = scenario
+    evaluate = evaluator.evaluate
     rng = np.random.default_rng(7)
     grid, start = _voxels(arm, evaluate, 24, rng)
     assert len(start.voxel) >= 20
-    res = refine(grid, start, evaluate, RefineSettings(), np.random.default_rng(1))
+    res = refine(grid, start, evaluator, RefineSettings(), np.random.default_rng(1))
     least = RefineSettings().min_points
     assert res.converged.all() and np.all((res.n_points >= least) | (res.capacity_kg == 0))  # 0 cannot fall further
     # attained: the stored worst point lies in its voxel and carries exactly the stored value
@@ -116,13 +104,14 @@ def test_configuration_minima_within_one_percent_of_brute_force(scenario_configu
     points, or without the bisection of each configuration's boundary, this test fails. The refinement
     is a sampling method, its convergence test statistical (python -m tests.benchmarks.bench_refine
     measures it on the default map's own voxels)."""
-    arm, evaluate, C = scenario_configurations
+    arm, evaluator, C = scenario_configurations
+    evaluate = evaluator.evaluate
     rng = np.random.default_rng(13)
     grid, start = _voxels(arm, evaluate, 40, rng)
     start = VoxelMinima.with_configurations(C, **{f: getattr(start, f) for f in (
         "voxel", "capacity_kg", "axis_capacity_kg", "n_points", "n_reachable", "last_change", "converged", "worst_m",
         "binding", "rounds", "n_evaluated")})
-    res = refine(grid, start, evaluate, RefineSettings(), np.random.default_rng(2))
+    res = refine(grid, start, evaluator, RefineSettings(), np.random.default_rng(2))
     assert res.converged.mean() >= 0.8
     cc = res.config_capacity_kg
     seen = np.isfinite(cc)
@@ -143,11 +132,12 @@ def test_configuration_minima_within_one_percent_of_brute_force(scenario_configu
 
 
 def test_near_a_payload_a_voxel_gets_more_points(scenario):
-    arm, evaluate = scenario
+    arm, evaluator = scenario
+    evaluate = evaluator.evaluate
     grid, start = _voxels(arm, evaluate, 8, np.random.default_rng(3))
-    plain = refine(grid, start, evaluate, RefineSettings(min_points=8), np.random.default_rng(1))
+    plain = refine(grid, start, evaluator, RefineSettings(min_points=8), np.random.default_rng(1))
     payloads = tuple(plain.capacity_kg[:2])
-    near = refine(grid, start, evaluate, RefineSettings(min_points=8, payloads_kg=payloads, near_min_points=64),
+    near = refine(grid, start, evaluator, RefineSettings(min_points=8, payloads_kg=payloads, near_min_points=64),
                   np.random.default_rng(1))
     assert np.all(near.n_points[:2] >= 64) and near.converged.all()
 
@@ -164,7 +154,8 @@ def test_neighbouring_voxels_evaluate_a_shared_point_once(scenario):
     up to 8 voxels is evaluated once (fewer points evaluated than the voxels count), each shared point
     owned by one of its voxels with the highest of their ceilings; and the block's minima are still
     within 1 % of 300 uniform points per voxel. Without sharing, every voxel evaluates its own corners."""
-    arm, evaluate = scenario
+    arm, evaluator = scenario
+    evaluate = evaluator.evaluate
     rng = np.random.default_rng(5)
     grid, one = _voxels(arm, evaluate, 1, rng)
     c = np.stack(np.unravel_index(one.voxel, grid.shape), axis=1)[0]
@@ -181,9 +172,14 @@ def test_neighbouring_voxels_evaluate_a_shared_point_once(scenario):
                         n_evaluated=0)
     calls = []
 
-    def counting(p, ceiling, owner):
-        calls.append((p.copy(), np.asarray(ceiling).copy(), np.asarray(owner).copy()))
-        return evaluate(p)
+    class Counting:  # the locked evaluator, its calls recorded
+        pointwise, n_evaluated = True, 0
+
+        def evaluate(self, p, ceiling, owner):
+            calls.append((p.copy(), np.asarray(ceiling).copy(), np.asarray(owner).copy()))
+            return evaluate(p)
+
+    counting = Counting()
     res = refine(grid, start, counting, RefineSettings(), np.random.default_rng(1))
     for p, ceiling, owner in calls:
         assert len(np.unique(p, axis=0)) == len(p)
@@ -202,7 +198,8 @@ def test_neighbouring_voxels_evaluate_a_shared_point_once(scenario):
         vox = np.flatnonzero(holds[i])
         assert owner[i] in vox and ceiling[i] == start.capacity_kg[vox].max()
     calls.clear()
-    alone = refine(grid, start, counting, RefineSettings(), np.random.default_rng(1), share_points=False)
+    counting.pointwise = False
+    alone = refine(grid, start, counting, RefineSettings(), np.random.default_rng(1))
     assert len(calls[0][0]) == 8 * n and alone.n_evaluated > res.n_evaluated
     m = 300
     dense_pts = grid.lower + (np.repeat(idx3, m, axis=0) + rng.uniform(0, 1, (m * n, 3))) * EDGE

@@ -2,7 +2,9 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config import check_run_config, load_config, parse_config
+from capmap.capacity.build import load_limits, task_rotation
+from capmap.checks import check_run_config
+from capmap.config import load_config, parse_config
 from capmap.errors import CapmapError
 from tests.scenario import ROOT, TASK_R
 
@@ -15,8 +17,8 @@ def test_default_config_parses_to_the_spec_scenario():
     run = load_config(ROOT / "config" / "config.yaml")
     assert run.lock.joint == 1 and run.lock.angle_deg is None  # locked where it stood
     assert check_run_config(_doc()).failure.angle_deg == 100
-    assert np.allclose(run.task.rotation, TASK_R, atol=1e-15)  # independent Rz Ry Rx in tests/scenario.py
-    limits = run.limits.resolve(7)
+    assert np.allclose(task_rotation(run.task), TASK_R, atol=1e-15)  # independent Rz Ry Rx in tests/scenario.py
+    limits = load_limits(run.limits, 7)
     assert np.all(limits.joint_torque_nm == 700) and np.all(limits.base_moment_nm == 500)
 
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config import parse_config, resolve_failure
+from capmap.capacity.build import resolve_failure
+from capmap.config import parse_config
 from capmap.errors import ConfigError
 from tests.reference.ik_oracle import DHArm, solve_all
 from tests.scenario import ROOT, SSRMS_YAML, TASK_R, X_INI

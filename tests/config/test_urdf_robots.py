@@ -13,9 +13,10 @@ import pytest
 import yaml
 from example_robot_data.robots_loader import getModelPath
 
+from capmap.capacity.build import load_limits
+from capmap.checks import check_run_config
 from capmap.config import main_task
 from capmap.config.capacity import TORQUE_FROM_CONFIG, TORQUE_FROM_URDF, LimitsConfig
-from capmap.config.checks import check_run_config
 from capmap.config.robot_file import load
 from capmap.config.slices import stage_slice
 from capmap.config.validation import load_yaml
@@ -173,7 +174,7 @@ def test_effort_limits_are_the_urdf_s(robot_file):
     assert robot.effort_limit_nm.tolist() == [effort[n] for n in robot.joint_names]
     lim = LimitsConfig.from_doc({"base_force_n": 1000, "base_moment_nm": 500}).for_robot(robot)
     assert lim.torque_limit_source == TORQUE_FROM_URDF
-    assert np.array_equal(lim.resolve(7).joint_torque_nm, [effort[n] for n in robot.joint_names])
+    assert np.array_equal(load_limits(lim, 7).joint_torque_nm, [effort[n] for n in robot.joint_names])
 
 
 def _panda_run(**limits) -> dict:

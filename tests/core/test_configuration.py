@@ -8,8 +8,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+import capmap.core.ik.closed as ik_closed
 from capmap.config.robot_file import load
-from capmap.core import ik, ik_closed
+from capmap.core import ik
 from capmap.core.configuration import Aspects, ShoulderElbowWrist, arm_configurations
 from capmap.core.reduction import free, lock
 from capmap.core.tracking import track

@@ -1,15 +1,17 @@
 """The compiled IK kernels against independent numpy/LAPACK computations: the companion roots
-(:mod:`capmap.core.ik_roots`) against ``numpy.linalg.eigvals`` (LAPACK dgeev), the Newton polish
-(:mod:`capmap.core.ik_polish`) against :func:`capmap.core.ik_numeric.newton` and
+(:mod:`capmap.core.ik.roots`) against ``numpy.linalg.eigvals`` (LAPACK dgeev), the Newton polish
+(:mod:`capmap.core.ik.newton`) against :func:`capmap.core.ik.multistart.newton` and
 :func:`capmap.core.kinematics.pose_error`, and the elimination matrices
-(:mod:`capmap.core.ik_general_matrices`, a pivoted Householder QR) against an SVD formulation
+(:mod:`capmap.core.ik.general.matrices`, a pivoted Householder QR) against an SVD formulation
 written here."""
 
 import numpy as np
 import pytest
 
-from capmap.core import ik_general, ik_polish, ik_roots
-from capmap.core.ik_numeric import newton
+import capmap.core.ik.general.elimination as ik_general
+import capmap.core.ik.newton as ik_polish
+import capmap.core.ik.roots as ik_roots
+from capmap.core.ik.multistart import newton
 from capmap.core.kinematics import Chain, inverse_transform, pose_error
 
 
@@ -239,7 +241,7 @@ def test_error_bounds_how_far_noise_moves_a_real_root(noise):
 def test_null_space_split_recovers_every_monomial_vector(k):
     """A null space spanned by k monomial vectors tan(qb/2)^i tan(qc/2)^j (random angles), given in a
     random orthonormal basis: the split returns k vectors whose angles are the k pairs (1e-6 rad)."""
-    from capmap.core.ik_general_back import _angles_of, _split
+    from capmap.core.ik.general.back import _angles_of, _split
 
     rng = np.random.default_rng(k)
     for _ in range(200):

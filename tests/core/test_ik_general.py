@@ -7,9 +7,11 @@ import logging
 import numpy as np
 import pytest
 
+import capmap.core.ik.general.elimination as ik_general
+import capmap.core.ik.general.select as ik_general_select
 from capmap.config.robot_file import load
-from capmap.core import ik, ik_general, ik_general_select
-from capmap.core.ik_polish import polish
+from capmap.core import ik
+from capmap.core.ik.newton import polish
 from capmap.core.kinematics import Chain, pose_error
 from capmap.core.reduction import free, lock
 from tests.scenario import SSRMS_YAML
@@ -129,7 +131,7 @@ def test_classify_known_shapes():
 
 def test_every_known_configuration_on_1000_poses():
     """SSRMS with joint 4 locked at 130 deg, 1,000 seeded poses FK(q): the arm's method (the resultant
-    polynomial, :mod:`capmap.core.ik_semi_poly`) returns every q. (The general method, solving each
+    polynomial, :mod:`capmap.core.ik.semi.resultant`) returns every q. (The general method, solving each
     pose with two eliminations, loses pose 249's under OPENBLAS_CORETYPE=Prescott: joints 2 and 6
     both within 1 deg of the angles at which the two eliminations lose rank.)"""
     arm = lock(load(SSRMS_YAML), 4, np.deg2rad(130))

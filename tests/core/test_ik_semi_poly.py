@@ -1,15 +1,17 @@
-"""The resultant-polynomial IK of the SSRMS middle locks (:mod:`capmap.core.ik_semi_poly`) against
+"""The resultant-polynomial IK of the SSRMS middle locks (:mod:`capmap.core.ik.semi.resultant`) against
 independent computations: the elimination's claims (P is a trigonometric polynomial of the stated
 degree that vanishes at every solution) checked on samples, and the solution sets against two other
-algorithms, the 1-D search over joint 0 (:mod:`capmap.core.ik_semi`) and the general 6R elimination
-(:mod:`capmap.core.ik_general`), with planted bugs that these checks must catch."""
+algorithms, the 1-D search over joint 0 (:mod:`capmap.core.ik.semi.search`) and the general 6R elimination
+(:mod:`capmap.core.ik.general.elimination`), with planted bugs that these checks must catch."""
 
 import numpy as np
 import pytest
 
+import capmap.core.ik.semi.resultant as ik_semi_poly
+import capmap.core.ik.semi.search as ik_semi
 from capmap.config.robot_file import load
-from capmap.core import ik, ik_semi, ik_semi_poly
-from capmap.core.ik_finish import _finish
+from capmap.core import ik
+from capmap.core.ik.finish import _finish
 from capmap.core.reduction import lock
 from tests.core.test_ik_general import _missing
 from tests.scenario import SSRMS_YAML

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from capmap.config.checks import check_run_config
+from capmap.checks import check_run_config
 from capmap.config.run import run_document
 from capmap.errors import CapmapError
 from tests.scenario import ROOT, SSRMS_YAML

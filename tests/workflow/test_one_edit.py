@@ -12,8 +12,8 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from capmap.config.checks import check_run_config
-from capmap.config.failure import locked_arm
+from capmap.capacity.build import locked_arm
+from capmap.checks import check_run_config
 from capmap.config.robot_file import load
 from capmap.config.run import run_document
 from tests.scenario import ROOT

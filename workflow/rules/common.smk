@@ -4,7 +4,8 @@ import shlex
 import sys
 from pathlib import Path
 
-from capmap.config import canonical, check_run_config, main_task, payload_label, stage_slice
+from capmap.checks import check_run_config
+from capmap.config import canonical, main_task, payload_label, stage_slice
 from capmap.config.run import DEFAULT_CONFIG
 from capmap.config.slices import section_modules
 from capmap.errors import CapmapError

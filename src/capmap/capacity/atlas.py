@@ -12,15 +12,11 @@ import numpy as np
 import pandas as pd
 
 from capmap.capacity import planning
-from capmap.capacity.directions import Directions
-from capmap.capacity.engine import Motion
+from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.tables import capacity_table, sample_table, voxel_table
 from capmap.capacity.verification import judge, verify_path
 from capmap.capacity.voxels import Grid, capacity_volume
 from capmap.core import ik
-from capmap.core.dynamics import ArmDynamics
-from capmap.core.limits import AffineLimits
-from capmap.core.reduction import LockedArm
 from capmap.errors import CapmapError
 
 __all__ = ["AtlasTask", "AtlasMap", "atlas_map"]
@@ -28,14 +24,11 @@ __all__ = ["AtlasTask", "AtlasMap", "atlas_map"]
 
 @dataclass(frozen=True)
 class AtlasTask:
-    """The run's task on one locked arm: end-effector rotation (3, 3), motion and load limits, start
-    and goal (3,) m (start None when unknown), the payloads [kg], the verification's dt_s [s], and
-    the start configuration q_start (n_active,) rad on this lock (None, with ``start_note`` saying
-    why, when the start is not reachable on it)."""
+    """The run's task on one locked arm (its rotation, motion and limits are the problem's): start and
+    goal (3,) m (start None when unknown), the payloads [kg], the verification's dt_s [s], and the start
+    configuration q_start (n_active,) rad on this lock (None, with ``start_note`` saying why, when the
+    start is not reachable on it)."""
 
-    rotation: np.ndarray
-    motion: Motion
-    limits: AffineLimits
     start_m: np.ndarray | None
     goal_m: np.ndarray
     payloads_kg: tuple[float, ...]
@@ -54,14 +47,14 @@ class AtlasMap:
     rows: list[dict]
 
 
-def atlas_map(arm: LockedArm, lock: tuple[int, float], sampling, dirs: Directions, edge_m: float, task: AtlasTask,
+def atlas_map(problem: CapacityProblem, lock: tuple[int, float], sampling, edge_m: float, task: AtlasTask,
               reword: Callable[[CapmapError], str] = str, log=None) -> AtlasMap:
-    """The coarse map of ``arm``, locked as ``lock`` (joint number, angle deg), (``sampling``: mode,
-    n_points, seed, jitter_per_voxel) over ``dirs`` on voxels of ``edge_m`` [m], and its summary rows;
+    """The coarse map of ``problem``'s arm, locked as ``lock`` (joint number, angle deg), (``sampling``:
+    mode, n_points, seed, jitter_per_voxel) on voxels of ``edge_m`` [m], and its summary rows;
     ``reword`` turns a planner's error into the row's note (in config terms)."""
+    arm = problem.arm
     pts = sample_table(arm, sampling, edge_m, log)
-    cap = capacity_table(arm, pts.point_id.to_numpy(), pts[["x_m", "y_m", "z_m"]].to_numpy(), task.rotation,
-                         task.motion, task.limits, dirs, log, chunk=1000)
+    cap = capacity_table(problem, pts.point_id.to_numpy(), pts[["x_m", "y_m", "z_m"]].to_numpy(), log, chunk=1000)
     vox, grid = voxel_table(cap, edge_m)
     reach = vox.capacity_kg[vox.n_reachable > 0].to_numpy()
     q = np.quantile(reach, [0.0, 0.05, 0.5, 0.95, 1.0]) if len(reach) else np.full(5, np.nan)
@@ -73,8 +66,8 @@ def atlas_map(arm: LockedArm, lock: tuple[int, float], sampling, dirs: Direction
     start_note, direct = task.start_note, None
     if task.q_start is not None:
         try:
-            direct = verify_path(ArmDynamics(arm), np.array([task.start_m, task.goal_m]), task.rotation, task.q_start,
-                                 task.motion, task.dt_s, task.limits)
+            direct = verify_path(problem.dyn, np.array([task.start_m, task.goal_m]), problem.rotation, task.q_start,
+                                 problem.motion, task.dt_s, problem.limits)
         except CapmapError as exc:
             start_note = f"direct line: {exc}"
     rows = []
@@ -82,7 +75,7 @@ def atlas_map(arm: LockedArm, lock: tuple[int, float], sampling, dirs: Direction
         row = {**base, "payload_kg": payload,
                "volume_carrying_payload_m3": float(capacity_volume(reach, edge_m, [payload])[0])}
         if direct is not None:
-            _, verdict = judge(direct, arm, task.limits, payload)
+            _, verdict = judge(direct, arm, problem.limits, payload)
             row.update(direct_capacity_kg=verdict.capacity_kg, direct_feasible=verdict.feasible,
                        direct_note="" if verdict.feasible else (verdict.limits_exceeded_at_payload
                                                                 or (verdict.tracking if verdict.tracking != "ok"

@@ -16,29 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.capacity.directions import Directions
-from capmap.capacity.engine import Motion, point_capacity
+from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.verification import PathResult, PathVerdict, judge, verify_path
-from capmap.core import ik
-from capmap.core.configuration import Configurations
-from capmap.core.dynamics import ArmDynamics
-from capmap.core.limits import AffineLimits
 from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError
 
-__all__ = ["ArmQuestion", "PointAnswer", "point_query", "LineAnswer", "line_query"]
-
-
-@dataclass(frozen=True)
-class ArmQuestion:
-    """What every question is asked of: the locked arm's dynamics, the task's end-effector ``rotation``
-    (3, 3), ``motion``, the load ``limits`` on the arm's outputs and its configuration ``labels``."""
-
-    dyn: ArmDynamics
-    rotation: np.ndarray
-    motion: Motion
-    limits: AffineLimits
-    labels: Configurations
+__all__ = ["PointAnswer", "point_query", "LineAnswer", "line_query"]
 
 
 @dataclass(frozen=True)
@@ -56,17 +39,17 @@ class PointAnswer:
     worst_u: np.ndarray
 
 
-def point_query(arm_q: ArmQuestion, directions: Directions, point_m) -> PointAnswer:
-    """The capacity of every IK branch at ``point_m`` (3,) m over ``directions`` (the run's set).
+def point_query(problem: CapacityProblem, point_m) -> PointAnswer:
+    """The capacity of every IK branch at ``point_m`` (3,) m over the problem's directions (it must
+    carry its configuration ``labels``).
     Raises :class:`CapmapError` (key ``point``) where no branch reaches it at the task orientation."""
     p = np.asarray(point_m, dtype=float).reshape(3)
     if not np.all(np.isfinite(p)):
         raise CapmapError(f"{{point}} = {p.tolist()} is not a finite position", point="the point")
-    q, lab = _branches(arm_q, p)
-    K = len(q)
-    pc = point_capacity(arm_q.dyn, q[:, None, :], np.ones(K, dtype=int), directions, arm_q.motion, arm_q.limits)
+    q, lab = _branches(problem, p)
+    pc = problem.per_branch(q)
     order = np.lexsort((pc.capacity_kg, lab))
-    return PointAnswer(point_m=p, configuration=tuple(arm_q.labels.names[i] for i in lab[order]), q_rad=q[order],
+    return PointAnswer(point_m=p, configuration=tuple(problem.labels.names[i] for i in lab[order]), q_rad=q[order],
                        capacity_kg=pc.capacity_kg[order], binding=tuple(pc.names[b] for b in pc.binding[order]),
                        worst_u=pc.worst_u[order])
 
@@ -82,19 +65,19 @@ class LineAnswer:
     verdict: PathVerdict
 
 
-def line_query(arm_q: ArmQuestion, a_m, b_m, payload_kg: float, dt_s: float, configuration: str | None = None,
+def line_query(problem: CapacityProblem, a_m, b_m, payload_kg: float, dt_s: float, configuration: str | None = None,
                q_reference: np.ndarray | None = None) -> LineAnswer:
     """Verify the straight line a_m -> b_m (3,) m carrying payload_kg, samples dt_s apart, starting on
-    ``configuration`` (a name of ``arm_q.labels``; default: that of q_reference (n_active,) rad) at
+    ``configuration`` (a name of ``problem.labels``; default: that of q_reference (n_active,) rad) at
     a_m: the branch of that configuration nearest q_reference (the first if none). Raises
     :class:`CapmapError` (keys ``configuration``, ``start``) for an unknown configuration or one that
     does not reach a_m."""
-    names = arm_q.labels.names
+    names = problem.labels.names
     if configuration is None:
         if q_reference is None:
             raise CapmapError("{configuration}: give a configuration or a reference configuration",
                               configuration="the configuration")
-        want = int(arm_q.labels.labels(np.asarray(q_reference, dtype=float)[None])[0])
+        want = int(problem.labels.labels(np.asarray(q_reference, dtype=float)[None])[0])
     elif configuration in names:
         want = names.index(configuration)
     else:
@@ -104,26 +87,26 @@ def line_query(arm_q: ArmQuestion, a_m, b_m, payload_kg: float, dt_s: float, con
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))) or np.allclose(a, b):
         raise CapmapError(f"{{start}}: the line [{', '.join(f'{v:g}' for v in a)}] -> "
                           f"[{', '.join(f'{v:g}' for v in b)}] m needs two distinct finite ends", start="the line")
-    q, lab = _branches(arm_q, a)
+    q, lab = _branches(problem, a)
     if not np.any(lab == want):
         raise CapmapError(f"{{configuration}} {names[want]} does not reach the line's start "
                           f"[{', '.join(f'{v:g}' for v in a)}] m (there: {', '.join(names[i] for i in np.unique(lab))})",
                           configuration="the configuration")
     q = q[lab == want]
     q0 = q[0 if q_reference is None else nearest_branch(q, np.asarray(q_reference, dtype=float))[0]]
-    res = verify_path(arm_q.dyn, np.stack([a, b]), arm_q.rotation, q0, arm_q.motion, dt_s, arm_q.limits)
-    _, verdict = judge(res, arm_q.dyn.arm, arm_q.limits, payload_kg)
+    res = verify_path(problem.dyn, np.stack([a, b]), problem.rotation, q0, problem.motion, dt_s, problem.limits)
+    _, verdict = judge(res, problem.arm, problem.limits, payload_kg)
     return LineAnswer(configuration=names[want], q_start_rad=q0, result=res, verdict=verdict)
 
 
-def _branches(arm_q: ArmQuestion, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _branches(problem: CapacityProblem, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Every IK branch at p (3,) m: q (K, n_active) rad and its configuration labels (K,); raises
     (key ``point``) where there is none."""
-    arm = arm_q.dyn.arm
-    sol = ik.solve(arm, p[None], arm_q.rotation)
+    arm = problem.arm
+    sol = problem.branches(p[None])
     K = int(sol.n_solutions[0])
     if K == 0:
         raise CapmapError(f"{{point}} [{', '.join(f'{v:g}' for v in p)}] m is not reachable at the task orientation "
                           f"(no IK solution with joint {arm.locked_joint} locked)", point="the point")
     q = sol.q[0, :K]
-    return q, arm_q.labels.labels(q)
+    return q, problem.labels.labels(q)

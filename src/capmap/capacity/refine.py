@@ -33,7 +33,8 @@ the others keep their own values.
 
 A voxel whose minimum and per-axis minima are all 0 cannot fall further and has converged. The per-axis
 capacities (moves along the 13 grid axes) are minimised over the same points. The evaluation of points
-is passed in as a function (this module holds the rounds); randomness comes from the Generator given.
+is an :class:`~capmap.capacity.evaluator.Evaluator` passed in (this module holds the rounds); randomness
+comes from the Generator given.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from capmap.capacity.evaluator import Evaluator
 from capmap.capacity.folds import ConfigBrackets, FoldBrackets
 from capmap.capacity.patterns import COMPASS, CORNERS, around, rows_in
 from capmap.capacity.refine_data import Evaluation, RefineSettings, VoxelMinima
@@ -69,21 +71,17 @@ def _groups(ev: Evaluation, C: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return np.where(np.isfinite(c), c, np.inf), b, np.where(np.isfinite(a), a, np.inf)
 
 
-def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Evaluation], settings: RefineSettings,
-           rng: np.random.Generator, progress: Callable[[int, int, int], None] | None = None,
-           share_points: bool = True) -> VoxelMinima:
+def refine(grid: Grid, start: VoxelMinima, evaluator: Evaluator, settings: RefineSettings,
+           rng: np.random.Generator, progress: Callable[[int, int, int], None] | None = None) -> VoxelMinima:
     """Refine the voxels of ``start`` (their minima from the points already evaluated; a voxel
-    without a reachable point keeps NaN and is not refined). ``evaluate(points (N, 3) m, ceiling (N,) kg,
-    owner (N,))`` gives the point results; ``ceiling`` is each point's voxel's all-branch minimum so far,
-    ``owner`` its voxel: only the least capacity_kg of each voxel's points (below the ceiling) must be
-    exact, any other may be a value at or above it (the per-axis and per-configuration values must be
-    exact); ``progress(round, active voxels, points)`` is called per round. A point several brackets of
-    a voxel ask for in one round is evaluated once; with ``share_points`` also a point several voxels
-    ask for (neighbours share their corners), owned by one of them with the highest of their ceilings:
-    for an ``evaluate`` whose values are exact wherever they are below the ceiling it is given (not one
-    that prunes a point by the other points of its owner, as the baseline's does: it passes False).
+    without a reachable point keeps NaN and is not refined). ``evaluator`` gives the point results
+    (:mod:`capmap.capacity.evaluator`'s contract), each point's ceiling its voxel's all-branch minimum so
+    far and its owner that voxel; ``progress(round, active voxels, points)`` is called per round. A
+    point several brackets of a voxel ask for in one round is evaluated once; for a ``pointwise``
+    evaluator also a point several voxels ask for (neighbours share their corners), owned by one of
+    them with the highest of their ceilings.
 
-    With configuration fields in ``start`` (:meth:`VoxelMinima.with_configurations`; ``evaluate``
+    With configuration fields in ``start`` (:meth:`VoxelMinima.with_configurations`; the evaluator
     then gives them too), every configuration's minimum and per-axis minima are refined as the
     all-branch ones are (groups: all branches, then each configuration), from the same points: a
     voxel has converged when every group has; a compass around each group's worst point still
@@ -193,7 +191,7 @@ def refine(grid: Grid, start: VoxelMinima, evaluate: Callable[[np.ndarray], Eval
         pts = np.concatenate([local_pts,
                               grid.lower + (idx3[uniform] + rng.uniform(0.0, 1.0, (len(uniform), 3))) * grid.edge_m])
         new = new + n_local
-        ev, n_unique = _evaluate_once(evaluate, pts, cap[owner, 0], owner, share_points)
+        ev, n_unique = _evaluate_once(evaluator, pts, cap[owner, 0], owner)
         if progress:
             progress(rounds, len(active), n_unique)
         evaluated += n_unique
@@ -285,20 +283,20 @@ def argmin_columns(values: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, 
     return g[starts], order[np.minimum.reduceat(pos, starts, axis=0)]
 
 
-def _evaluate_once(evaluate, pts: np.ndarray, ceiling: np.ndarray, owner: np.ndarray, share: bool
+def _evaluate_once(evaluator: Evaluator, pts: np.ndarray, ceiling: np.ndarray, owner: np.ndarray
                    ) -> tuple[Evaluation, int]:
-    """``evaluate`` on the distinct points of a round only (a bracket's midpoint shared by a voxel's
-    configurations; with ``share``, also a corner or face point shared by neighbouring voxels): results
-    per row of pts, and the number of points evaluated. A point shared by voxels goes to ``evaluate``
+    """``evaluator`` on the distinct points of a round only (a bracket's midpoint shared by a voxel's
+    configurations; for a pointwise evaluator, also a corner or face point shared by neighbouring voxels): results
+    per row of pts, and the number of points evaluated. A point shared by voxels is evaluated
     once, owned by one of them, with the highest of their ceilings."""
-    key = pts if share else np.column_stack([owner, pts])
+    key = pts if evaluator.pointwise else np.column_stack([owner, pts])
     _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
     if len(first) == len(pts):
-        return evaluate(pts, ceiling, owner), len(pts)
+        return evaluator.evaluate(pts, ceiling, owner), len(pts)
     ceil = np.full(len(first), -np.inf)
     np.maximum.at(ceil, inv, ceiling)
-    ev = evaluate(pts[first], ceil, owner[first])
+    ev = evaluator.evaluate(pts[first], ceil, owner[first])
     return Evaluation(*(None if (x := getattr(ev, f)) is None else x[inv] for f in Evaluation.__dataclass_fields__)), \
         len(first)
 

@@ -11,12 +11,9 @@ import pandas as pd
 import pinocchio as pin
 
 from capmap.capacity import sampling
-from capmap.capacity.directions import AXIS_LABELS, angles_deg, grid_axes
-from capmap.capacity.engine import Motion, point_capacity
+from capmap.capacity.directions import AXIS_LABELS, angles_deg
+from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.voxels import Grid, voxelise
-from capmap.core import ik
-from capmap.core.dynamics import ArmDynamics
-from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
 from capmap.core.robot import Robot
 
@@ -69,18 +66,16 @@ def sample_table(arm: LockedArm, sc, edge_m: float | None, log=None) -> pd.DataF
                          "source": pd.Categorical.from_codes(source, ["joint_sample", "voxel_centre", "voxel_jitter"])})
 
 
-def capacity_table(arm: LockedArm, ids: np.ndarray, pos: np.ndarray, rotation: np.ndarray, motion: Motion,
-                   limits: AffineLimits, dirs, log=None, chunk: int = 500) -> pd.DataFrame:
-    """Per-point capacity table for points ``pos`` (N, 3) m at end-effector orientation ``rotation``
-    (all IK branches x all directions); progress to ``log`` (a logger) every chunk."""
-    dyn = ArmDynamics(arm)
-    axes = grid_axes()
+def capacity_table(problem: CapacityProblem, ids: np.ndarray, pos: np.ndarray, log=None, chunk: int = 500) -> pd.DataFrame:
+    """Per-point capacity table of ``problem`` for points ``pos`` (N, 3) m with ids (N,) (all IK
+    branches x all directions, per-axis minima along the problem's axes); progress to ``log`` (a
+    logger) every chunk."""
+    arm, dirs = problem.arm, problem.directions
     parts = []
     t0, states = time.perf_counter(), 0
     for start in range(0, len(pos), chunk):
         rows = slice(start, start + chunk)
-        sol = ik.solve(arm, pos[rows], rotation)
-        pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, motion, limits, axes)
+        sol, pc = problem.solve(pos[rows], chunk)
         states += int(pc.n_states.sum())
         reach = sol.n_solutions > 0
         alpha, beta = angles_deg(pc.worst_u)  # off the set (exact): from the direction itself

@@ -1,4 +1,5 @@
-"""Configuration: files in (YAML), frozen dataclasses out; validated once, before any job.
+"""Configuration: files in (YAML), frozen dataclasses out; validated once, before any job. The checks
+that need the robot are :mod:`capmap.checks`; each family's ``build`` module turns its sections into numerics.
 
 - :mod:`~capmap.config.validation`  YAML loading and JSON-schema validation (``schemas/``)
 - :mod:`~capmap.config.robot_file`  robot files -> robot descriptions and models
@@ -13,16 +14,13 @@
 - :mod:`~capmap.config.jobs`        one plan/verify job (PlanTask)
 - :mod:`~capmap.config.typed`       typed objects <-> JSON (the generic rebuild of a job's config)
 - :mod:`~capmap.config.slices`      the fields each stage reads (rule params, provenance)
-- :mod:`~capmap.config.failure`     the failure in one edit: lock angle, start, start configuration
-- :mod:`~capmap.config.checks`      checks that need the robot, with errors naming config keys
+- :mod:`~capmap.config.failure`     the failure in one edit: the resolved lock angle, start, start configuration
 """
 
 from capmap._lazy import lazy_exports
 
 _EXPORTS = {
-    'check_run_config': 'checks',
     'Failure': 'failure',
-    'resolve_failure': 'failure',
     'main_task': 'failure',
     'RunConfig': 'run',
     'load_config': 'parse',

@@ -1,22 +1,18 @@
 """Config sections of the capacity-map family: lock, task, limits, sampling, directions,
-voxels, verification. Frozen dataclasses built from the validated config document."""
+voxels, verification. Frozen dataclasses built from the validated config document; the family's numerics
+objects are built from them in :mod:`capmap.capacity.build`."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pinocchio as pin
 
-from capmap.capacity import directions
-from capmap.capacity.directions import Directions
-from capmap.capacity.engine import LoadLimits, Motion
-from capmap.capacity.refine_data import RefineSettings
-from capmap.config.validation import as_tuple, per_item
-from capmap.errors import CapmapError, ConfigError
+from capmap.config.validation import as_tuple
+from capmap.errors import ConfigError
 
 __all__ = ["LockConfig", "TaskConfig", "LimitsConfig", "SamplingConfig", "DirectionsConfig", "VerificationConfig",
-           "RefineConfig", "PlanningConfig", "rotation_from_rpy", "PLAN_MOVES", "TORQUE_FROM_CONFIG", "TORQUE_FROM_URDF"]
+           "RefineConfig", "PlanningConfig", "PLAN_MOVES", "TORQUE_FROM_CONFIG", "TORQUE_FROM_URDF"]
 
 PLAN_MOVES = ("branch", "axis", "isotropic")  # planning.moves; the first is the default
 MAX_DIRECTIONS = 1_000_000  # directions a set may be built from (the paper's grid before its duplicates go)
@@ -40,18 +36,6 @@ class RefineConfig:
         r = voxels_doc.get("refine", {})
         return None if r is False else cls(**r)
 
-    def settings(self, payloads_kg) -> RefineSettings:
-        """The refinement's numerics settings around the task payloads; their own check, re-worded with
-        the keys (the schema bounds rel_tol, so only the point counts can contradict each other)."""
-        try:
-            return RefineSettings(rel_tol=float(self.rel_tol), min_points=int(self.min_points),
-                                  max_points=int(self.max_points), payloads_kg=tuple(float(p) for p in payloads_kg),
-                                  near_band=float(self.near_band), near_min_points=int(self.near_min_points))
-        except CapmapError:
-            raise ConfigError(f"voxels.refine: min_points = {self.min_points}, near_min_points = {self.near_min_points} "
-                              f"and max_points = {self.max_points}: need min_points <= max_points and "
-                              "near_min_points <= max_points") from None
-
 
 @dataclass(frozen=True)
 class PlanningConfig:
@@ -65,11 +49,6 @@ class PlanningConfig:
 
 
 DEFAULT_DT_S = 0.1  # verification.dt_s when not given
-
-
-def rotation_from_rpy(rpy_deg) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll) (3, 3) from [roll, pitch, yaw] deg."""
-    return pin.rpy.rpyToMatrix(*np.deg2rad(np.asarray(rpy_deg, dtype=float)))
 
 
 @dataclass(frozen=True)
@@ -104,14 +83,6 @@ class TaskConfig:
         task = {k: as_tuple(v) for k, v in d.items()}
         task["payload_kg"] = tuple(float(m) for m in np.atleast_1d(task["payload_kg"]))
         return cls(**task)
-
-    @property
-    def rotation(self) -> np.ndarray:
-        return rotation_from_rpy(self.orientation_rpy_deg)
-
-    @property
-    def motion(self) -> Motion:
-        return Motion(self.v_max_mps, self.a_max_mps2)
 
 
 TORQUE_FROM_CONFIG = "config limits.joint_torque_nm"  # LimitsConfig.torque_limit_source
@@ -170,15 +141,6 @@ class LimitsConfig:
                for k, v in vars(self).items()}
         return LimitsConfig(**one)
 
-    def resolve(self, n_joints: int) -> LoadLimits:
-        """:class:`LoadLimits` for an arm with n_joints joints (length checks here)."""
-        if self.joint_torque_nm is None:
-            raise CapmapError("limits.joint_torque_nm: the URDF's effort limits are not filled in "
-                              "(LimitsConfig.for_robot, done by check_run_config)")
-        return LoadLimits(per_item(self.joint_torque_nm, n_joints, "limits.joint_torque_nm"),
-                          per_item(self.base_force_n, 3, "limits.base_force_n"),
-                          per_item(self.base_moment_nm, 3, "limits.base_moment_nm"))
-
 
 @dataclass(frozen=True)
 class SamplingConfig:
@@ -223,11 +185,6 @@ class DirectionsConfig:
                               f"directions to build (at most {MAX_DIRECTIONS:,}): "
                               f"{'raise' if out.kind == 'paper_grid' else 'lower'} {key}")
         return out
-
-    def build(self) -> Directions:
-        if self.kind == "exact":
-            return directions.exact()
-        return directions.paper_grid(self.step_deg) if self.kind == "paper_grid" else directions.sphere(self.n)
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,8 @@ key (before a stage deletes a good output and dies in numpy), and what will run 
 The memory model is per job and deliberately simple (measured on the default run: a Python
 process with Pinocchio imported holds ~350 MB; a capacity shard holds one chunk of 500 points x
 IK branches x directions x limit outputs in a few float64 arrays; the voxels stage holds every
-point of the map in a table of ~40 columns)."""
+point of the map in a table of ~40 columns). The estimate itself draws the seeded joint samples:
+:func:`capmap.capacity.sizing.estimate_map`; this module holds its result and the step guards."""
 
 from __future__ import annotations
 
@@ -14,20 +15,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.capacity.sampling import joint_samples
-from capmap.capacity.voxels import Grid
-from capmap.config.capacity import SamplingConfig
-from capmap.core.reduction import LockedArm
 from capmap.errors import ConfigError
 
-__all__ = ["Estimate", "estimate_map", "available_memory_mb", "BASE_MB", "MAX_STEPS", "MAX_MOTION_S", "check_steps",
-           "check_duration", "line_duration_s"]
+__all__ = ["Estimate", "available_memory_mb", "BASE_MB", "CHUNK", "MAX_BRANCHES", "POINT_BYTES", "MAX_SAMPLES",
+           "MAX_STEPS", "MAX_MOTION_S", "check_steps", "check_duration", "line_duration_s"]
 
 BASE_MB = 350.0  # a job's Python with numpy, pandas and Pinocchio imported
-_CHUNK = 500  # points per capacity chunk (capmap.capacity.tables.capacity_table)
-_MAX_BRANCHES = 16
-_POINT_BYTES = 700  # one point in the voxels stage's tables, with pandas' overhead
-_MAX_SAMPLES = 20_000_000
+CHUNK = 500  # points per capacity chunk (capmap.capacity.tables.capacity_table)
+MAX_BRANCHES = 16
+POINT_BYTES = 700  # one point in the voxels stage's tables, with pandas' overhead
+MAX_SAMPLES = 20_000_000
 MAX_STEPS = 5_000_000  # samples of a verified motion, control periods of a follow case, RK4 steps, OCP nodes x grid
 
 
@@ -65,7 +62,6 @@ class Estimate:
     points: int
     states: float
     peak_mb: float
-    grid: Grid | None = None  # the map's grid (None when too large to build)
 
     def describe(self, edge_m: float) -> str:
         g = "x".join(map(str, self.grid_shape))
@@ -83,48 +79,3 @@ def available_memory_mb() -> float:
     except OSError:
         pass
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**20
-
-
-def estimate_map(arm: LockedArm, sampling: SamplingConfig, edge_m: float, n_directions: int, n_outputs: int,
-                 shards: int, keys: dict[str, str]) -> Estimate:
-    """The size of one capacity map: the grid from the same seeded joint samples the sample stage
-    draws (exact), the points voxel_fill adds, the states and the memory of its largest job.
-    ``keys``: the config keys of n_points, edge_m, jitter and directions (the one driving the size is
-    named when the map is refused)."""
-    if sampling.n_points > _MAX_SAMPLES:
-        raise ConfigError(f"{keys['n_points']} = {sampling.n_points:,} joint samples is more than this workflow "
-                          f"handles ({_MAX_SAMPLES:,})")
-    _, pos = joint_samples(arm, sampling.n_points, np.random.default_rng(sampling.seed))
-    span = np.ptp(pos, axis=0) / edge_m + 1
-    shape = tuple(int(v) for v in np.floor(span) + 1)
-    voxels = int(np.prod(np.asarray(shape, dtype=float)))
-    grid = Grid.covering(pos, edge_m) if voxels < 1e9 else None  # the grid of the voxels stage (all samples)
-    if sampling.mode == "voxel_fill" and grid is not None:
-        shape = grid.shape
-        voxels = grid.n_voxels
-    fill = voxels * (1 + sampling.jitter_per_voxel) if sampling.mode == "voxel_fill" else 0
-    points = sampling.n_points + fill
-    states = points * 8.0 * n_directions
-    chunk_mb = _CHUNK * _MAX_BRANCHES * n_directions * n_outputs * 8 * 3 / 2**20
-    shard_mb = points / max(shards, 1) * _POINT_BYTES / 2**20
-    voxel_mb = points * _POINT_BYTES / 2**20 + voxels * 200 / 2**20
-    peak = BASE_MB + max(chunk_mb + shard_mb, voxel_mb)
-    est = Estimate(grid_shape=shape, voxels=voxels, points=points, states=states, peak_mb=peak, grid=grid)
-    free = available_memory_mb()
-    if peak > 0.8 * free:
-        key, what = _blame(sampling, keys, chunk_mb > shard_mb and chunk_mb > voxel_mb, fill)
-        raise ConfigError(f"{key}: this map needs {est.describe(edge_m)}; this machine has "
-                          f"{free / 1024:.1f} GB available: {what}")
-    return est
-
-
-def _blame(sampling: SamplingConfig, keys: dict[str, str], directions_dominate: bool, fill: int) -> tuple[str, str]:
-    """The key that drives the size most, and what to do about it: the direction count (a capacity
-    chunk's arrays), the jittered points per voxel, the voxel edge (the fill) or the joint samples."""
-    if directions_dominate:
-        return keys["directions"], f"use fewer motion directions ({keys['directions']})"
-    if sampling.mode == "voxel_fill" and fill > sampling.n_points:
-        if sampling.jitter_per_voxel > 1:
-            return keys["jitter"], f"lower {keys['jitter']}"
-        return keys["edge_m"], f"coarsen {keys['edge_m']}"
-    return keys["n_points"], f"lower {keys['n_points']}"

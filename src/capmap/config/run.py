@@ -50,7 +50,7 @@ SECTION_TYPES = {  # a section type's name -> the module defining it (imported w
 class RunConfig:
     """A whole run: the robot file and every section (``follow``, ``reconfig``, ``dualarm``: None when
     absent). ``failure`` (the resolved lock and start) and ``estimate`` (the map's size) are set by
-    :func:`capmap.config.check_run_config`. The sections' types are resolved lazily
+    :func:`capmap.checks.check_run_config`. The sections' types are resolved lazily
     (:data:`SECTION_TYPES`): a job that rebuilds its slice imports only the sections it reads, so its
     code fingerprint does not follow every family's code."""
 

@@ -11,7 +11,7 @@ provenance. The job gets the same types back with :func:`stage_config` (one gene
 field it did not declare raises when used).
 
 A key's path: YAML -> schema validation -> the section dataclass (``LockConfig``) -> resolved
-(``Failure``) in :func:`capmap.config.checks.check_run_config` -> :func:`stage_slice` -> the
+(``Failure``) in :func:`capmap.checks.check_run_config` -> :func:`stage_slice` -> the
 rule's params -> :func:`stage_config` in the job -> the numerics.
 """
 
@@ -135,7 +135,7 @@ def _put(doc: dict, path: str, value) -> None:
 def stage_slice(cfg: RunConfig, stage: str, job: PlanTask | None = None) -> dict:
     """The slice of ``stage``: ``{"run": {...}, "job": {...}, "files": {...}}`` with the declared
     fields' values (``job`` only when the stage reads one) and the content hashes of the files they
-    name. ``cfg`` is the checked configuration (:func:`capmap.config.checks.check_run_config`)."""
+    name. ``cfg`` is the checked configuration (:func:`capmap.checks.check_run_config`)."""
     out: dict = {}
     files: dict[str, str] = {}
     for path in upstream_fields(cfg, stage):

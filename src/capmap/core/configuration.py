@@ -7,7 +7,7 @@ configurations (det J = 0), so a motion that crosses no singular surface never c
 
 - :class:`ShoulderElbowWrist`, chains with a closed form (``0 | 1 2 3 parallel | 4 5 intersecting``,
   on the chain or from its tip; the SSRMS with joint 1, 2, 6 or 7 locked, UR-type arms): the three
-  branch choices of the closed form (:func:`capmap.core.ik_closed.flags`), shoulder, elbow and wrist.
+  branch choices of the closed form (:func:`capmap.core.ik.closed.flags`), shoulder, elbow and wrist.
   det J is their product times a constant (measured 0.5 on the SSRMS: tests/core/test_configuration.py),
   so every singular surface is where exactly one flag changes sign: 8 configurations, at most one IK
   solution each.
@@ -28,7 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik, ik_closed
+import capmap.core.ik.closed as ik_closed
+from capmap.core import ik
 from capmap.core.kinematics import Chain
 
 __all__ = ["Configurations", "ShoulderElbowWrist", "Aspects", "configurations_of", "arm_configurations"]

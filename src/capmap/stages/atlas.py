@@ -11,11 +11,10 @@ import numpy as np
 import pandas as pd
 
 from capmap.capacity.atlas import AtlasTask, atlas_map
+from capmap.capacity.build import capacity_problem, resolve_failure
 from capmap.capacity.tables import grid_meta
 from capmap.capacity.voxels import capacity_volume
 from capmap.config.capacity import LockConfig
-from capmap.config.failure import locked_arm, resolve_failure
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.errors import CapmapError
 from capmap.io import datasets
@@ -36,23 +35,19 @@ def stage_atlas_map(out_voxels: str, out_summary: str, slice_json: str, joint: i
     cfg = stage_config(slice_json)
     run = cfg.run
     log = stage_logger(__name__, f"atlas joint {joint} at {angle_deg:g} deg")
-    robot = load(run.robot)
-    task = run.task
-    arm = locked_arm(robot, joint, angle_deg)
-    dirs = run.atlas.directions.build()
-    log.info(f"IK method {ik.method_for(arm.chain)}; {len(dirs)} directions; edge {run.atlas.edge_m} m")
+    problem = capacity_problem(run, joint, angle_deg, run.atlas.directions)
+    arm, task = problem.arm, run.task
+    log.info(f"IK method {ik.method_for(arm.chain)}; {len(problem.directions)} directions; edge {run.atlas.edge_m} m")
     start_note, q_start, offset = "", None, np.nan
     try:  # the start configuration on this lock, as for the main run
-        failure = resolve_failure(robot, LockConfig(joint, angle_deg), replace(task, start_m=run.failure.start_m))
+        failure = resolve_failure(arm.robot, LockConfig(joint, angle_deg), replace(task, start_m=run.failure.start_m))
         q_start = np.deg2rad(np.asarray(failure.q_start_deg))[arm.active]
         offset = failure.offset_deg
     except CapmapError as exc:
         start_note = f"start: {exc}".replace("config: ", "")
-    start = np.asarray(run.failure.start_m, dtype=float)
-    at = AtlasTask(task.rotation, task.motion, run.limits.resolve(robot.n_joints).for_arm(arm), start,
-                   np.asarray(task.goal_m, dtype=float), task.payload_kg, run.verification.dt_s, q_start, offset,
-                   start_note)
-    res = atlas_map(arm, (joint, angle_deg), run.atlas.sampling, dirs, run.atlas.edge_m, at,
+    at = AtlasTask(np.asarray(run.failure.start_m, dtype=float), np.asarray(task.goal_m, dtype=float), task.payload_kg,
+                   run.verification.dt_s, q_start, offset, start_note)
+    res = atlas_map(problem, (joint, angle_deg), run.atlas.sampling, run.atlas.edge_m, at,
                     lambda exc: exc.in_terms(**PLAN_KEYS), log)
     prov = datasets.provenance("atlas_map", cfg.doc, seed=run.atlas.sampling.seed, joint=joint,
                                angle_deg=float(angle_deg), grid=grid_meta(res.grid))

@@ -9,11 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from capmap.capacity.build import capacity_problem, run_arm
 from capmap.capacity.tables import capacity_table, grid_meta, model_table, sample_table, voxel_table
 from capmap.config.robot_file import load
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.stages.arm import arm_from, arm_task_from
 from capmap.stages.common import stage_config
 
 __all__ = ["stage_model", "stage_sample", "stage_capacity", "stage_voxels"]
@@ -45,7 +45,7 @@ def stage_model(robot_yaml: str, out: str, slice_json: str) -> None:
 def stage_sample(out: str, slice_json: str) -> None:
     cfg = stage_config(slice_json)
     log = stage_logger(__name__, "sample")
-    _, arm = arm_from(cfg.run)
+    arm = run_arm(cfg.run)
     sc = cfg.run.sampling
     df = sample_table(arm, sc, cfg.run.voxel_edge_m if sc.mode == "voxel_fill" else None, log)
     datasets.write(df, out, datasets.provenance("sample", cfg.doc, seed=sc.seed))
@@ -59,14 +59,12 @@ def stage_capacity(points: str, out: str, slice_json: str, shard: int, shards: i
     """Shard ``shard`` (0-based) of ``shards``: points with point_id % shards == shard."""
     cfg = stage_config(slice_json)
     log = stage_logger(__name__, f"capacity shard {shard} of {shards}")
-    at = arm_task_from(cfg.run)  # limits checked before the long work
-    arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
-    dirs = cfg.run.directions.build()
+    problem = capacity_problem(cfg.run)  # limits checked before the long work
+    dirs = problem.directions
     pts = datasets.read(points)
     mine = pts[pts.point_id % shards == shard]
     log.info(f"{len(mine)} of {len(pts)} points, {len(dirs)} directions ({dirs.kind})")
-    df = capacity_table(arm, mine.point_id.to_numpy(), mine[["x_m", "y_m", "z_m"]].to_numpy(), rotation, motion,
-                        limits, dirs, log)
+    df = capacity_table(problem, mine.point_id.to_numpy(), mine[["x_m", "y_m", "z_m"]].to_numpy(), log)
     datasets.write(df, out, datasets.provenance("capacity", cfg.doc, seed=cfg.run.sampling.seed,
                                                  shard=shard, shards=shards, directions=dirs.kind))
     n_reach = int(df.reachable.sum()) if len(df) else 0

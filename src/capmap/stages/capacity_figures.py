@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from capmap.capacity.build import configuration_name, run_arm
 from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
@@ -16,7 +17,6 @@ from capmap.io.tables import write_quantities
 from capmap.plots.baseline import baseline_figure
 from capmap.plots.capacity import capacity_map
 from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
-from capmap.stages.arm import configuration_name
 from capmap.stages.common import stage_config
 
 __all__ = ["stage_summary", "stage_capacity_3d", "stage_baseline_figure", "MapView"]
@@ -36,7 +36,7 @@ class MapView:
     def from_slice(cls, slice_json: str) -> MapView:
         run = stage_config(slice_json).run
         return cls(np.asarray(run.failure.start_m, float), np.asarray(run.task.goal_m, float), run.task.payload_kg,
-                   configuration_name(run, run.failure.q_start_deg))
+                   configuration_name(run_arm(run), run.failure.q_start_deg))
 
 
 def _planned(waypoints: list[str]) -> tuple[list[tuple[float, float, np.ndarray]], list[str]]:

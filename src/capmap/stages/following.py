@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from capmap.capacity.build import run_arm, task_rotation
 from capmap.config.robot_file import load
 from capmap.config.validation import per_item
 from capmap.core.reduction import LockedArm, free
@@ -16,7 +17,6 @@ from capmap.following.tables import follow_path, follow_tables, stored_rows, sum
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.stages.arm import arm_from
 from capmap.stages.common import StageConfig, stage_config
 
 __all__ = ["FollowCase", "follow_case", "stage_follow"]
@@ -41,7 +41,8 @@ def follow_case(case: str, sc: StageConfig, waypoints: str | None) -> FollowCase
     fol = sc.run.follow
     if case == "space":
         sp = fol.space
-        robot, arm = arm_from(sc.run)
+        arm = run_arm(sc.run)
+        robot = arm.robot
         task, vt = sc.run.task, sc.job
         wp = datasets.read(waypoints)
         if wp.attrs["capmap"]["status"] == "ok":
@@ -52,7 +53,7 @@ def follow_case(case: str, sc: StageConfig, waypoints: str | None) -> FollowCase
         settings = FollowSettings(float(sp.payload_kg), tau, task.v_max_mps, task.a_max_mps2, sp.j_max_mps3,
                                   fol.period_s, sp.catch_up_hz)
         q0 = np.deg2rad(np.asarray(vt.q_start_deg, dtype=float))[arm.active]
-        return FollowCase(arm, pts, task.rotation, q0, settings, label)
+        return FollowCase(arm, pts, task_rotation(task), q0, settings, label)
     g = fol.ground
     robot = load(g.robot)
     arm = free(robot)

@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from capmap.capacity.build import capacity_problem
 from capmap.capacity.gain import SWEEP_PERCENTILES, GainMap, GainVerifier, gain_payloads, gain_summary, gain_tasks
 from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.core.dynamics import ArmDynamics
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.stages.arm import arm_task_from
 from capmap.stages.common import stage_config
 
 __all__ = ["stage_plan_gain"]
@@ -21,7 +21,7 @@ def stage_plan_gain(voxels: str, out_tasks: str, out_csv: str, out_md: str, slic
     sc = stage_config(slice_json)
     run = sc.run
     log = stage_logger(__name__, "plan gain")
-    at = arm_task_from(run)
+    at = capacity_problem(run)
     vox = datasets.read(voxels)
     gm = GainMap(grid_of(vox), vox.capacity_kg.to_numpy(), vox[AXIS_COLUMNS].to_numpy(), vox[["i", "j", "k"]].to_numpy())
     ver = GainVerifier(ArmDynamics(at.arm), at.rotation, at.motion, run.verification.dt_s, at.limits)

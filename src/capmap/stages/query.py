@@ -10,25 +10,23 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from capmap.capacity.build import capacity_problem
 from capmap.capacity.engine import margin_pct
-from capmap.capacity.query import ArmQuestion, line_query, point_query
+from capmap.capacity.problem import CapacityProblem
+from capmap.capacity.query import line_query, point_query
 from capmap.capacity.tables import grid_of
-from capmap.config.checks import check_run_config
+from capmap.checks import check_run_config
 from capmap.config.run import RunConfig, run_document
 from capmap.config.slices import stage_slice
-from capmap.core.configuration import arm_configurations
-from capmap.core.dynamics import ArmDynamics
 from capmap.errors import CapmapError
 from capmap.io import datasets
-from capmap.stages.arm import arm_task_from
 
 __all__ = ["load_question", "answer_point", "answer_line"]
 
-def load_question(configfile: str) -> tuple[RunConfig, ArmQuestion]:
-    """The checked run config of ``configfile`` and the arm it asks about."""
+def load_question(configfile: str) -> tuple[RunConfig, CapacityProblem]:
+    """The checked run config of ``configfile`` and the capacity problem it asks about (per configuration)."""
     run = check_run_config(run_document([configfile]), configfile)
-    at = arm_task_from(run)
-    return run, ArmQuestion(ArmDynamics(at.arm), at.rotation, at.motion, at.limits, arm_configurations(at.arm))
+    return run, capacity_problem(run, per_configuration=True)
 
 
 def _run_voxels(run: RunConfig, results: Path, point: np.ndarray) -> dict:
@@ -64,7 +62,7 @@ def answer_point(configfile: str, point, payload_kg: float | None, as_json: bool
     """The text (or JSON) answer to ``query point``."""
     run, q = load_question(configfile)
     p = np.asarray(point, dtype=float)
-    ans = point_query(q, run.directions.build(), p)
+    ans = point_query(q, p)
     vox = _run_voxels(run, Path(results), p)
     arm = q.dyn.arm
     u = np.round(ans.worst_u, 4) + 0.0  # a unit vector: 4 decimals (and no -0)

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from capmap.capacity import branch_planning, planning
+from capmap.capacity.build import capacity_problem
 from capmap.capacity.directions import AXIS_LABELS, axis_of
 from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.capacity.verification import PathResult, judge, verify_path
@@ -22,7 +23,6 @@ from capmap.errors import CapmapError, ConfigError, NoPath
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
-from capmap.stages.arm import arm_task_from
 from capmap.stages.common import stage_config
 
 __all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "branch_deviation_deg", "stage_verify"]
@@ -69,7 +69,7 @@ def _branch_plan(sc: StageConfig, grid, vox: pd.DataFrame, task: PlanTask,
                  payload: float) -> tuple[pd.DataFrame, float, int, str]:
     """A* over (voxel, IK branch) states on the start configuration's branch: waypoints table with
     the planned configuration at each waypoint, cost, expansions, log line."""
-    at = arm_task_from(sc.run)
+    at = capacity_problem(sc.run)
     arm = at.arm
     step = sc.run.planning.track_step_m
     problem = branch_planning.BranchProblem(ArmDynamics(arm), grid, at.rotation, at.motion, at.limits,
@@ -151,7 +151,7 @@ def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv
                  slice_json: str) -> None:
     """Verify the direct line and the planned path (if any) carrying the task payload."""
     sc = stage_config(slice_json)
-    at = arm_task_from(sc.run)
+    at = capacity_problem(sc.run)
     arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
     dyn = ArmDynamics(arm)
     vt = sc.job

@@ -3,11 +3,11 @@ import matplotlib)."""
 
 from __future__ import annotations
 
+from capmap.capacity.build import configuration_name, run_arm
 from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.capacity import load_series, workspace_paths
-from capmap.stages.arm import configuration_name
 from capmap.stages.common import stage_config
 
 __all__ = ["stage_verify_plots"]
@@ -19,7 +19,7 @@ def stage_verify_plots(voxels: str, configurations: str, timeseries: str, out_wo
     base moment against their limits."""
     vox, ts = datasets.read(voxels), datasets.read(timeseries)
     sc = stage_config(slice_json)
-    name = configuration_name(sc.run, sc.job.q_start_deg)
+    name = configuration_name(run_arm(sc.run), sc.job.q_start_deg)
     op = configuration_voxels(vox, datasets.read(configurations), name)
     meta = ts.attrs["capmap"]
     payload, limits = meta["payload_kg"], meta["limits"]

@@ -1,46 +1,6 @@
-"""All inverse-kinematics branches of a locked 6-joint arm, batched over target poses.
-
-Closed form (complete, up to 8 branches) for chains of the shape
-
-    joint 0 | joints 1, 2, 3 with parallel axes | joints 4, 5 with intersecting axes
-
-(the SSRMS-type arm with joint 1, 2, 6 or 7 locked; UR-type arms), and for the same
-shape reversed (solved on the inverse chain). It is derived from the chain's own fixed
-transforms, so it does not assume any particular link lengths:
-
-1. The point w where axes 4 and 5 meet is known from the target and is fixed in the
-   link of joint 3. Its coordinate along the parallel-axis direction n is constant,
-   and n depends on joint 0 only: ``A cos q0 + B sin q0 = C`` -> two q0.
-2. n must map onto the target's frame through joints 4, 5 (a vector equation:
-   Paden-Kahan subproblem 2) -> two q4, then q5.
-3. The parallel group is a planar 3R with known end rotation and known point w:
-   law of cosines -> two q2, then q1 and q3.
-
-Semi-analytical (complete) for chains of the shape
-
-    joint 0 | joint 1 | joints 2, 3 with parallel axes | joints 4, 5 with intersecting axes
-
-(the SSRMS-type arm with joint 3, 4 or 5 locked: two parallel joints left), and reversed.
-For a fixed q0 steps 1-3 above give joints 1, 4, 5 in closed form and leave the planar 2R group
-one condition too many (Xu, She, Xu, Acta Astronautica 105, 2014, search q0 for it); it is
-eliminated exactly, a resultant polynomial in q0 solved per pose, with the 1-D search around
-roots known only approximately and on degenerate poses (:mod:`capmap.core.ik_semi_poly`,
-:mod:`capmap.core.ik_semi`).
-
-Every solution is polished by Newton steps (two; up to eight for the semi-analytical and general
-methods, whose roots can be ~1e-5 rad off), checked by forward kinematics
-(position and orientation residual <= ``tol``), put inside the joint ranges and
-de-duplicated. Every other chain of 6 revolute joints is solved by the general 6R method
-(:mod:`capmap.core.ik_general`: Raghavan-Roth / Manocha-Canny elimination, up to 16 solutions,
-complete; eight Newton steps polish its candidates). Only a chain it cannot take (not 6 joints)
-uses a multi-start Newton solver (a deterministic Halton set of starts): found solutions are
-exact, but completeness is not guaranteed (a warning, once per chain, says the map may overstate).
-
-Each method is one :class:`IKMethod` (one call signature, a ``complete`` property):
-:class:`ClosedForm` (:mod:`capmap.core.ik_closed`), :class:`SemiAnalytic` (:mod:`capmap.core.ik_semi_poly`),
-each also ``reversed``, :class:`GeneralSixR` (:mod:`capmap.core.ik_general`), :class:`MultiStartNewton`
-(:mod:`capmap.core.ik_numeric`); :func:`solve` takes the first of :data:`METHODS` that applies.
-"""
+"""The IK contract (:class:`IKMethod`: one call signature, a ``complete`` property) and the registry:
+:func:`solve` takes the first of :data:`METHODS` that applies to the locked arm's chain. The methods,
+their shapes and what each guarantees are described in :mod:`capmap.core.ik`."""
 
 from __future__ import annotations
 
@@ -50,10 +10,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik_classify, ik_closed, ik_general_select, ik_semi, ik_semi_poly
-from capmap.core.ik_classify import ChainClass
-from capmap.core.ik_finish import RESIDUAL_TOL, IKSolutions, _finish, wrap_to_range
-from capmap.core.ik_numeric import multi_start, newton
+import capmap.core.ik.classify as ik_classify
+import capmap.core.ik.closed as ik_closed
+import capmap.core.ik.general.select as ik_general_select
+import capmap.core.ik.semi.resultant as ik_semi_poly
+import capmap.core.ik.semi.search as ik_semi
+from capmap.core.ik.classify import ChainClass
+from capmap.core.ik.finish import RESIDUAL_TOL, IKSolutions, _finish, wrap_to_range
+from capmap.core.ik.multistart import multi_start, newton
 from capmap.core.kinematics import Chain, inverse_transform
 from capmap.core.reduction import LockedArm
 
@@ -204,7 +168,7 @@ class _ShapeMethod(IKMethod):
 
 @dataclass(frozen=True)
 class ClosedForm(_ShapeMethod):
-    """Closed form (complete, up to 8 branches; :mod:`capmap.core.ik_closed`) for chains
+    """Closed form (complete, up to 8 branches; :mod:`capmap.core.ik.closed`) for chains
     ``0 | 1 2 3 parallel | 4 5 intersecting``; ``reversed``: that shape from the tip, solved on the
     inverse chain."""
 
@@ -227,8 +191,8 @@ def _semi_candidates(chain: Chain, T: np.ndarray) -> tuple[np.ndarray, np.ndarra
 @dataclass(frozen=True)
 class SemiAnalytic(_ShapeMethod):
     """The semi-analytical method (complete) for chains ``0 | 1 | 2 3 parallel | 4 5 intersecting``:
-    the real roots in joint 0 of one resultant polynomial (:mod:`capmap.core.ik_semi_poly`), the
-    1-D search (:mod:`capmap.core.ik_semi`) around roots known only approximately and on degenerate
+    the real roots in joint 0 of one resultant polynomial (:mod:`capmap.core.ik.semi.resultant`), the
+    1-D search (:mod:`capmap.core.ik.semi.search`) around roots known only approximately and on degenerate
     poses; ``reversed``: that shape from the tip."""
 
     reversed: bool = False
@@ -250,7 +214,7 @@ def _general_solver(chain: Chain) -> "ik_general_select.GeneralSolver":
 
 @dataclass(frozen=True)
 class GeneralSixR(IKMethod):
-    """Every solution of any 6-joint revolute chain (:mod:`capmap.core.ik_general`: Raghavan-Roth /
+    """Every solution of any 6-joint revolute chain (:mod:`capmap.core.ik.general.elimination`: Raghavan-Roth /
     Manocha-Canny elimination, a companion eigenproblem per pose). Poses it cannot vouch for (every
     formulation degenerate, a solution lost, four axes nearly parallel: ik_general_select) go to the
     semi-analytical method where the chain has its shape (complete), else to the multi-start search,
@@ -289,7 +253,7 @@ class GeneralSixR(IKMethod):
 
 @dataclass(frozen=True)
 class MultiStartNewton(IKMethod):
-    """Multi-start damped Newton from a deterministic Halton set of starts (:func:`capmap.core.ik_numeric.multi_start`):
+    """Multi-start damped Newton from a deterministic Halton set of starts (:func:`capmap.core.ik.multistart.multi_start`):
     any chain, exact solutions, but NOT complete (branches may be missed)."""
 
     @property
@@ -345,6 +309,6 @@ def solve_chain(chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarra
 
 
 def classify(chain: Chain) -> ChainClass:
-    """The chain's axis geometry and the IK method :func:`solve` uses for it (:mod:`capmap.core.ik_classify`)."""
+    """The chain's axis geometry and the IK method :func:`solve` uses for it (:mod:`capmap.core.ik.classify`)."""
     method = method_of(chain)
     return ik_classify.classify(chain, method.name, method.complete)

@@ -2,7 +2,7 @@
 de-duplication. The polish: per candidate the chain's forward kinematics
 ``T = X[0] Rz(q1) X[1] ... Rz(qn) X[n]``, the world-frame pose error [p_t - p; log(R_t R^T)] and
 Newton steps dq = J^T (J J^T + damping^2 I)^-1 e (damping 0 unless asked; each joint's step clipped to 0.5 rad), as
-:func:`capmap.core.ik_numeric.newton` and :func:`capmap.core.kinematics.pose_error` do in numpy
+:func:`capmap.core.ik.multistart.newton` and :func:`capmap.core.kinematics.pose_error` do in numpy
 (tests/core/test_ik_compiled.py compares them)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The back-substitution of the general 6R method (:mod:`capmap.core.ik_general`), compiled
+"""The back-substitution of the general 6R method (:mod:`capmap.core.ik.general.elimination`), compiled
 (numba): for a root qa of det M(qa), qb and qc from the null space of M(qa) (a monomial vector
 tan(qb/2)^i tan(qc/2)^j), split into its monomial vectors when several solutions share the root
 (a null space of dimension k <= 4: the eigenvectors of a shift operator restricted to it)."""
@@ -10,9 +10,9 @@ import math
 import numba
 import numpy as np
 
-from capmap.core.ik_general_kernels import _at, _eliminate
-from capmap.core.ik_general_matrices import _matmul, _qr, _solve_upper
-from capmap.core.ik_roots import _balance, _hqr
+from capmap.core.ik.general.kernels import _at, _eliminate
+from capmap.core.ik.general.matrices import _matmul, _qr, _solve_upper
+from capmap.core.ik.roots import _balance, _hqr
 
 __all__ = ["back_substitute"]
 

@@ -1,10 +1,10 @@
-"""The dual-arm build the pre-run check remembers (capmap.config.checks.dual_arm_limits): the limits it
+"""The dual-arm build the pre-run check remembers (capmap.checks.dual_arm_limits): the limits it
 reads back are the build's; a changed mesh, URDF or robot file, another part thickness or code builds
 again, so a broken mesh is still found before any job; an unreadable memo is built again."""
 
 import pytest
 
-from capmap.config import checks
+from capmap import checks
 from capmap.config.dualarm import load_dual_arm_file
 from capmap.dualarm.robot import build_dual_arm
 from capmap.errors import CapmapError

@@ -1,4 +1,4 @@
-"""The per-pose matrices of the general 6R elimination (:mod:`capmap.core.ik_general`), compiled
+"""The per-pose matrices of the general 6R elimination (:mod:`capmap.core.ik.general.elimination`), compiled
 (numba): the right-hand quantities fitted on the (qu, qv) grid, the left null space and the
 least-squares map of their 14 x 8 coefficient matrix Q by a Householder QR with column pivoting
 (an SVD costs ten times more here), and M(qa) = M0 + cos qa M1 + sin qa M2."""
@@ -10,7 +10,7 @@ import math
 import numba
 import numpy as np
 
-from capmap.core.ik_general_kernels import _times
+from capmap.core.ik.general.kernels import _times
 
 __all__ = ["matrices"]
 

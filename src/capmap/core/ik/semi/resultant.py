@@ -1,7 +1,7 @@
 """Every IK solution of a chain ``0 | 1 | 2 3 parallel | 4 5 intersecting`` (the SSRMS-type arm with
 joint 3, 4 or 5 locked) as the real roots of one polynomial in joint 0, batched over poses.
 
-The semi-analytical method (:mod:`capmap.core.ik_semi`) follows Xu, She and Xu (Acta Astronautica
+The semi-analytical method (:mod:`capmap.core.ik.semi.search`) follows Xu, She and Xu (Acta Astronautica
 105, 2014): for a fixed q0 joints 1, 4, 5 are closed forms and one residual is left, searched over
 q0. Here that residual is eliminated exactly. In the frame of joint 2 (z along the parallel axes),
 with P' the wrist point (where axes 4 and 5 meet) and w the axis of joint 5, both bilinear in
@@ -20,8 +20,8 @@ its two roots q1+-(q0) (complex where E1 has no real root), and the resultant of
 is a trigonometric polynomial in q0 (degree 8 on the SSRMS: at most 16 roots; the chain's degree is
 measured once from seeded poses, :func:`prepare`). P is sampled at 2D + 3 angles (one harmonic above D
 measures the rounding noise), its real roots are the eigenvalues of a companion matrix (in x =
-tan((q0 - phase)/2), a seeded phase, as in :mod:`capmap.core.ik_general`), and at every root the
-closed forms of the semi-analytical kernel (:mod:`capmap.core.ik_kernels`) give joints 1-5 on the
+tan((q0 - phase)/2), a seeded phase, as in :mod:`capmap.core.ik.general.elimination`), and at every root the
+closed forms of the semi-analytical kernel (:mod:`capmap.core.ik.semi.kernels`) give joints 1-5 on the
 branches whose residual vanishes there. No search, no grid: a pose costs one companion matrix.
 
 Where the chain has the shape from its tip as well (every SSRMS middle lock), the direction whose
@@ -31,7 +31,7 @@ A pose is degenerate when P is (numerically) zero for every q0, has a harmonic a
 samples are not accurate: rho near 0 at a sample), loses degree (a root toward x = infinity), its
 QR iteration fails, a root's error bound exceeds ``_MAX_WINDOW``, or a complex eigenvalue's error
 bound reaches the real axis (``doubt`` > 0.1,
-:class:`capmap.core.ik_roots.RealRoots`): those poses are solved by the 1-D search, complete as well.
+:class:`capmap.core.ik.roots.RealRoots`): those poses are solved by the 1-D search, complete as well.
 """
 
 from __future__ import annotations
@@ -43,9 +43,10 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from capmap.core import ik_kernels, ik_semi
-from capmap.core.ik_general import companion_map, sampling
-from capmap.core.ik_roots import real_roots
+import capmap.core.ik.semi.kernels as ik_kernels
+import capmap.core.ik.semi.search as ik_semi
+from capmap.core.ik.general.elimination import companion_map, sampling
+from capmap.core.ik.roots import real_roots
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["SemiPolynomial", "prepare", "candidates", "polynomial_samples"]
@@ -219,7 +220,7 @@ def roots(solver: SemiPolynomial, T: np.ndarray) -> Roots:
     A root where no branch vanishes to ``_BRANCH_TOL`` or whose error bound exceeds ``_ROOT_SPREAD``
     (solutions close together beside a fold, each root known to ~1e-5 rad only, so that the branch of
     least residual at a root can be a neighbour's), and every complex pair kept as a candidate, are
-    searched in a window around it (:func:`capmap.core.ik_semi.search_windows`)."""
+    searched in a window around it (:func:`capmap.core.ik.semi.search.search_windows`)."""
     N, D = len(T), solver.degree
     poly, status, noise = _polynomials(solver, T, D)
     found = real_roots(poly, status == 0, _REAL_TOL, noise)
@@ -254,7 +255,7 @@ def roots(solver: SemiPolynomial, T: np.ndarray) -> Roots:
 
 def candidates(solver: SemiPolynomial, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Candidate solutions (N, K, 6) rad and validity (N, K) for targets T (N, 4, 4) of the caller's
-    chain: the polynomial's roots, and the 1-D search (:func:`capmap.core.ik_semi.candidates`) on its
+    chain: the polynomial's roots, and the 1-D search (:func:`capmap.core.ik.semi.search.candidates`) on its
     degenerate poses (on the inverse chain where the solver is ``reversed``, the angles mapped back)."""
     T = np.ascontiguousarray(inverse_transform(T) if solver.reversed else T, dtype=float)
     theta, ok, degenerate = roots(solver, T)

@@ -1,4 +1,4 @@
-"""Which eliminations of the general 6R method (:mod:`capmap.core.ik_general`) solve which poses.
+"""Which eliminations of the general 6R method (:mod:`capmap.core.ik.general.elimination`) solve which poses.
 
 A formulation can lose solutions: where its eliminated joint qa reaches an angle at which two axes
 line up, M(qa) loses rank and the true roots nearby cluster, turn into complex pairs or
@@ -13,7 +13,7 @@ steps, :func:`_rescued`) from a candidate that did not converge reaches a soluti
 demonstrably lost one there) or where a candidate, converged or not, has four axes within 5 deg of
 parallel (next to a continuum of solutions, where the roots crowd: :func:`four_parallel`). On the
 poses the first formulation does not settle, solutions within 10 deg of four parallel axes seed
-Newton restarts around them (:func:`_restarts_nearby`). In :mod:`capmap.core.ik_general` a near-real
+Newton restarts around them (:func:`_restarts_nearby`). In :mod:`capmap.core.ik.general.elimination` a near-real
 complex pair is back-substituted at Re z +- Im z (where the two roots of a split double root lie)
 and a dropped complex root whose real part is a pseudo-zero of the polynomial is a candidate too.
 Measured 2026-12-03 together: 0 of 189,324 solutions lost on poses next to the SSRMS's continuum
@@ -43,8 +43,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from capmap.core.ik_finish import DUPLICATE_TOL, POLISHED
-from capmap.core.ik_general import (
+from capmap.core.ik.finish import DUPLICATE_TOL, POLISHED
+from capmap.core.ik.general.elimination import (
     FORMULATIONS,
     Formulation,
     Solved,
@@ -55,7 +55,7 @@ from capmap.core.ik_general import (
     solve_formulation,
     structural_roots,
 )
-from capmap.core.ik_polish import _fk, distinct, polish
+from capmap.core.ik.newton import _fk, distinct, polish
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["GeneralSolver", "prepare", "candidates", "four_parallel", "UNION"]

@@ -1,6 +1,6 @@
-"""Compiled per-pose kernels of the general 6R method (:mod:`capmap.core.ik_general`): the
+"""Compiled per-pose kernels of the general 6R method (:mod:`capmap.core.ik.general.elimination`): the
 determinant of M(qa) sampled and turned into the companion polynomial, and the remaining joints of
-a root (the back-substitution of qb, qc is :mod:`capmap.core.ik_general_back`). Scalar loops
+a root (the back-substitution of qb, qc is :mod:`capmap.core.ik.general.back`). Scalar loops
 compiled with numba: 12 x 12 matrices, where numpy's per-call overhead would dominate."""
 
 from __future__ import annotations

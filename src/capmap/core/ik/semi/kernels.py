@@ -1,7 +1,7 @@
 """Compiled kernel of the semi-analytical IK (see :mod:`capmap.core.ik`): for a target pose and
 a joint-0 angle, the four branches of joints 1-5 in closed form and the residual of the planar
 2R group. The 1-D search evaluates it about 1,500 times per target (the resultant polynomial of
-:mod:`capmap.core.ik_semi_poly` once per root), so it is a scalar loop
+:mod:`capmap.core.ik.semi.resultant` once per root), so it is a scalar loop
 compiled with numba, and carries angles as cosines and sines (about 0.3 us per evaluation
 against 13 us for the same steps in numpy).
 
@@ -35,7 +35,7 @@ def pack(X: np.ndarray, u, wc, n1, t1, a, h: float, sigma: float, reach: float) 
 
 @_inline
 def _roots(A, B, C, slack):
-    """A cos x + B sin x = C, as ``capmap.core.ik_closed._trig_roots`` but as cosines and sines of the
+    """A cos x + B sin x = C, as ``capmap.core.ik.closed._trig_roots`` but as cosines and sines of the
     two roots phi + delta, phi - delta: (c1, s1, c2, s2, ok); |C| / hypot(A, B) up to 1 + slack counts
     as a (double) root."""
     rho = math.hypot(A, B)

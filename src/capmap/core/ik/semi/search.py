@@ -1,7 +1,7 @@
 """The 1-D search of the semi-analytical IK (see :mod:`capmap.core.ik`): for a chain of the shape
 ``0 | 1 | 2 3 parallel | 4 5 intersecting`` and a batch of targets, the roots in q0 of the
 planar 2R residual f on each of the four branches of joints 1, 4, 5. The residual itself is
-the compiled kernel :mod:`capmap.core.ik_kernels`; here are the grid, the refinement of
+the compiled kernel :mod:`capmap.core.ik.semi.kernels`; here are the grid, the refinement of
 suspect intervals, the branch ends and the root polishing (all batched over targets)."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core import ik_kernels
-from capmap.core.ik_numeric import newton
+import capmap.core.ik.semi.kernels as ik_kernels
+from capmap.core.ik.multistart import newton
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["search", "search_windows", "candidates", "SEARCH_STEPS"]
@@ -22,7 +22,7 @@ _CHUNK_EVALS = 400_000  # (target, grid point) pairs per batch of the search: bo
 
 @dataclass(frozen=True)
 class _SemiConstants:
-    """Fixed quantities of a ``semi_analytic_shape`` chain (used by :mod:`capmap.core.ik_kernels`)."""
+    """Fixed quantities of a ``semi_analytic_shape`` chain (used by :mod:`capmap.core.ik.semi.kernels`)."""
 
     s_star: float  # axis 5 meets axis 4 at (0, 0, s*) in frame 5
     wc: np.ndarray  # (3,) that point in the link of joint 3
@@ -34,7 +34,7 @@ class _SemiConstants:
     reach: float  # m, in-plane distance from axis 2 to axis 3
 
     def packed(self, chain: Chain) -> np.ndarray:
-        """The kernel's constant array (:func:`capmap.core.ik_kernels.pack`)."""
+        """The kernel's constant array (:func:`capmap.core.ik.semi.kernels.pack`)."""
         u = (inverse_transform(chain.X[6]) @ np.array([0, 0, self.s_star, 1.0]))[:3]
         return ik_kernels.pack(chain.X, u, self.wc, self.n1, self.t1, self.a, self.h, self.sigma, self.reach)
 

@@ -15,11 +15,14 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from capmap.capacity.build import directions_of, load_limits, locked_arm, refine_settings, resolve_failure, task_rotation
+from capmap.capacity.sizing import estimate_map
+from capmap.capacity.voxels import Grid
 from capmap.config.atlas import AtlasConfig
 from capmap.config.capacity import DirectionsConfig, TaskConfig
 from capmap.config.dualarm import load_dual_arm_file
-from capmap.config.estimate import Estimate, check_duration, check_steps, estimate_map, line_duration_s
-from capmap.config.failure import Failure, locked_arm, resolve_failure
+from capmap.config.estimate import check_duration, check_steps, line_duration_s
+from capmap.config.failure import Failure
 from capmap.config.following import FollowConfig
 from capmap.config.inputs import check_cloud_file
 from capmap.config.jobs import PlanTask
@@ -68,24 +71,24 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     arm = locked_arm(robot, failure.joint, failure.angle_deg)
     try:
         limits_cfg = cfg.limits.for_robot(robot)  # the URDF's effort limits unless limits.joint_torque_nm
-        limits = limits_cfg.resolve(robot.n_joints).for_arm(arm)
+        limits = load_limits(limits_cfg, robot.n_joints).for_arm(arm)
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
-    dirs = cfg.directions.build()
+    dirs = directions_of(cfg.directions)
     check_goal(arm, cfg.task, failure, source)
     tasks = check_tasks(cfg.tasks, arm, cfg.task, failure, source)
     check_dt(cfg, source)
     if cfg.refine is not None:
         try:
-            cfg.refine.settings(cfg.task.payload_kg)
+            refine_settings(cfg.refine, cfg.task.payload_kg)
         except ConfigError as exc:
             raise ConfigError(f"{source}: {exc}") from None
     keys = _map_keys("", "voxels.edge_m", cfg.directions)
     try:
-        estimate = estimate_map(arm, cfg.sampling, cfg.voxel_edge_m, len(dirs), len(limits.names), cfg.shards, keys)
+        estimate, grid = estimate_map(arm, cfg.sampling, cfg.voxel_edge_m, len(dirs), len(limits.names), cfg.shards, keys)
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
-    check_on_grid(cfg, failure, estimate, source)
+    check_on_grid(cfg, failure, grid, source)
     with _named(source):
         check_motions(cfg, failure, source)
     if cfg.follow is not None:
@@ -98,7 +101,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
         check_atlas(cfg.atlas, robot, source)
         keys = _map_keys("atlas.", "atlas.edge_m", cfg.atlas.directions)
         try:
-            estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(cfg.atlas.directions.build()),
+            estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(directions_of(cfg.atlas.directions)),
                          len(limits.names), 1, keys)
         except ConfigError as exc:
             raise ConfigError(f"{source}: {exc}") from None
@@ -125,7 +128,7 @@ def check_goal(arm: LockedArm, task: TaskConfig, failure: Failure, source: str =
     if start is not None and np.linalg.norm(np.subtract(goal, start)) < 1e-6:
         raise ConfigError(f"{source}: {key} = [{', '.join(f'{v:g}' for v in goal)}] is the start "
                           f"({'task.start_m' if failure.start_given else 'FK(task.q_ini_deg)'}): nothing to plan")
-    if ik.solve(arm, np.asarray(goal, dtype=float)[None], task.rotation).n_solutions[0] == 0:
+    if ik.solve(arm, np.asarray(goal, dtype=float)[None], task_rotation(task)).n_solutions[0] == 0:
         raise ConfigError(f"{source}: {key} = [{', '.join(f'{v:g}' for v in goal)}] is not reachable "
                           f"at task.orientation_rpy_deg = {list(task.orientation_rpy_deg)} with joint {failure.joint} "
                           f"locked at {failure.angle_deg:g} deg")
@@ -149,7 +152,7 @@ def check_tasks(tasks: tuple[PlanTask, ...], arm: LockedArm, task: TaskConfig, f
         if len(q) != arm.robot.n_joints:
             raise ConfigError(f"{source}: {key}.q_start_deg has {len(q)} values but {arm.robot.name} has "
                               f"{arm.robot.n_joints} joints")
-        sol = ik.solve(arm, np.asarray(t.start_m, dtype=float)[None], task.rotation)
+        sol = ik.solve(arm, np.asarray(t.start_m, dtype=float)[None], task_rotation(task))
         n = int(sol.n_solutions[0])
         if n == 0:
             raise ConfigError(f"{source}: {key}.start_m = [{', '.join(f'{v:g}' for v in t.start_m)}] is not reachable "
@@ -208,10 +211,9 @@ def check_atlas(at: AtlasConfig, robot: Robot, source: str = "config") -> None:
                 raise ConfigError(f"{source}: atlas.angles_deg: {a:g} is outside joint {j}'s range [{lo:g}, {hi:g}] deg")
 
 
-def check_on_grid(cfg: RunConfig, failure: Failure, estimate: Estimate, source: str = "config") -> None:
+def check_on_grid(cfg: RunConfig, failure: Failure, grid: Grid | None, source: str = "config") -> None:
     """Every start and goal lies inside the map's grid (known before any job: the grid covers the
     seeded joint samples, as the voxels stage's will), else the planner could not place it."""
-    grid = estimate.grid
     if grid is None:
         return
     ends = [("task.start_m" if failure.start_given else "the start (FK(task.q_ini_deg))", failure.start_m),

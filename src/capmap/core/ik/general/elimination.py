@@ -23,7 +23,7 @@ equispaced qa (25 for D = 12), its Fourier coefficients are exact (the one harmo
 measures the rounding noise), and its real roots are the eigenvalues of a companion matrix (in x =
 tan((qa - phase)/2), a seeded random phase, so that a root at x = infinity, qa = phase + 180 deg,
 has probability zero; a formulation whose polynomial loses degree at a pose does not count as
-having solved it, :mod:`capmap.core.ik_general_select`).
+having solved it, :mod:`capmap.core.ik.general.select`).
 For each root the null vector of M(qa) gives qb, qc (from projective ratios, so qb = 180 deg is
 no special case), the least-squares solution of Q gives qu, qv, and the orientation gives qf.
 
@@ -31,7 +31,7 @@ Degenerate cases are detected, never silently dropped: a rank-deficient Q or a d
 vanishes identically (special geometries, where some formulations fail), or a determinant of
 higher degree than the chain's, marks the pose (:func:`solve_formulation`'s status). Which
 formulations solve which poses, and how their candidates are joined, is
-:mod:`capmap.core.ik_general_select`.
+:mod:`capmap.core.ik.general.select`.
 """
 
 from __future__ import annotations
@@ -42,10 +42,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from capmap.core.ik_general_back import back_substitute
-from capmap.core.ik_general_kernels import finish_angles, polynomials
-from capmap.core.ik_general_matrices import matrices
-from capmap.core.ik_roots import RealRoots, real_roots
+from capmap.core.ik.general.back import back_substitute
+from capmap.core.ik.general.kernels import finish_angles, polynomials
+from capmap.core.ik.general.matrices import matrices
+from capmap.core.ik.roots import RealRoots, real_roots
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["Formulation", "FORMULATIONS", "Solved", "solve_formulation", "left_coefficients", "degree_of",
@@ -138,7 +138,7 @@ def left_coefficients(X: np.ndarray, f: int) -> np.ndarray:
 def _matrices(X: np.ndarray, f: int, CL: np.ndarray, T: np.ndarray):
     """Per pose: M (N, 3, 12, 12) (M(qa) = M0 + cos qa M1 + sin qa M2), the least-squares map of Q
     (N, 8, 14), the right-hand constant (N, 14), and |R_88| / |R_11| of Q's pivoted QR (N,) (compiled:
-    :func:`capmap.core.ik_general_matrices.matrices`)."""
+    :func:`capmap.core.ik.general.matrices.matrices`)."""
     N = len(T)
     A, B = _sides(X, f, _G2[:, 0], _G2[:, 1])  # (9, 4, 4)
     M, lstsq = np.empty((N, 3, 12, 12)), np.empty((N, 8, 14))
@@ -178,7 +178,7 @@ def sampling(degree: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _real_roots(poly: np.ndarray, usable: np.ndarray, noise: np.ndarray) -> RealRoots:
     """Real roots of the polynomials poly (N, 2D+1) (x^0 upward) of the ``usable`` poses (see
-    :func:`capmap.core.ik_roots.real_roots`). Eigenvalues with |imag| <= _REAL_TOL (1 + |real|) are
+    :func:`capmap.core.ik.roots.real_roots`). Eigenvalues with |imag| <= _REAL_TOL (1 + |real|) are
     kept: near-double roots split into complex pairs of small imaginary part, and every candidate is
     polished and checked later."""
     return real_roots(poly, usable, _REAL_TOL, noise)
@@ -191,7 +191,7 @@ class Solved(NamedTuple):
     clusters (see :func:`structural_roots`), full
     (N,): the polynomial kept its full degree 2D (no root escaped toward x = infinity), doubt (N,):
     how close a dropped complex eigenvalue's error bound comes to the real axis (see
-    :class:`capmap.core.ik_roots.RealRoots`)."""
+    :class:`capmap.core.ik.roots.RealRoots`)."""
 
     theta: np.ndarray
     ok: np.ndarray
@@ -204,7 +204,7 @@ class Solved(NamedTuple):
 
 def _polynomials(M: np.ndarray, degree: int, phase: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """det M(qa) of each pose as the polynomial (N, 2D+1) in x = tan((qa - phase) / 2), its status (N,)
-    and noise (N,) (compiled: :func:`capmap.core.ik_general_kernels.polynomials`)."""
+    and noise (N,) (compiled: :func:`capmap.core.ik.general.kernels.polynomials`)."""
     N = len(M)
     poly, status, noise = np.zeros((N, 2 * degree + 1)), np.zeros(N, dtype=np.int64), np.full(N, np.inf)
     theta_s, dft = sampling(degree)

@@ -1,0 +1,100 @@
+"""One contract for evaluating points for a voxel map: :class:`Evaluator`, and its two implementations.
+
+The refinement (:func:`capmap.capacity.refine.refine`) holds the rounds; an evaluator turns points
+into point results (:class:`Evaluation`). The contract, checked against every implementation by
+``tests/capacity/test_contracts_evaluator.py``:
+
+- ``evaluate(points (N, 3) m)`` alone: every value exact (its independent reference: Pinocchio's
+  dynamics, an LP per direction).
+- with ``ceiling`` (N,) kg and ``owner`` (N,) int (each point's voxel and that voxel's least value so
+  far): the least ``capacity_kg`` of each owner's points is exact wherever it lies below the owner's
+  ceiling; any other point may carry a value at or above that least one (never below the exact
+  least). Per-axis and per-configuration values are always exact.
+- ``pointwise`` True: a point's value depends on that point and its own ceiling only, so a point that
+  several voxels share may be evaluated once with the highest of their ceilings; False: a point may be
+  pruned by the other points of its owner (the refinement then evaluates shared points per voxel).
+
+:class:`LockedEvaluator` is the failed arm's (every value exact: the ceiling is not used);
+:class:`HealthyEvaluator` the healthy arm's (:mod:`capmap.capacity.baseline`), whose state is its
+swept joint's angles and, per voxel, the angle of the voxel's least value so far (a hint tried first).
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from capmap.capacity.baseline import SelfMotion, healthy_capacity
+from capmap.capacity.directions import Directions
+from capmap.capacity.engine import Motion, argmin_per_group
+from capmap.capacity.problem import CapacityProblem
+from capmap.capacity.refine_data import Evaluation
+
+__all__ = ["Evaluator", "LockedEvaluator", "HealthyEvaluator"]
+
+
+@runtime_checkable
+class Evaluator(Protocol):
+    """Point results for the refinement (the module's contract). ``n_evaluated``: points evaluated so far."""
+
+    pointwise: bool
+    n_evaluated: int
+
+    def evaluate(self, points: np.ndarray, ceiling: np.ndarray | None = None,
+                 owner: np.ndarray | None = None) -> Evaluation: ...
+
+
+class LockedEvaluator:
+    """The locked arm's points: every IK branch x every direction of ``problem``, each value exact,
+    ``chunk`` points per call of the problem (memory)."""
+
+    pointwise = True
+
+    def __init__(self, problem: CapacityProblem, chunk: int = 2000):
+        self.problem, self.chunk, self.n_evaluated = problem, int(chunk), 0
+
+    def evaluate(self, points: np.ndarray, ceiling: np.ndarray | None = None,
+                 owner: np.ndarray | None = None) -> Evaluation:
+        sol, pc = self.problem.solve(points, self.chunk)
+        self.n_evaluated += len(sol.n_solutions)
+        return Evaluation(pc.capacity_kg, pc.axis_capacity_kg, pc.binding, sol.n_solutions, pc.config_capacity_kg,
+                          pc.config_axis_capacity_kg, pc.config_binding, pc.config_branches)
+
+
+class HealthyEvaluator:
+    """The healthy arm's points (:func:`capmap.capacity.baseline.healthy_capacity`): the arm ``sm`` over
+    its swept joint's angles at end-effector ``rotation`` (3, 3), ``directions`` screened by ``screen``,
+    ``motion``; ``n_voxels`` the grid's voxel count (the owners' range). A voxel's points are evaluated
+    together, ``chunk`` at a time; each voxel's least value exact, the others may stop at it, tried first
+    at the angle of the voxel's least value so far. No per-axis or per-configuration values.
+    ``angle_deg`` after a call: each point's angle of its value (NaN: unreachable)."""
+
+    pointwise = False
+
+    def __init__(self, sm: SelfMotion, rotation: np.ndarray, directions: Directions, screen: Directions,
+                 motion: Motion, n_voxels: int, chunk: int = 1000):
+        self.sm, self.rotation, self.directions, self.screen, self.motion = sm, rotation, directions, screen, motion
+        self.chunk, self.n_evaluated = int(chunk), 0
+        self.hint_of = np.full(int(n_voxels), -1)  # per voxel: the angle (index) of its least value's posture
+        self.angle_deg = np.zeros(0)
+
+    def evaluate(self, points: np.ndarray, ceiling: np.ndarray | None = None,
+                 owner: np.ndarray | None = None) -> Evaluation:
+        N = len(points)
+        order = np.argsort(owner, kind="stable") if owner is not None else np.arange(N)
+        cap, binding, angle = np.full(N, np.nan), np.full(N, -1), np.full(N, np.nan)
+        for r in range(0, N, self.chunk):
+            rows = order[r:r + self.chunk]
+            hc = healthy_capacity(self.sm, points[rows], self.rotation, self.directions, self.screen, self.motion,
+                                  None if ceiling is None else ceiling[rows], None if owner is None else owner[rows],
+                                  None if owner is None else self.hint_of[owner[rows]])
+            cap[rows], binding[rows], angle[rows] = hc.capacity_kg, hc.binding, hc.angle_deg
+        self.n_evaluated += N
+        if owner is not None and N:  # a voxel's new least value: its angle is the voxel's next hint
+            c = np.where(np.isfinite(cap), cap, np.inf)
+            i = argmin_per_group(c, owner)
+            new = np.isfinite(c[i]) & (c[i] < (np.inf if ceiling is None else ceiling[i]))
+            self.hint_of[owner[i[new]]] = np.searchsorted(self.sm.angles_deg, angle[i[new]])
+        self.angle_deg = angle
+        return Evaluation(cap, np.zeros((N, 0)), binding, np.isfinite(cap).astype(int))

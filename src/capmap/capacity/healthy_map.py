@@ -1,0 +1,172 @@
+"""The healthy arm's map beside the failed one (:mod:`capmap.capacity.baseline` for the healthy value):
+one shard of the healthy arm's voxels on the failed map's lattice, refined as the map's
+(:class:`~capmap.capacity.evaluator.HealthyEvaluator`), the angle step's convergence at sampled
+voxels' worst points, and the family's column schemas of these tables. No file I/O."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from capmap.capacity import sampling
+from capmap.capacity.baseline import SelfMotion, healthy_capacity
+from capmap.capacity.directions import Directions
+from capmap.capacity.evaluator import HealthyEvaluator
+from capmap.capacity.problem import CapacityProblem
+from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
+from capmap.capacity.tables import grid_of
+from capmap.capacity.voxels import Grid
+from capmap.core.reduction import free
+
+__all__ = ["HEALTHY_COLUMNS", "BASELINE_COLUMNS", "HealthyProblem", "healthy_samples", "baseline_shard",
+           "angle_convergence"]
+
+HEALTHY_COLUMNS = ["x_m", "y_m", "z_m", "healthy_capacity_kg", "healthy_binding", "healthy_angle_deg", "n_points",
+                   "n_reachable", "converged", "last_change_rel", "worst_x_m", "worst_y_m", "worst_z_m"]
+# baseline/voxels.parquet: the healthy map on the failed map's grid (i, j, k may fall outside its box), the
+# failed map's values (all branches; the arm's configuration) and the loss, healthy - failed (failed: 0 kg
+# where it reaches no point of the voxel)
+BASELINE_COLUMNS = ["i", "j", "k", *HEALTHY_COLUMNS[:6], "n_points", "converged", "capacity_kg",
+                    "arm_configuration_capacity_kg", "loss_kg", "arm_configuration_loss_kg"]
+_CHUNK = 1000  # points per call of the evaluation (memory: ~36 angles x 8 solutions each)
+
+
+@dataclass(frozen=True)
+class HealthyProblem:
+    """The healthy arm's question: the failed arm's ``problem`` (rotation, motion, directions), the
+    self-motion ``sm`` over the failed joint's angles and the ``screen`` subset of the directions."""
+
+    problem: CapacityProblem
+    sm: SelfMotion
+    screen: Directions
+
+    def value(self, points: np.ndarray):
+        """The exact healthy value of points (N, 3) m (:func:`capmap.capacity.baseline.healthy_capacity`)."""
+        p = self.problem
+        return healthy_capacity(self.sm, points, p.rotation, p.directions, self.screen, p.motion)
+
+    def evaluator(self, n_voxels: int) -> HealthyEvaluator:
+        p = self.problem
+        return HealthyEvaluator(self.sm, p.rotation, p.directions, self.screen, p.motion, n_voxels, _CHUNK)
+
+
+def healthy_samples(robot, sc, edge_m: float) -> tuple[np.ndarray, Grid]:
+    """The healthy arm's Monte Carlo positions (every joint of ``robot`` moving; the run's sampling
+    ``sc``: seed, points, and for voxel_fill every voxel of their box) and the grid of ``edge_m`` [m]
+    covering them, on the map's lattice (anchored at multiples of the edge, as every map's grid)."""
+    rng = np.random.default_rng(sc.seed)
+    _, pos = sampling.joint_samples(free(robot), sc.n_points, rng)
+    grid = Grid.covering(pos, edge_m)
+    if sc.mode == "voxel_fill":
+        pos = np.concatenate([pos, sampling.voxel_fill(grid, sc.jitter_per_voxel, rng)[0]])
+    return pos, grid
+
+
+def _lattice_union(a: Grid, b: Grid) -> Grid:
+    """The grid on the same lattice covering both grids."""
+    lo = np.minimum(a.lower, b.lower)
+    hi = np.maximum(a.lower + np.array(a.shape) * a.edge_m, b.lower + np.array(b.shape) * b.edge_m)
+    return Grid(lower=lo, shape=tuple(int(n) for n in np.rint((hi - lo) / a.edge_m)), edge_m=a.edge_m)
+
+
+def baseline_shard(hp: HealthyProblem, failed: pd.DataFrame, samples: tuple[np.ndarray, Grid],
+                   settings: RefineSettings | None, shard: int, shards: int, rng: np.random.Generator,
+                   log) -> tuple[pd.DataFrame, dict]:
+    """The healthy arm's voxels with flat index % shards == shard: its sampled points there (``samples``:
+    positions and their grid, :func:`healthy_samples`) and the failed map's worst point of each voxel,
+    then each voxel's minimum refined as the map's (``settings``; None: not refined). One row per voxel
+    that a point reaches (:data:`HEALTHY_COLUMNS`) and the provenance fields (angles, seconds, points)."""
+    t0 = time.perf_counter()
+    fg = grid_of(failed)
+    fr = failed[(failed.n_reachable > 0) & failed.worst_x_m.notna()]
+    grid = _lattice_union(samples[1], fg)
+    # the failed map's worst points, each in its own voxel (one on a face belongs to the voxel it was refined in)
+    shift = np.rint((fg.lower - grid.lower) / grid.edge_m).astype(int)
+    pos = np.concatenate([samples[0], fr[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()])
+    flat = np.concatenate([grid.flat(grid.index(samples[0])), grid.flat(fr[["i", "j", "k"]].to_numpy() + shift)])
+    mine = flat % shards == shard
+    pos, flat = pos[mine], flat[mine]
+    ev = hp.evaluator(grid.n_voxels)
+    # the first point of each voxel exactly, then the others against it (only a lower value needs to be exact)
+    first = np.zeros(len(flat), dtype=bool)
+    first[np.unique(flat, return_index=True)[1]] = True
+    ev1 = ev.evaluate(pos[first], None, flat[first])
+    head = np.full(grid.n_voxels, np.inf)
+    head[flat[first]] = np.where(np.isfinite(ev1.capacity_kg), ev1.capacity_kg, np.inf)
+    ev2 = ev.evaluate(pos[~first], head[flat[~first]], flat[~first])
+    vox_of = np.unique(flat)
+    log.info(f"{len(vox_of)} voxels, {len(pos)} sampled points over {len(hp.sm.angles_deg)} angles of joint "
+             f"{hp.problem.arm.locked_joint} ({time.perf_counter() - t0:.1f} s)")
+    cap, binding = np.full(len(pos), np.nan), np.full(len(pos), -1)
+    cap[first], cap[~first] = ev1.capacity_kg, ev2.capacity_kg
+    binding[first], binding[~first] = ev1.binding, ev2.binding
+    res = _start(grid, vox_of, flat, pos, cap, binding)
+    if settings is not None:
+        def progress(rnd: int, active: int, points: int) -> None:
+            log.info(f"round {rnd}: {active} of {len(vox_of)} voxels not converged, {points} new points "
+                     f"({time.perf_counter() - t0:.1f} s so far)")
+
+        res = refine(grid, res, ev, settings, rng, progress)
+    return _healthy_table(hp, grid, res, log), {
+        "angles_deg": hp.sm.angles_deg.tolist(), "seconds": time.perf_counter() - t0,
+        "points_evaluated": ev.n_evaluated, "screen_directions": len(hp.screen)}
+
+
+def _healthy_table(hp: HealthyProblem, grid: Grid, res: VoxelMinima, log) -> pd.DataFrame:
+    """One row per reached voxel (:data:`HEALTHY_COLUMNS`); each worst point evaluated again, exactly, for
+    its angle and binding limit."""
+    reach = np.isfinite(res.capacity_kg)
+    final = hp.value(res.worst_m[reach])
+    names = list(hp.sm.limits.names) + ["singular"]
+    off = final.capacity_kg - res.capacity_kg[reach]  # > 0 only where a tie kept a point stopped at its ceiling
+    if len(off) and np.nanmax(np.abs(off)) > 1e-9 * max(1.0, np.nanmax(np.abs(final.capacity_kg))):
+        log.info(f"worst points re-evaluated: {np.nanmax(np.abs(off)):.3g} kg from the voxel minimum at most (ties)")
+    centres = grid.centres(np.stack(np.unravel_index(res.voxel[reach], grid.shape), axis=1))
+    return pd.DataFrame({"x_m": centres[:, 0], "y_m": centres[:, 1], "z_m": centres[:, 2],
+                         "healthy_capacity_kg": res.capacity_kg[reach],
+                         "healthy_binding": pd.Categorical(np.array(names)[final.binding]),
+                         "healthy_angle_deg": final.angle_deg, "n_points": res.n_points[reach],
+                         "n_reachable": res.n_reachable[reach], "converged": res.converged[reach],
+                         "last_change_rel": res.last_change[reach], "worst_x_m": res.worst_m[reach, 0],
+                         "worst_y_m": res.worst_m[reach, 1], "worst_z_m": res.worst_m[reach, 2]})[HEALTHY_COLUMNS]
+
+
+def _start(grid: Grid, vox_of: np.ndarray, flat: np.ndarray, pos: np.ndarray, cap: np.ndarray,
+           binding: np.ndarray) -> VoxelMinima:
+    """The voxels' minima over their evaluated points (the refinement's start)."""
+    V = len(vox_of)
+    row = np.searchsorted(vox_of, flat)
+    n_pts = np.bincount(row, minlength=V)
+    reach = np.isfinite(cap)
+    n_reach = np.bincount(row[reach], minlength=V)
+    low = np.full(V, np.inf)
+    np.minimum.at(low, row[reach], cap[reach])
+    worst = np.full((V, 3), np.nan)
+    wb = np.full(V, -1)
+    at_min = reach & (cap == low[row])
+    worst[row[at_min]], wb[row[at_min]] = pos[at_min], binding[at_min]
+    low[n_reach == 0] = np.nan
+    return VoxelMinima(voxel=vox_of, capacity_kg=low, axis_capacity_kg=np.zeros((V, 0)), n_points=n_pts,
+                       n_reachable=n_reach, last_change=np.zeros(V), converged=np.zeros(V, dtype=bool), worst_m=worst,
+                       binding=wb, rounds=0, n_evaluated=0)
+
+
+def angle_convergence(problems: tuple[HealthyProblem, HealthyProblem, HealthyProblem], h: pd.DataFrame, n_voxels: int,
+                      rng: np.random.Generator) -> pd.DataFrame:
+    """The healthy value at the worst points of ``n_voxels`` random voxels of the healthy table ``h`` with
+    the angle step, half and a quarter of it (``problems``, in that order): each voxel's value can rise
+    by at most its worst point's rise (a finer grid holds the coarser one's angles), so the table bounds
+    the change of the map."""
+    rows = h[h.healthy_capacity_kg.notna()]
+    rows = rows.iloc[np.sort(rng.choice(len(rows), size=min(n_voxels, len(rows)), replace=False))]
+    pts = rows[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
+    out = pd.DataFrame({"x_m": pts[:, 0], "y_m": pts[:, 1], "z_m": pts[:, 2]})
+    for col, hp in zip(("healthy_capacity_kg", "healthy_half_step_kg", "healthy_quarter_step_kg"), problems):
+        out[col] = hp.value(pts).capacity_kg
+    base = out.healthy_capacity_kg.where(out.healthy_capacity_kg > 0)
+    out["rise_half_step_rel"] = (out.healthy_half_step_kg - out.healthy_capacity_kg) / base
+    out["rise_quarter_step_rel"] = (out.healthy_quarter_step_kg - out.healthy_capacity_kg) / base
+    return out
