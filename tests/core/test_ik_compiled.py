@@ -1,6 +1,6 @@
 """The compiled IK kernels against independent numpy/LAPACK computations: the companion roots
 (:mod:`capmap.core.ik.roots`) against ``numpy.linalg.eigvals`` (LAPACK dgeev), the Newton polish
-(:mod:`capmap.core.ik.newton`) against :func:`capmap.core.ik.multistart.newton` and
+(:mod:`capmap.core.ik.polish`) against :func:`capmap.core.ik.multistart.newton` and
 :func:`capmap.core.kinematics.pose_error`, and the elimination matrices
 (:mod:`capmap.core.ik.general.matrices`, a pivoted Householder QR) against an SVD formulation
 written here."""
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import capmap.core.ik.general.elimination as ik_general
-import capmap.core.ik.newton as ik_polish
+import capmap.core.ik.polish as ik_polish
 import capmap.core.ik.roots as ik_roots
 from capmap.core.ik.multistart import newton
 from capmap.core.kinematics import Chain, inverse_transform, pose_error

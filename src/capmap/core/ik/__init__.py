@@ -55,7 +55,7 @@ One contract, :class:`~capmap.core.ik.registry.IKMethod`, and the registry that 
 - :mod:`~capmap.core.ik.multistart`  the multi-start Newton fallback (not complete)
 
 and what they share: :mod:`~capmap.core.ik.finish` (the common end of every method: Newton polish,
-forward-kinematics check, joint ranges, de-duplication), :mod:`~capmap.core.ik.newton` (its compiled
+forward-kinematics check, joint ranges, de-duplication), :mod:`~capmap.core.ik.polish` (its compiled
 Newton steps), :mod:`~capmap.core.ik.roots` (polynomial roots by companion matrices),
 :mod:`~capmap.core.ik.classify` (a chain's axis geometry).
 """

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core.ik.newton import distinct, polish
+from capmap.core.ik.polish import distinct, polish
 from capmap.core.kinematics import Chain
 
 __all__ = ["IKSolutions", "wrap_to_range", "RESIDUAL_TOL", "POLISHED", "DUPLICATE_TOL"]

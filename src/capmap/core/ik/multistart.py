@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from capmap.core.ik.finish import POLISHED
-from capmap.core.ik.newton import polish
+from capmap.core.ik.polish import polish
 from capmap.core.kinematics import Chain, pose_error
 
 __all__ = ["newton", "multi_start"]
@@ -45,7 +45,7 @@ def _halton(n: int, d: int) -> np.ndarray:
 def multi_start(chain: Chain, T_target: np.ndarray, lower: np.ndarray, upper: np.ndarray,
                 n_starts: int = 64) -> tuple[np.ndarray, np.ndarray]:
     """Multi-start Newton from a deterministic Halton set of starts: 40 damped steps (1e-2) then 5
-    undamped, each joint's step clipped to 0.5 rad, compiled (:func:`capmap.core.ik.newton.polish`,
+    undamped, each joint's step clipped to 0.5 rad, compiled (:func:`capmap.core.ik.polish.polish`,
     stopping at rounding level; a start whose undamped J J^T is exactly singular stops there, where
     numpy's version took a pseudo-inverse step): (N, n_starts, n) rad."""
     N, n = len(T_target), chain.n

@@ -55,7 +55,7 @@ from capmap.core.ik.general.elimination import (
     solve_formulation,
     structural_roots,
 )
-from capmap.core.ik.newton import _fk, distinct, polish
+from capmap.core.ik.polish import _fk, distinct, polish
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["GeneralSolver", "prepare", "candidates", "four_parallel", "UNION"]
