@@ -6,7 +6,7 @@ import pytest
 
 from capmap import checks
 from capmap.config.dualarm import load_dual_arm_file
-from capmap.dualarm.robot import build_dual_arm
+from capmap.dualarm.scene.robot import build_dual_arm
 from capmap.errors import CapmapError
 from tests.config.test_referenced_files import MESHES, local  # noqa: F401 (the fixture)
 

@@ -37,8 +37,8 @@ from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free
 from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
-from capmap.dualarm.robot import build_dual_arm
-from capmap.dualarm.scene import surface_points
+from capmap.dualarm.scene.robot import build_dual_arm
+from capmap.dualarm.scene.solids import surface_points
 from capmap.errors import CapmapError, ConfigError
 from capmap.io.fingerprint import code_fingerprint, file_sha256
 
@@ -275,7 +275,7 @@ def _memo_file(robot_file: str, thickness_m: float) -> Path | None:
     if not base:
         return None
     h = hashlib.sha256(f"{pin.__version__} {thickness_m!r}".encode())
-    for mod in ("capmap.dualarm.robot", "capmap.config.dualarm"):
+    for mod in ("capmap.dualarm.scene.robot", "capmap.config.dualarm"):
         h.update(f" {mod} {code_fingerprint(mod)}".encode())
     for f in referenced_files(robot_file):
         h.update(f" {Path(f).resolve()} {file_sha256(f)}".encode())

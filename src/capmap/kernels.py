@@ -20,6 +20,8 @@ import time
 
 import numpy as np
 
+import capmap.dualarm.geometry.distance as distance
+import capmap.dualarm.ocp.compiled_nodes as nodes
 from capmap.capacity import directions, engine
 from capmap.capacity.problem import CapacityProblem
 from capmap.checks import dual_arm_limits
@@ -29,7 +31,6 @@ from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.config.scene_file import load_scene
 from capmap.core import ik
 from capmap.core.reduction import lock
-from capmap.dualarm import distance, nodes
 from capmap.errors import CapmapError
 from capmap.io.kernel_marker import is_warm, record, run_key
 

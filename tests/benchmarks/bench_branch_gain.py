@@ -24,6 +24,7 @@ from capmap.capacity import planning
 from capmap.capacity.branch_moves import MoveCache
 from capmap.capacity.branch_planning import BranchProblem, _result, _search
 from capmap.capacity.build import capacity_problem
+from capmap.capacity.plan_verify import branch_deviation_deg
 from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.capacity.verification import judge, verify_path
 from capmap.core import ik
@@ -31,7 +32,6 @@ from capmap.core.dynamics import ArmDynamics
 from capmap.errors import NoPath
 from capmap.io import datasets
 from capmap.stages.common import stage_config
-from capmap.stages.verify import branch_deviation_deg
 from tests.benchmarks.machine import machine
 
 

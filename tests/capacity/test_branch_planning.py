@@ -14,6 +14,7 @@ import yaml
 from capmap.capacity.branch_moves import line_capacity, track_moves
 from capmap.capacity.branch_planning import BranchProblem, plan_on_branch
 from capmap.capacity.engine import LoadLimits, Motion, state_capacity
+from capmap.capacity.plan_verify import branch_deviation_deg
 from capmap.capacity.verification import judge, verify_path
 from capmap.capacity.voxels import Grid
 from capmap.config.robot_file import load
@@ -21,7 +22,6 @@ from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.errors import NoPath
-from capmap.stages.verify import branch_deviation_deg
 from tests.reference import branch_graph
 from tests.scenario import SSRMS_YAML, TASK_R, X_INI
 

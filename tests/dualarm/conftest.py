@@ -9,14 +9,14 @@ import yaml
 
 from capmap.config.dualarm import cloud_source, fit_settings, load_dual_arm_file
 from capmap.config.scene_file import load_scene
-from capmap.dualarm.assembly import assemble, warm_start
-from capmap.dualarm.chain import pack
-from capmap.dualarm.cloud import fit_envelope
-from capmap.dualarm.ocp import Context
-from capmap.dualarm.robot import build_dual_arm, fit_capsules
-from capmap.dualarm.scene import nearest_solid, scan
-from capmap.dualarm.settings import Weights
-from capmap.dualarm.solver import initial_guess, node_pairs
+from capmap.dualarm.geometry.chain import pack
+from capmap.dualarm.ocp.assembly import assemble, warm_start
+from capmap.dualarm.ocp.crocoddyl_nodes import Context
+from capmap.dualarm.ocp.settings import Weights
+from capmap.dualarm.ocp.solver import initial_guess, node_pairs
+from capmap.dualarm.scene.cloud import fit_envelope
+from capmap.dualarm.scene.robot import build_dual_arm, fit_capsules
+from capmap.dualarm.scene.solids import nearest_solid, scan
 from tests.scenario import ROOT
 
 SECTION = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["dualarm"]

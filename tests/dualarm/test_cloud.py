@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from capmap.dualarm.cloud import FitSettings, fit_envelope, min_area_rectangle, uncovered
-from capmap.dualarm.scene import Box, Cylinder, PanelSpec, ScanSettings, Scene, scan
+from capmap.dualarm.scene.cloud import FitSettings, fit_envelope, min_area_rectangle, uncovered
+from capmap.dualarm.scene.solids import Box, Cylinder, PanelSpec, ScanSettings, Scene, scan
 
 
 def _scene():

@@ -8,7 +8,7 @@ import zlib
 import numpy as np
 import pytest
 
-from capmap.dualarm.distance import point_triangle, segment_segment, segment_triangle
+from capmap.dualarm.geometry.distance import point_triangle, segment_segment, segment_triangle
 from tests.reference.coal_shapes import capsule, distance, triangle
 
 
@@ -153,10 +153,10 @@ def test_distance_gradient_is_the_normal_at_the_closest_points():
 
 
 def test_pair_lower_bound_never_exceeds_coal_and_clears_far_pairs():
-    """The node kernel's cheap bound (capmap.dualarm.chain.lower_bound) skips a pair's exact distance
+    """The node kernel's cheap bound (capmap.dualarm.geometry.chain.lower_bound) skips a pair's exact distance
     only when it clears the margin: it must lie below coal's distance of the bare segment and
     triangle / segment, and be tight enough to clear pairs far apart (else it saves nothing)."""
-    from capmap.dualarm.chain import lower_bound
+    from capmap.dualarm.geometry.chain import lower_bound
 
     rng = np.random.default_rng(7)
     n = 400

@@ -15,13 +15,13 @@ import crocoddyl
 import numpy as np
 import pytest
 
-from capmap.dualarm.broadphase import MIN_GROUP, group_bound, pair_groups
-from capmap.dualarm.chain import fk, groups_of, joint_placements, levers, pair_table, place_primitives
-from capmap.dualarm.distance import segment_segment, segment_triangle
-from capmap.dualarm.fddp import ALPHAS, fddp, pack_nodes
-from capmap.dualarm.nodes import CompiledNodeModel
-from capmap.dualarm.proximity import batch_distances
-from capmap.dualarm.solver import REG_INCREASE
+from capmap.dualarm.geometry.broadphase import MIN_GROUP, group_bound, pair_groups
+from capmap.dualarm.geometry.chain import fk, groups_of, joint_placements, levers, pair_table, place_primitives
+from capmap.dualarm.geometry.distance import segment_segment, segment_triangle
+from capmap.dualarm.geometry.proximity import batch_distances
+from capmap.dualarm.ocp.compiled_nodes import CompiledNodeModel
+from capmap.dualarm.ocp.fddp import ALPHAS, fddp, pack_nodes
+from capmap.dualarm.ocp.solver import REG_INCREASE
 
 
 def _models(small, seed):

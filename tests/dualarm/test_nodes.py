@@ -14,13 +14,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.dualarm.chain import fk, pack
-from capmap.dualarm.lie import jlog3, jlog6, log3, log6
-from capmap.dualarm.nodes import CompiledNodeModel
-from capmap.dualarm.ocp import NodeModel
-from capmap.dualarm.proximity import PairFilter, batch_distances
-from capmap.dualarm.settings import ALSettings
-from capmap.dualarm.solver import solve, solve_csqp
+from capmap.dualarm.geometry.chain import fk, pack
+from capmap.dualarm.geometry.proximity import PairFilter, batch_distances
+from capmap.dualarm.ocp.compiled_nodes import CompiledNodeModel
+from capmap.dualarm.ocp.crocoddyl_nodes import NodeModel
+from capmap.dualarm.ocp.lie import jlog3, jlog6, log3, log6
+from capmap.dualarm.ocp.settings import ALSettings
+from capmap.dualarm.ocp.solver import solve, solve_csqp
 from tests.dualarm.conftest import W
 
 NODES = [0, 10, 27, 28, 29, 35, 39, 40]  # transfer, pre-insertion and around it, insertion, terminal
@@ -100,7 +100,7 @@ def test_a_joint_that_is_not_revolute_is_not_packed():
     model = pin.Model()
     j1 = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "hinge")
     model.addJoint(j1, pin.JointModelPZ(), pin.SE3.Identity(), "slider")
-    from capmap.dualarm.collision import Primitives
+    from capmap.dualarm.geometry.collision import Primitives
     why = pack(model, (0, 0, 0), Primitives.empty())
     assert isinstance(why, str) and "'slider'" in why and "not a revolute joint" in why
 
@@ -110,7 +110,7 @@ def test_a_one_joint_chain_is_packed():
     model = pin.Model()
     j = model.addJoint(0, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.3])), "hinge")
     frames = tuple(model.addFrame(pin.Frame(n, j, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME)) for n in "lrp")
-    from capmap.dualarm.collision import Primitives
+    from capmap.dualarm.geometry.collision import Primitives
     packed = pack(model, frames, Primitives.empty())
     assert not isinstance(packed, str), packed
     np.testing.assert_allclose(packed.chain_f[1, 12:], [0.0, 1.0, 0.0])
@@ -122,7 +122,7 @@ def test_batch_distances_within_keep_a_minimum_that_its_bounds_reach_by_rounding
     no pairs at all there is nothing to fail on."""
     from scipy.spatial.transform import Rotation
 
-    from capmap.dualarm.collision import Pairs, Primitives
+    from capmap.dualarm.geometry.collision import Pairs, Primitives
     model = pin.Model()
     j = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "hinge")
     frames = tuple(model.addFrame(pin.Frame(n, j, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME)) for n in "lrp")

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from capmap.dualarm.assembly import warm_start
-from capmap.dualarm.ocp import Context, NodeModel
-from capmap.dualarm.settings import Weights
-from capmap.dualarm.solver import initial_guess, node_pairs
+from capmap.dualarm.ocp.assembly import warm_start
+from capmap.dualarm.ocp.crocoddyl_nodes import Context, NodeModel
+from capmap.dualarm.ocp.settings import Weights
+from capmap.dualarm.ocp.solver import initial_guess, node_pairs
 
 W = Weights(control=np.full(14, 1.0), velocity=1.0, panel=0.01, margin_m=0.005)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from capmap.dualarm.primitives import box_points, covers, cylinder_points, fit_capsule
+from capmap.dualarm.geometry.primitives import box_points, covers, cylinder_points, fit_capsule
 
 
 def _brute(points, n_dir=40, n_off=9):

@@ -12,7 +12,7 @@ import pinocchio as pin
 import pytest
 
 from capmap.config.dualarm import load_dual_arm_file
-from capmap.dualarm.robot import build_dual_arm, fit_capsules
+from capmap.dualarm.scene.robot import build_dual_arm, fit_capsules
 from capmap.dualarm.tables import capsule_table
 from capmap.errors import CapmapError
 from tests.dualarm.conftest import SECTION

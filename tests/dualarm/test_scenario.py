@@ -13,9 +13,9 @@ import pinocchio as pin
 import pytest
 
 from capmap.config.dualarm import horizon, weights
-from capmap.dualarm.assembly import warm_start
-from capmap.dualarm.settings import ALSettings
-from capmap.dualarm.solver import initial_guess, solve
+from capmap.dualarm.ocp.assembly import warm_start
+from capmap.dualarm.ocp.settings import ALSettings
+from capmap.dualarm.ocp.solver import initial_guess, solve
 from tests.dualarm.conftest import SECTION
 from tests.reference.coal_shapes import capsule, distance, triangle
 

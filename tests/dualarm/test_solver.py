@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from capmap.dualarm.assembly import warm_start
-from capmap.dualarm.evaluate import fine_grid, node_errors, safety
-from capmap.dualarm.settings import ALSettings, Weights
-from capmap.dualarm.solver import equality_cost, initial_guess, solve, solve_csqp
+from capmap.dualarm.ocp.assembly import warm_start
+from capmap.dualarm.ocp.evaluate import fine_grid, node_errors, safety
+from capmap.dualarm.ocp.settings import ALSettings, Weights
+from capmap.dualarm.ocp.solver import equality_cost, initial_guess, solve, solve_csqp
 
 W = Weights(control=np.full(14, 1.0), velocity=1.0, panel=0.01, margin_m=0.005)
 
@@ -61,7 +61,7 @@ def test_inexact_inner_solves_reach_the_exact_solution(coarse, monkeypatch):
     """The inner stop relative to the violation (solver.inner_stop) against inner solves all run to FDDP's
     tight stop (INEXACT = 0): fewer FDDP iterations, the same outer loop (iterations, penalties), the same
     pairs within 1 cm of the margin, and the same solution up to the stopping points of two converged runs."""
-    from capmap.dualarm import solver as S
+    import capmap.dualarm.ocp.solver as S
 
     asm, limits, xs0, us0 = coarse
     st = ALSettings(mu_max=1e12, tolerance=5e-8)

@@ -1,4 +1,4 @@
-"""Joint torques of the held panel (capmap.dualarm.torques) against independent computations: the
+"""Joint torques of the held panel (capmap.dualarm.ocp.torques) against independent computations: the
 panel's wrench against the finite-difference rate of its momentum, the torques against a second
 formulation (the panel's inertia appended to the left arm, the right gripper's wrench as an external
 force, Pinocchio's own RNEA), the least-norm distribution against numpy's minimum-norm solution, and the
@@ -11,8 +11,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.dualarm import torques
-from capmap.dualarm.torques import HeldPart, held_torques, part_wrench
+import capmap.dualarm.ocp.torques as torques
+from capmap.dualarm.ocp.torques import HeldPart, held_torques, part_wrench
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""Unknown space is occupied (capmap.dualarm.unknown): on the default scene and on a scene with a face no
+"""Unknown space is occupied (capmap.dualarm.scene.unknown): on the default scene and on a scene with a face no
 camera sees, every true surface point of the scene inside the work volume lies in a fitted volume or an
 unknown voxel; the boxes cover exactly the unknown voxels; the swept rectangles hold their boxes; the
 motion check against unknown voxels agrees with brute force."""
@@ -12,11 +12,11 @@ import pinocchio as pin
 import pytest
 
 from capmap.config.dualarm import cloud_source, fit_settings, unknown_settings
-from capmap.dualarm.cloud import depth, fit_envelope
-from capmap.dualarm.distance import segment_triangle
-from capmap.dualarm.scene import Box, scan, surface_points
-from capmap.dualarm.unknown import Grid, box_rectangles, merge_boxes, near_boxes, unknown_space
-from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check, viewpoints_that_see
+from capmap.dualarm.geometry.distance import segment_triangle
+from capmap.dualarm.scene.cloud import depth, fit_envelope
+from capmap.dualarm.scene.solids import Box, scan, surface_points
+from capmap.dualarm.scene.unknown import Grid, box_rectangles, merge_boxes, near_boxes, unknown_space
+from capmap.dualarm.scene.unobserved import swept_balls, unknown_mask, unobserved_check, viewpoints_that_see
 from tests.dualarm.conftest import SECTION
 
 HIDDEN = Box("shelf", np.array([0.60, 0.30, 0.45]), np.array([0.70, 0.40, 0.50]))  # under the bulkhead: its top

@@ -117,7 +117,7 @@ def test_imports_for_annotations_only_are_not_followed_and_named_modules_are(fre
     family through them; the sections a job rebuilds are added by name (``also``)."""
     closure = fp.module_closure("capmap.config.run")
     assert "capmap.config.run" in closure and "capmap.config.jobs" in closure
-    assert not {"capmap.config.dualarm", "capmap.dualarm.robot", "capmap.capacity.engine"} & set(closure)
+    assert not {"capmap.config.dualarm", "capmap.dualarm.scene.robot", "capmap.capacity.engine"} & set(closure)
     script = ROOT / "workflow" / "scripts" / "dualarm_scan.py"
     plain = fp.script_fingerprint(script)
     assert fp.script_fingerprint(script, ["capmap.config.reconfig"]) != plain

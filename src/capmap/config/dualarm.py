@@ -4,7 +4,7 @@ A dual-arm robot file names a URDF (a path relative to the file, or a file shipp
 package), the two arms' joints and gripper frames, the joints to lock and their values, and
 the capsule groups (URDF geometry objects each capsule covers), ``cover`` (the URDF models the
 capsules cover: visual and/or collision, default both) and the self-collision rules ``self_gap``,
-``body_skip`` and ``hold`` (see :mod:`capmap.dualarm.assembly`).
+``body_skip`` and ``hold`` (see :mod:`capmap.dualarm.ocp.assembly`).
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ import numpy as np
 from capmap.config.robot_file import check_meshes, check_urdf, package_file, urdf_package_dir
 from capmap.config.typed import FILE
 from capmap.config.validation import load_yaml
-from capmap.dualarm.cloud import FitSettings
-from capmap.dualarm.robot import CapsuleGroup, DualArmDescription
-from capmap.dualarm.scene import ScanSettings
-from capmap.dualarm.settings import ALSettings, Weights
-from capmap.dualarm.unknown import UnknownSettings
+from capmap.dualarm.ocp.settings import ALSettings, Weights
+from capmap.dualarm.scene.cloud import FitSettings
+from capmap.dualarm.scene.robot import CapsuleGroup, DualArmDescription
+from capmap.dualarm.scene.solids import ScanSettings
+from capmap.dualarm.scene.unknown import UnknownSettings
 from capmap.errors import ConfigError
 
 __all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "CheckSettings",

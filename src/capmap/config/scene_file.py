@@ -1,4 +1,4 @@
-"""Scene files (YAML) -> :class:`capmap.dualarm.scene.Scene`; one-line errors naming the file and key."""
+"""Scene files (YAML) -> :class:`capmap.dualarm.scene.solids.Scene`; one-line errors naming the file and key."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from capmap.config.validation import load_yaml, validate
-from capmap.dualarm.scene import Box, Cylinder, PanelSpec, Scene, pose
+from capmap.dualarm.scene.solids import Box, Cylinder, PanelSpec, Scene, pose
 from capmap.errors import ConfigError
 
 __all__ = ["parse_scene", "load_scene"]

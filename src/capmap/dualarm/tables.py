@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from capmap.dualarm.cloud import Envelope
-from capmap.dualarm.robot import Covered, DualArm, LinkCapsule
-from capmap.dualarm.unknown import UnknownSpace
+from capmap.dualarm.scene.cloud import Envelope
+from capmap.dualarm.scene.robot import Covered, DualArm, LinkCapsule
+from capmap.dualarm.scene.unknown import UnknownSpace
 
 __all__ = ["envelope_table", "envelope_from", "capsule_table", "capsules_from", "unknown_table", "unknown_boxes"]
 

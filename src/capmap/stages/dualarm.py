@@ -11,11 +11,11 @@ import pandas as pd
 
 from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.scene_file import load_scene
-from capmap.dualarm.cloud import depth, fit_envelope, uncovered
-from capmap.dualarm.robot import DualArm, build_dual_arm, fit_capsules
-from capmap.dualarm.scene import nearest_solid, scan
+from capmap.dualarm.scene.cloud import depth, fit_envelope, uncovered
+from capmap.dualarm.scene.robot import DualArm, build_dual_arm, fit_capsules
+from capmap.dualarm.scene.solids import nearest_solid, scan
+from capmap.dualarm.scene.unknown import Grid, unknown_space
 from capmap.dualarm.tables import capsule_table, capsules_from, envelope_from, envelope_table, unknown_table
-from capmap.dualarm.unknown import Grid, unknown_space
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
@@ -95,7 +95,7 @@ def stage_dualarm_envelope(cloud: str, out: str, slice_json: str) -> None:
 
 
 def stage_dualarm_unknown(cloud: str, environment: str, out: str, slice_json: str) -> None:
-    """The unknown space of the work volume (:func:`capmap.dualarm.unknown.unknown_space`): what no
+    """The unknown space of the work volume (:func:`capmap.dualarm.scene.unknown.unknown_space`): what no
     viewpoint's rays crossed and no fitted volume holds, as boxes (one row each); checked that every
     cloud point lies outside the observed-free voxels."""
     sc = stage_config(slice_json)

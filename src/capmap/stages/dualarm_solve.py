@@ -13,15 +13,15 @@ import pandas as pd
 
 from capmap.config.dualarm import DualArmConfig, Horizon
 from capmap.config.scene_file import load_scene
-from capmap.dualarm.assembly import assemble, warm_start
-from capmap.dualarm.cloud import depth
-from capmap.dualarm.evaluate import fine_grid, node_errors
-from capmap.dualarm.motion import motion_quantities, motion_tables, plan_assembly, torque_table
-from capmap.dualarm.settings import Weights
-from capmap.dualarm.solver import equality_cost, initial_guess, solve, solve_csqp
+from capmap.dualarm.ocp.assembly import assemble, warm_start
+from capmap.dualarm.ocp.evaluate import fine_grid, node_errors
+from capmap.dualarm.ocp.motion import motion_quantities, motion_tables, plan_assembly, torque_table
+from capmap.dualarm.ocp.settings import Weights
+from capmap.dualarm.ocp.solver import equality_cost, initial_guess, solve, solve_csqp
+from capmap.dualarm.scene.cloud import depth
+from capmap.dualarm.scene.unknown import Grid, near_boxes, with_boxes
+from capmap.dualarm.scene.unobserved import swept_balls, unknown_mask, unobserved_check, viewpoints_that_see
 from capmap.dualarm.tables import envelope_from, unknown_boxes
-from capmap.dualarm.unknown import Grid, near_boxes, with_boxes
-from capmap.dualarm.unobserved import swept_balls, unknown_mask, unobserved_check, viewpoints_that_see
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
@@ -89,7 +89,7 @@ def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, un
 
 def _suggest(da: DualArmConfig, environment: str, unknown: str, msg: str) -> str:
     """Where a camera would see the unknown region named in ``msg`` ('unknown [x0 x1, y0 y1, z0 z1]'):
-    the candidates nearest the configured viewpoints (:func:`capmap.dualarm.unobserved.viewpoints_that_see`)."""
+    the candidates nearest the configured viewpoints (:func:`capmap.dualarm.scene.unobserved.viewpoints_that_see`)."""
     x = [float(v) for v in re.search(r"unknown \[([-\d.]+) ([-\d.]+), ([-\d.]+) ([-\d.]+), ([-\d.]+) ([-\d.]+)\]",
                                      msg).groups()]
     region = np.array([[x[0], x[2], x[4]], [x[1], x[3], x[5]]])
@@ -106,8 +106,8 @@ def _suggest(da: DualArmConfig, environment: str, unknown: str, msg: str) -> str
 def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_trajectory: str, out_fine: str,
                            out_outer: str, out_torques: str, out_csv: str, out_md: str, slice_json: str) -> None:
     """The satellite-panel assembly by augmented-Lagrangian DDP, then checked on a finer grid
-    (:func:`capmap.dualarm.motion.plan_assembly`) and by inverse dynamics with the held panel against
-    the effort limits (:func:`capmap.dualarm.motion.torque_table`); the start within the joint limits
+    (:func:`capmap.dualarm.ocp.motion.plan_assembly`) and by inverse dynamics with the held panel against
+    the effort limits (:func:`capmap.dualarm.ocp.motion.torque_table`); the start within the joint limits
     is checked before any job."""
     sc = stage_config(slice_json)
     da = sc.run.dualarm

@@ -1,89 +1,22 @@
-"""Stages of planning and verification: plan (A* per payload) -> verify (direct line and the
-planned path, carrying the payload) -> verify_plots; one job per payload."""
+"""Stages of planning and verification (:mod:`capmap.capacity.plan_verify`): plan (A* per payload or
+task) -> verify (direct line and the planned path, carrying the payload) -> verify_plots; one job per
+payload or task."""
 
 from __future__ import annotations
 
-from dataclasses import asdict
-
-import numpy as np
-import pandas as pd
-
-from capmap.capacity import branch_planning, planning
 from capmap.capacity.build import capacity_problem
-from capmap.capacity.directions import AXIS_LABELS, axis_of
-from capmap.capacity.tables import AXIS_COLUMNS, grid_of
-from capmap.capacity.verification import PathResult, judge, verify_path
-from capmap.config.jobs import PlanTask
-from capmap.config.slices import StageConfig
-from capmap.core.dynamics import ArmDynamics
-from capmap.core.limits import AffineLimits
-from capmap.core.profiles import PHASES
-from capmap.core.reduction import LockedArm
+from capmap.capacity.plan_verify import no_waypoints, plan_waypoints, verify_job
+from capmap.capacity.tables import grid_of
 from capmap.errors import CapmapError, ConfigError, NoPath
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
 from capmap.stages.common import stage_config
 
-__all__ = ["PLAN_KEYS", "WAYPOINT_COLUMNS", "stage_plan", "path_tables", "branch_deviation_deg", "stage_verify"]
+__all__ = ["PLAN_KEYS", "stage_plan", "stage_verify"]
 
 PLAN_KEYS = {"start": "task.start_m", "goal": "task.goal_m", "payload": "task.payload_kg",
              "q_ini": "task.q_ini_deg"}  # planning's roles
-WAYPOINT_COLUMNS = ["waypoint", "kind", "x_m", "y_m", "z_m", "i", "j", "k", "voxel_capacity_kg"]
-
-
-def _waypoint_frame(p, grid, capacity_kg: np.ndarray) -> pd.DataFrame:
-    """The :data:`WAYPOINT_COLUMNS` of a plan (:class:`~capmap.capacity.planning.Plan` or
-    :class:`~capmap.capacity.branch_planning.BranchPlan`) on the map's voxel capacities (V,) kg."""
-    wp, wv = p.waypoints, p.waypoint_voxel
-    return pd.DataFrame({"waypoint": np.arange(len(wp)), "kind": p.waypoint_kind, "x_m": wp[:, 0], "y_m": wp[:, 1],
-                         "z_m": wp[:, 2], "i": wv[:, 0], "j": wv[:, 1], "k": wv[:, 2],
-                         "voxel_capacity_kg": capacity_kg[grid.flat(wv)]})
-
-
-def _grid_plan(grid, vox: pd.DataFrame, task: PlanTask, payload: float, moves: str) -> tuple[pd.DataFrame, float, int, str]:
-    """A* on the voxel map (``axis`` or ``isotropic`` moves): waypoints table, cost, expansions, log line."""
-    cap = vox.capacity_kg.to_numpy()
-    axis_cap = vox[AXIS_COLUMNS].to_numpy() if moves == "axis" else None
-    p = planning.plan(grid, cap, task.start_m, task.goal_m, payload, axis_cap)
-    wv = p.waypoint_voxel
-    df = _waypoint_frame(p, grid, cap)
-    if axis_cap is not None:  # the capacity along the move that arrives at each voxel (both voxels)
-        f = grid.flat(wv)
-        step = np.diff(wv, axis=0)
-        move = np.r_[False, np.any(step != 0, axis=1)]
-        a = np.zeros(len(wv), dtype=int)
-        a[move] = axis_of(step[move[1:]])
-        along = np.full(len(wv), np.nan)
-        along[move] = np.minimum(axis_cap[f[move], a[move]], axis_cap[f[:-1][move[1:]], a[move]])
-        df["move_axis"] = np.where(move, np.array(AXIS_LABELS)[a], "")
-        df["move_capacity_kg"] = along
-    line = (f"{moves} moves: {len(p.voxel_path)} voxels, {len(df)} waypoints, A* cost {p.cost_m:.3f} m, path "
-            f"{p.length_m:.3f} m, {p.expanded} voxels expanded; weakest voxel on it {df.voxel_capacity_kg.min():.1f} kg"
-            + (f", weakest move {np.nanmin(df.move_capacity_kg):.1f} kg" if axis_cap is not None
-               and df.move_capacity_kg.notna().any() else ""))
-    return df, p.cost_m, p.expanded, line
-
-
-def _branch_plan(sc: StageConfig, grid, vox: pd.DataFrame, task: PlanTask,
-                 payload: float) -> tuple[pd.DataFrame, float, int, str]:
-    """A* over (voxel, IK branch) states on the start configuration's branch: waypoints table with
-    the planned configuration at each waypoint, cost, expansions, log line."""
-    at = capacity_problem(sc.run)
-    arm = at.arm
-    step = sc.run.planning.track_step_m
-    problem = branch_planning.BranchProblem(ArmDynamics(arm), grid, at.rotation, at.motion, at.limits,
-                                            (vox.n_reachable > 0).to_numpy(), **({} if step is None else {"step_m": step}))
-    q_start = np.deg2rad(np.asarray(task.q_start_deg, dtype=float))[arm.active]
-    p = branch_planning.plan_on_branch(problem, task.start_m, task.goal_m, q_start, payload)
-    df = _waypoint_frame(p, grid, vox.capacity_kg.to_numpy())
-    df["move_capacity_kg"] = p.move_capacity_kg
-    for c, j in enumerate(arm.active_joint_numbers):
-        df[f"q_j{j}_deg"] = np.rad2deg(p.q[:, c])
-    line = (f"branch moves: {len(df)} waypoints, path {p.length_m:.3f} m, {p.expanded} of {p.states} states expanded "
-            f"({p.voxels_solved} voxels' moves tracked); weakest move {np.nanmin(p.move_capacity_kg):.1f} kg at the "
-            f"tracked samples (the voxel map, every branch: {df.voxel_capacity_kg.min():.1f} kg)")
-    return df, p.length_m, p.expanded, line
 
 
 def stage_plan(voxels: str, out: str, slice_json: str) -> None:
@@ -91,112 +24,36 @@ def stage_plan(voxels: str, out: str, slice_json: str) -> None:
     branch, or A* on the map's axis or isotropic values); a payload with no path is recorded
     (status ``no_path`` and the reason in the provenance, zero waypoints), not an error."""
     sc = stage_config(slice_json)
-    task = sc.job
-    payload = task.payload_kg
-    log = stage_logger(__name__, f"plan {payload:g} kg")
-    moves = sc.run.planning.moves
+    job, pl = sc.job, sc.run.planning
+    log = stage_logger(__name__, f"plan {job.payload_kg:g} kg")
     vox = datasets.read(voxels)
-    grid = grid_of(vox)
     status, reason, cost, expanded = "ok", "", float("nan"), 0
     try:
-        if moves == "branch":
-            df, cost, expanded, line = _branch_plan(sc, grid, vox, task, payload)
-        else:
-            df, cost, expanded, line = _grid_plan(grid, vox, task, payload, moves)
+        df, cost, expanded, line = plan_waypoints(capacity_problem(sc.run), vox, grid_of(vox), job, pl.moves,
+                                                  pl.track_step_m)
         log.info(line)
     except NoPath as exc:
-        status, reason = "no_path", exc.in_terms(**PLAN_KEYS)
-        df = pd.DataFrame({c: pd.Series(dtype=object if c == "kind" else float) for c in WAYPOINT_COLUMNS})
+        status, reason, df = "no_path", exc.in_terms(**PLAN_KEYS), no_waypoints()
         log.info(f"no path: {reason}")
     except CapmapError as exc:  # start or goal outside the map: the config's fault
         raise ConfigError(exc.in_terms(**PLAN_KEYS)) from None
-    datasets.write(df, out, datasets.provenance("plan", sc.doc, payload_kg=payload, status=status, reason=reason,
-                                                 cost_m=cost, expanded=expanded, moves=moves))
-
-
-def path_tables(name: str, res: PathResult, arm: LockedArm, limits: AffineLimits, payload: float,
-                planner: str) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
-    """Time series, segment table and summary row of one verified path."""
-    tl, tr, ld = res.timeline, res.tracking, res.loads
-    ts = pd.DataFrame({"path": name, "t_s": tl.t_s, "segment": tl.segment,
-                       "phase": pd.Categorical.from_codes(tl.phase, list(PHASES)),
-                       "x_m": tl.p[:, 0], "y_m": tl.p[:, 1], "z_m": tl.p[:, 2],
-                       "vx_mps": tl.v[:, 0], "vy_mps": tl.v[:, 1], "vz_mps": tl.v[:, 2],
-                       "ax_mps2": tl.a[:, 0], "ay_mps2": tl.a[:, 1], "az_mps2": tl.a[:, 2]})
-    joints = arm.active_joint_numbers
-    for prefix, values, unit in (("q", tr.q, "deg"), ("qd", ld.qd, "deg_s"), ("qdd", ld.qdd, "deg_s2")):
-        for c, j in enumerate(joints):
-            ts[f"{prefix}_j{j}_{unit}"] = np.rad2deg(values[:, c])
-    y = ld.at(payload)
-    for c, col in enumerate(limits.names):
-        ts[col] = y[:, c]
-    ts["state_capacity_kg"] = ld.capacity_kg
-    ts["binding"] = np.array(list(limits.names) + ["untracked"])[ld.binding]
-    ts["tracked"] = ~np.isnan(tr.q).any(axis=1)
-    ts["in_joint_range"] = tr.in_range.all(axis=1)
-    segments, verdict = judge(res, arm, limits, payload)
-    seg = pd.DataFrame([{"path": name, **asdict(s)} for s in segments])
-    return ts, seg, {"path": name, "planner": planner, **asdict(verdict)}
-
-
-def branch_deviation_deg(res: PathResult, q_plan_deg: np.ndarray) -> float:
-    """Largest difference (deg) between the configurations the verification tracked at the
-    waypoints (the end of each segment, and the start) and the planned ones q_plan_deg (W, n)."""
-    rows = res.timeline.waypoint_rows()
-    return float(np.nanmax(np.abs(np.rad2deg(res.tracking.q[rows]) - q_plan_deg), initial=np.nan)) \
-        if not np.isnan(res.tracking.q[rows]).any() else float("inf")
+    datasets.write(df, out, datasets.provenance("plan", sc.doc, payload_kg=job.payload_kg, status=status, reason=reason,
+                                                 cost_m=cost, expanded=expanded, moves=pl.moves))
 
 
 def stage_verify(waypoints: str, out_timeseries: str, out_segments: str, out_csv: str, out_md: str,
                  slice_json: str) -> None:
     """Verify the direct line and the planned path (if any) carrying the task payload."""
     sc = stage_config(slice_json)
-    at = capacity_problem(sc.run)
-    arm, rotation, motion, limits = at.arm, at.rotation, at.motion, at.limits
-    dyn = ArmDynamics(arm)
-    vt = sc.job
-    payload = vt.payload_kg
-    log = stage_logger(__name__, f"verify {payload:g} kg")
-    q_start = np.deg2rad(np.asarray(vt.q_start_deg, dtype=float))[arm.active]
-    dt = sc.run.verification.dt_s
+    problem, job = capacity_problem(sc.run), sc.job
+    log = stage_logger(__name__, f"verify {job.payload_kg:g} kg")
     wp = datasets.read(waypoints)
-    plan_meta = wp.attrs["capmap"]
-    paths = {"direct": np.array([vt.start_m, vt.goal_m], dtype=float)}
-    if plan_meta["status"] == "ok":
-        paths["planned"] = wp[["x_m", "y_m", "z_m"]].to_numpy()
-    ts_parts, seg_parts, rows = [], [], []
-    for name, pts in paths.items():
-        res = verify_path(dyn, pts, rotation, q_start, motion, dt, limits)
-        q_cols = [f"q_j{j}_deg" for j in arm.active_joint_numbers]
-        on_branch = name == "planned" and q_cols[0] in wp  # planned on the start's branch
-        planner = ("straight line" if name == "direct" else
-                   f"A* on the start's IK branch, {len(pts)} waypoints" if on_branch else f"A*, {len(pts)} waypoints")
-        ts, seg, row = path_tables(name, res, arm, limits, payload, planner)
-        if on_branch:  # does the execution stay on the planned branch?
-            row["branch_deviation_deg"] = branch_deviation_deg(res, wp[q_cols].to_numpy())
-        ts_parts.append(ts)
-        seg_parts.append(seg)
-        rows.append(row)
-        log.info(f"{name}: {row['segments']} segments, {row['duration_s']:.1f} s, capacity {row['capacity_kg']:.1f} kg "
-                 f"({row['binding']}), mean segment capacity {row['mean_segment_capacity_kg']:.1f} kg = "
-                 f"{row['margin_pct']:+.1f}% vs {payload:g} kg; exceeded: {row['limits_exceeded_at_payload'] or 'none'}; "
-                 f"tracking {row['tracking']}; joint range {row['joint_range']}")
-    if plan_meta["status"] != "ok":
-        rows.append({"path": "planned", "planner": f"A*: {plan_meta['reason']}", "feasible": False})
-        log.info(f"planned: none ({plan_meta['reason']})")
-    summary = pd.DataFrame(rows)
-    summary.insert(0, "payload_kg", payload)
-    summary["task"] = vt.name or "task"  # "task": the config's task; else its name under `tasks`
-    if vt.name is not None:
-        summary["path"] = vt.name + ": " + summary.path  # headed "3200 kg, around_singularity: direct"
-    ts = pd.concat(ts_parts, ignore_index=True)
-    ts["path"] = ts.path.astype("category")
-    ts["binding"] = ts.binding.astype("category")
-    seg = pd.concat(seg_parts, ignore_index=True)
-    prov = datasets.provenance("verify", sc.doc, payload_kg=payload, limits=dict(zip(limits.names, limits.limit.tolist())),
-                               plan_status=plan_meta["status"], plan_reason=plan_meta["reason"])
+    plan = wp.attrs["capmap"]
+    ts, seg, summary = verify_job(problem, job, wp, plan, sc.run.verification.dt_s, log)
+    limits = problem.limits
+    prov = datasets.provenance("verify", sc.doc, payload_kg=job.payload_kg,
+                               limits=dict(zip(limits.names, limits.limit.tolist())), plan_status=plan["status"],
+                               plan_reason=plan["reason"])
     datasets.write(ts, out_timeseries, prov)
     datasets.write(seg, out_segments, prov)
     write_table(summary, out_csv, out_md)
-
-

@@ -1,4 +1,4 @@
-"""The motion against the space no camera observed (:mod:`capmap.dualarm.unknown`): which unknown boxes
+"""The motion against the space no camera observed (:mod:`capmap.dualarm.scene.unknown`): which unknown boxes
 the optimiser must see (those near the moving volumes), and the check afterwards against all of them.
 
 The moving volumes (every arm capsule and the held panel) are sampled as balls: each capsule at
@@ -16,10 +16,10 @@ import numpy as np
 import pinocchio as pin
 from scipy.ndimage import distance_transform_edt
 
-from capmap.dualarm.assembly import Assembly
-from capmap.dualarm.chain import joint_placements, pack
-from capmap.dualarm.robot import DualArm
-from capmap.dualarm.unknown import Grid
+from capmap.dualarm.geometry.chain import joint_placements, pack
+from capmap.dualarm.ocp.assembly import Assembly
+from capmap.dualarm.scene.robot import DualArm
+from capmap.dualarm.scene.unknown import Grid
 
 __all__ = ["swept_balls", "UnobservedCheck", "unobserved_check", "unknown_mask", "viewpoints_that_see"]
 

@@ -1,7 +1,7 @@
-"""The node model compiled: one numba call (:func:`capmap.dualarm.node_kernel.node_eval`) per Crocoddyl
+"""The node model compiled: one numba call (:func:`capmap.dualarm.ocp.node_kernel.node_eval`) per Crocoddyl
 ``calc`` / ``calcDiff``.
 
-The same problem as :class:`capmap.dualarm.ocp.NodeModel` (its module docstring: costs,
+The same problem as :class:`capmap.dualarm.ocp.crocoddyl_nodes.NodeModel` (its module docstring: costs,
 equalities of :mod:`.task`, safety-distance and joint-limit inequalities, augmented-Lagrangian
 terms or CSQP constraint rows) evaluated on the packed chain of :mod:`.chain`: forward
 kinematics, the three frames and their local Jacobians, the logarithms of :mod:`.lie`, the pair
@@ -17,16 +17,16 @@ import crocoddyl
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.chain import Packed, groups_of, joint_placements, levers, pack, pair_table
-from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
-from capmap.dualarm.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
-from capmap.dualarm.node_kernel import node_eval
-from capmap.dualarm.ocp import Context, equality_size
-from capmap.dualarm.proximity import PairFilter, batch_distances
-from capmap.dualarm.settings import Weights
-from capmap.dualarm.task import AssemblyTask
-from capmap.dualarm.unknown import near_boxes
-from capmap.dualarm.unobserved import _bound_gaps, _cube_distances
+from capmap.dualarm.geometry.chain import Packed, groups_of, joint_placements, levers, pack, pair_table
+from capmap.dualarm.geometry.collision import CollisionModel, Pairs, Primitives
+from capmap.dualarm.geometry.proximity import PairFilter, batch_distances
+from capmap.dualarm.ocp.crocoddyl_nodes import Context, equality_size
+from capmap.dualarm.ocp.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
+from capmap.dualarm.ocp.node_kernel import node_eval
+from capmap.dualarm.ocp.settings import Weights
+from capmap.dualarm.ocp.task import AssemblyTask
+from capmap.dualarm.scene.unknown import near_boxes
+from capmap.dualarm.scene.unobserved import _bound_gaps, _cube_distances
 
 __all__ = ["CompiledNodeModel", "node_kind", "node_targets", "warm_up"]
 
@@ -80,7 +80,7 @@ def _compact(pk: Packed, rows: np.ndarray):
 
 class CompiledNodeModel(crocoddyl.ActionModelAbstract):
     """Node k of the problem on the packed chain ``packed`` (same arguments and meaning as
-    :class:`capmap.dualarm.ocp.NodeModel`; multipliers lam_eq, lam_in on the node)."""
+    :class:`capmap.dualarm.ocp.crocoddyl_nodes.NodeModel`; multipliers lam_eq, lam_in on the node)."""
 
     def __init__(self, ctx: Context, k: int, pairs: Pairs, mode: str = "al", packed: Packed | None = None):
         nq = ctx.model.nq
@@ -188,7 +188,7 @@ def warm_up() -> None:
             d = m.createData()
             (m.calc(d, x), m.calcDiff(d, x)) if k == 3 else (m.calc(d, x, u), m.calcDiff(d, x, u))
             models.setdefault(mode, []).append(m)
-    P = pack_nodes(models["al"])  # the compiled FDDP (capmap.dualarm.solver), the argument types of a real run
+    P = pack_nodes(models["al"])  # the compiled FDDP (capmap.dualarm.ocp.solver), the argument types of a real run
     xs, us = np.tile(x, (4, 1)), np.tile(u, (3, 1))
     Luu = np.ascontiguousarray(np.broadcast_to(np.eye(2), (3, 2, 2)))
     fddp(P, 0.1, 0.005, Luu, x.copy(), xs, us, 2, False, 100.0, 1e-9, 1e3, ALPHAS)

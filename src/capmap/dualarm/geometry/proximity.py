@@ -1,4 +1,4 @@
-"""Which collision pairs are near, on the packed chain (:mod:`capmap.dualarm.chain`), compiled: every
+"""Which collision pairs are near, on the packed chain (:mod:`capmap.dualarm.geometry.chain`), compiled: every
 pair's safety distance at many configurations with bounding-sphere and plane culling
 (:func:`batch_distances`: the optimiser's pair filter, and the evaluation of a solution, exact for
 each configuration's least distance and the pairs within a given distance). Tested against
@@ -10,14 +10,14 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from capmap.dualarm.broadphase import group_bound
-from capmap.dualarm.chain import Packed, fk, groups_of, pair_table, place_primitives, plane_gap
-from capmap.dualarm.collision import Pairs
-from capmap.dualarm.distance import segpoint, segseg, segtri
+from capmap.dualarm.geometry.broadphase import group_bound
+from capmap.dualarm.geometry.chain import Packed, fk, groups_of, pair_table, place_primitives, plane_gap
+from capmap.dualarm.geometry.collision import Pairs
+from capmap.dualarm.geometry.distance import segpoint, segseg, segtri
 
 __all__ = ["batch_distances", "near_pairs", "PairFilter"]
 
-_jit = numba.njit(cache=True)  # plain calls (see capmap.dualarm.chain)
+_jit = numba.njit(cache=True)  # plain calls (see capmap.dualarm.geometry.chain)
 ROUNDING = 1e-9  # m: how far a lower bound may exceed the distance it bounds by rounding (~1e-15 here)
 
 
@@ -112,7 +112,7 @@ def _subset(a, b):
 def _carry(lever, movers, gm, q, q_ref, dm, lb):
     """lb (G,) valid at q_ref (nq,) made valid at q: less how far each group's moving primitives (rows gm (G,
     2) of ``lever``, -1: none) can have moved (a point of primitive e moves at most sum_i lever[e, i] |dq_i|,
-    :func:`capmap.dualarm.chain.levers`); dm (S + T,): scratch, 0 but for ``movers``."""
+    :func:`capmap.dualarm.geometry.chain.levers`); dm (S + T,): scratch, 0 but for ``movers``."""
     for e in movers:
         x = 0.0
         for i in range(q.shape[0]):
@@ -258,7 +258,7 @@ def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order
 
 def _movers(packed: Packed, rows: np.ndarray, order: np.ndarray, groups: np.ndarray
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(lever (S + T, nq) of every segment, then triangle (:func:`capmap.dualarm.chain.levers`), the rows
+    """(lever (S + T, nq) of every segment, then triangle (:func:`capmap.dualarm.geometry.chain.levers`), the rows
     of those that move, gm (G, 2): the rows of each group's moving primitives, -1: none)."""
     S, lever = len(packed.seg_f), packed.lever
     first = rows[order[groups[:, 0]]].reshape(-1, 3)
@@ -274,7 +274,7 @@ class PairFilter:
     configurations that change a little from call to call. Each call returns the pairs newly within the
     cutoff; they join ``keep`` (K, P) bool, which is never looked at again. In between, each (configuration,
     pair group) keeps a lower bound of its other pairs' distances, less how far its moving primitives can
-    have moved since (:func:`capmap.dualarm.chain.levers`), so a group far from the cutoff costs a
+    have moved since (:func:`capmap.dualarm.geometry.chain.levers`), so a group far from the cutoff costs a
     comparison, not a test (the same pairs as :func:`near_pairs` with the same cutoff, tested against it in
     tests/dualarm/test_nodes.py)."""
 

@@ -1,4 +1,4 @@
-"""The compiled node of :mod:`capmap.dualarm.nodes`: one function evaluating a node's cost,
+"""The compiled node of :mod:`capmap.dualarm.ocp.compiled_nodes`: one function evaluating a node's cost,
 constraints and (with ``diff``) their derivatives on the packed chain of :mod:`.chain`."""
 
 from __future__ import annotations
@@ -6,10 +6,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from capmap.dualarm.broadphase import group_bound
-from capmap.dualarm.chain import fk, lower_bound, place_moving, static_bound
-from capmap.dualarm.distance import segseg, segtri
-from capmap.dualarm.lie import jlog3, jlog6, log3, log6
+from capmap.dualarm.geometry.broadphase import group_bound
+from capmap.dualarm.geometry.chain import fk, lower_bound, place_moving, static_bound
+from capmap.dualarm.geometry.distance import segseg, segtri
+from capmap.dualarm.ocp.lie import jlog3, jlog6, log3, log6
 
 __all__ = ["node_eval"]
 
@@ -49,7 +49,7 @@ def node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, tri_f, tr
     none), that bound them anywhere else less the primitives' motion since (a calc or calcDiff skips a
     pair whose multiplier is zero and whose bound so moved clears the margin: its g is that bound, and
     its penalty and derivatives are zero either way); order, groups, spheres: the pairs' groups
-    (:func:`capmap.dualarm.broadphase.pair_groups`): with ``bound``, a group whose pairs all have zero
+    (:func:`capmap.dualarm.geometry.broadphase.pair_groups`): with ``bound``, a group whose pairs all have zero
     multipliers and whose bound clears the margin gets that bound as every pair's g."""
     dt, wv, wp, margin, scale = par[0], par[1], par[2], par[3], par[4]
     running, limits, al = par[5] > 0.5, par[6] > 0.5, par[7] > 0.5

@@ -7,7 +7,7 @@ Quu and Vxx, Cholesky of Quu), the same expected improvement (dg, dq, dv), the s
 alphas 1, 1/2, ..., 1/512 with its acceptance tests (th_acceptstep 0.1, th_acceptnegstep 2, th_grad
 1e-12), the same regularisation schedule (reg_min 1e-9, reg_max 1e9, the given increase factor,
 decrease 10, thresholds 0.5 and 0.01) and stop (|d0 + d1 / 2| < th_stop once feasible). The problem
-is the one :class:`capmap.dualarm.nodes.CompiledNodeModel` states (linear dynamics x+ = Fx x + Fu u,
+is the one :class:`capmap.dualarm.ocp.compiled_nodes.CompiledNodeModel` states (linear dynamics x+ = Fx x + Fu u,
 Luu = dt diag(w_control), Lxu = 0), its nodes packed flat by :func:`pack_nodes`.
 tests/dualarm/test_fddp.py checks it step for step against Crocoddyl's own solver on the same nodes, and
 tests/dualarm/test_nodes.py the whole AL solve against Crocoddyl on the Pinocchio node models.
@@ -18,7 +18,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from capmap.dualarm.node_kernel import node_eval
+from capmap.dualarm.ocp.node_kernel import node_eval
 
 __all__ = ["pack_nodes", "fddp", "evaluate_nodes", "ALPHAS", "LAM_EQ", "EQ_AT", "LAM_IN", "IN_AT", "C_VALUES",
            "G_VALUES"]

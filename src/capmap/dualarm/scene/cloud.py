@@ -22,7 +22,7 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from capmap.dualarm.distance import segment_segment, segment_triangle
+from capmap.dualarm.geometry.distance import segment_segment, segment_triangle
 from capmap.errors import CapmapError
 
 __all__ = ["FitSettings", "Envelope", "fit_envelope", "grow_to_cover", "normals", "min_area_rectangle", "uncovered",

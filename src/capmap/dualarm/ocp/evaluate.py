@@ -10,10 +10,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.assembly import Assembly
-from capmap.dualarm.chain import pack
-from capmap.dualarm.proximity import near_pairs
-from capmap.dualarm.task import node_constraints
+from capmap.dualarm.geometry.chain import pack
+from capmap.dualarm.geometry.proximity import near_pairs
+from capmap.dualarm.ocp.assembly import Assembly
+from capmap.dualarm.ocp.task import node_constraints
 
 __all__ = ["NodeErrors", "node_errors", "fine_grid", "Safety", "safety", "active_pairs"]
 
@@ -86,7 +86,7 @@ class Safety:
 
 def safety(asm: Assembly, qs: np.ndarray, cutoff_m: float = 0.2, within_m: float | None = None) -> Safety:
     """Every candidate pair at every configuration qs (M, nq): with the chain packed
-    (:func:`capmap.dualarm.proximity.batch_distances`, equal to Pinocchio's placements to 1e-12 in the tests),
+    (:func:`capmap.dualarm.geometry.proximity.batch_distances`, equal to Pinocchio's placements to 1e-12 in the tests),
     a pair whose distance is above ``cutoff_m`` gets inf, and with ``within_m`` also one above both
     ``within_m`` and the configuration's least distance (the least distance, its pair and every pair
     within ``within_m`` stay exact); else on Pinocchio's kinematics, every pair exactly."""

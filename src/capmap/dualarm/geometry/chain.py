@@ -1,5 +1,5 @@
 """A Pinocchio model of revolute joints packed into flat arrays, and compiled (numba) kinematics and
-safety distances on it, for the node models and the pair filters (:mod:`capmap.dualarm.proximity`).
+safety distances on it, for the node models and the pair filters (:mod:`capmap.dualarm.geometry.proximity`).
 
 Joint j: parent, placement in its parent (R, p), unit axis in its own frame, its q index; the
 placement of joint j in the world is oMi[parent] * placement * Rot(axis, q). Column i of the
@@ -18,9 +18,9 @@ import numba
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.broadphase import pair_groups, static_balls
-from capmap.dualarm.collision import Pairs, Primitives
-from capmap.dualarm.distance import segpoint, segseg, segtri
+from capmap.dualarm.geometry.broadphase import pair_groups, static_balls
+from capmap.dualarm.geometry.collision import Pairs, Primitives
+from capmap.dualarm.geometry.distance import segpoint, segseg, segtri
 
 __all__ = ["Packed", "pack", "fk", "pair_table", "place_primitives", "plane_gap", "lower_bound", "distances",
            "groups_of", "joint_placements", "levers",
@@ -38,7 +38,7 @@ class Packed:
     seg_r (S,); tri_f (T, 17): vertices (9) in their joint's frame, then for :func:`static_bound` the
     centroid (3), reach (1), unit normal (3) and plane offset (1); tri_j (T,); tri_r (T,); seg_g (S,),
     tri_g (T,), balls (G, 4): the static primitives' bodies and their balls
-    (:func:`capmap.dualarm.broadphase.static_balls`); reach (nj, nv):
+    (:func:`capmap.dualarm.geometry.broadphase.static_balls`); reach (nj, nv):
     a bound on the distance from joint j's origin to the origin of column i's joint, in any configuration
     (the lengths of the placements between them), where column i moves joint j; lever (S + T, nv): every
     segment's, then triangle's :func:`levers`."""
@@ -142,7 +142,7 @@ def _lever_table(seg_f: np.ndarray, seg_j: np.ndarray, tri_f: np.ndarray, tri_j:
 
 
 def groups_of(packed: Packed, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The pair rows' groups (order, groups, spheres) of :func:`capmap.dualarm.broadphase.pair_groups`."""
+    """The pair rows' groups (order, groups, spheres) of :func:`capmap.dualarm.geometry.broadphase.pair_groups`."""
     pk = packed
     return pair_groups(rows, pk.seg_j, pk.seg_r, pk.tri_j, pk.tri_r, pk.seg_g, pk.tri_g, pk.balls)
 

@@ -22,7 +22,7 @@ import numba
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.distance import segseg, segtri
+from capmap.dualarm.geometry.distance import segseg, segtri
 
 __all__ = ["Primitives", "Pairs", "CollisionModel", "Evaluation"]
 

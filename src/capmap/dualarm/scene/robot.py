@@ -21,7 +21,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.primitives import Capsule, box_points, cylinder_points, fit_capsule
+from capmap.dualarm.geometry.primitives import Capsule, box_points, cylinder_points, fit_capsule
 from capmap.errors import CapmapError
 
 __all__ = ["CapsuleGroup", "Covered", "DualArmDescription", "DualArm", "LinkCapsule", "build_dual_arm", "close_fingers",

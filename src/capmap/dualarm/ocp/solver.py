@@ -7,7 +7,7 @@ the violation (largest equality residual; largest shortfall of an inequality) ->
 lambda_eq + mu c, lambda_in <- max(0, lambda_in - mu g) -> mu <- 10 mu when the violation has not
 dropped ``decrease`` times. Collision pairs are filtered per node by their distance on the warm
 start; after each outer iteration the candidate pairs not yet in a node's set are re-checked on the
-solution and any within ``filter_m`` joins it (a :class:`capmap.dualarm.proximity.PairFilter`: a
+solution and any within ``filter_m`` joins it (a :class:`capmap.dualarm.geometry.proximity.PairFilter`: a
 group of pairs whose last bound, less how far the node has moved since, clears ``filter_m`` is not
 looked at).
 """
@@ -22,14 +22,14 @@ import mim_solvers  # after crocoddyl: it needs crocoddyl's libraries loaded
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.assembly import Assembly
-from capmap.dualarm.chain import pack
-from capmap.dualarm.collision import Pairs
-from capmap.dualarm.fddp import ALPHAS, C_VALUES, EQ_AT, G_VALUES, IN_AT, LAM_EQ, LAM_IN, evaluate_nodes, fddp, pack_nodes
-from capmap.dualarm.nodes import CompiledNodeModel
-from capmap.dualarm.ocp import Context, NodeModel
-from capmap.dualarm.proximity import PairFilter
-from capmap.dualarm.settings import ALSettings, Weights
+from capmap.dualarm.geometry.chain import pack
+from capmap.dualarm.geometry.collision import Pairs
+from capmap.dualarm.geometry.proximity import PairFilter
+from capmap.dualarm.ocp.assembly import Assembly
+from capmap.dualarm.ocp.compiled_nodes import CompiledNodeModel
+from capmap.dualarm.ocp.crocoddyl_nodes import Context, NodeModel
+from capmap.dualarm.ocp.fddp import ALPHAS, C_VALUES, EQ_AT, G_VALUES, IN_AT, LAM_EQ, LAM_IN, evaluate_nodes, fddp, pack_nodes
+from capmap.dualarm.ocp.settings import ALSettings, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
            "all_distances", "context", "node_model", "inner_stop"]
@@ -125,12 +125,12 @@ def all_distances(asm: Assembly, qs: np.ndarray, pairs: Pairs) -> np.ndarray:
 
 def node_pairs(asm: Assembly, qs: np.ndarray, filter_m: float) -> np.ndarray:
     """(K, P) bool: per node, which candidate pairs are within filter_m (safety distance) on the path qs (K, nq),
-    on Pinocchio's placements (the compiled filter: :class:`capmap.dualarm.proximity.PairFilter`)."""
+    on Pinocchio's placements (the compiled filter: :class:`capmap.dualarm.geometry.proximity.PairFilter`)."""
     return all_distances(asm, qs, asm.pairs) < filter_m
 
 
 class _ReferenceFilter:
-    """:class:`capmap.dualarm.proximity.PairFilter`'s interface on Pinocchio's placements (every candidate pair
+    """:class:`capmap.dualarm.geometry.proximity.PairFilter`'s interface on Pinocchio's placements (every candidate pair
     at every call)."""
 
     def __init__(self, asm: Assembly, K: int, cutoff: float):

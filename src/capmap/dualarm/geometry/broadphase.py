@@ -14,7 +14,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from capmap.dualarm.distance import _pointtri_uv, segpoint
+from capmap.dualarm.geometry.distance import _pointtri_uv, segpoint
 
 __all__ = ["MIN_GROUP", "static_balls", "pair_groups", "group_bound"]
 

@@ -11,13 +11,13 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from capmap.dualarm.assembly import Assembly, clearance_at, warm_start
-from capmap.dualarm.evaluate import active_pairs, fine_grid, node_errors, safety
-from capmap.dualarm.robot import DualArm
-from capmap.dualarm.scene import Scene
-from capmap.dualarm.settings import ALSettings, Weights
-from capmap.dualarm.solver import initial_guess, solve
-from capmap.dualarm.torques import HeldPart, held_torques
+from capmap.dualarm.ocp.assembly import Assembly, clearance_at, warm_start
+from capmap.dualarm.ocp.evaluate import active_pairs, fine_grid, node_errors, safety
+from capmap.dualarm.ocp.settings import ALSettings, Weights
+from capmap.dualarm.ocp.solver import initial_guess, solve
+from capmap.dualarm.ocp.torques import HeldPart, held_torques
+from capmap.dualarm.scene.robot import DualArm
+from capmap.dualarm.scene.solids import Scene
 from capmap.errors import CapmapError
 
 __all__ = ["ACTIVE_WITHIN_M", "AssemblyMotion", "key_poses", "plan_assembly", "motion_tables", "motion_quantities",
@@ -64,7 +64,7 @@ class AssemblyMotion:
 def plan_assembly(asm: Assembly, robot: DualArm, weights: Weights, solver: ALSettings, fine_factor: int,
                   progress: Callable[[str], None] = lambda _: None, compiled: bool = True,
                   warm: np.ndarray | None = None) -> AssemblyMotion:
-    """Key poses, warm start (``warm`` (N + 1, nq) rad: :func:`capmap.dualarm.assembly.warm_start`'s, when
+    """Key poses, warm start (``warm`` (N + 1, nq) rad: :func:`capmap.dualarm.ocp.assembly.warm_start`'s, when
     already computed), solve within the joint limits, evaluation on the nodes and on a grid ``fine_factor``
     times finer; ``compiled=False``: Pinocchio's node models (the reference)."""
     t0 = time.perf_counter()
@@ -133,7 +133,7 @@ def motion_quantities(asm: Assembly, robot: DualArm, m: AssemblyMotion, weights:
 
 def torque_table(asm: Assembly, robot: DualArm, scene: Scene, m: AssemblyMotion) -> tuple[pd.DataFrame, list]:
     """Joint torques by inverse dynamics with the panel held by both grippers (its mass and inertia from
-    the scene; :func:`capmap.dualarm.torques.held_torques`) at every node (the last at rest): one row per
+    the scene; :func:`capmap.dualarm.ocp.torques.held_torques`) at every node (the last at rest): one row per
     node with ``tau_<joint>_nm`` (least-norm internal force), ``tau_best_<joint>_nm`` (the internal force
     that minimises the peak |torque| / effort limit) and the panel's required force ``panel_force_n``;
     and the summary's rows."""

@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.cloud import Envelope
-from capmap.dualarm.collision import CollisionModel, Pairs, Primitives
-from capmap.dualarm.robot import DualArm
-from capmap.dualarm.scene import Scene
-from capmap.dualarm.task import AssemblyTask
+from capmap.dualarm.geometry.collision import CollisionModel, Pairs, Primitives
+from capmap.dualarm.ocp.task import AssemblyTask
+from capmap.dualarm.scene.cloud import Envelope
+from capmap.dualarm.scene.robot import DualArm
+from capmap.dualarm.scene.solids import Scene
 
 __all__ = ["Assembly", "assemble", "candidate_pairs", "reference_path", "arm_ik", "warm_start", "clearance_at"]
 

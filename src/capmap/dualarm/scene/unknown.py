@@ -23,7 +23,7 @@ import numba
 import numpy as np
 from scipy.ndimage import binary_dilation
 
-from capmap.dualarm.cloud import Envelope
+from capmap.dualarm.scene.cloud import Envelope
 
 __all__ = ["UnknownSettings", "Grid", "UnknownSpace", "carve", "merge_boxes", "box_rectangles", "unknown_space",
            "near_boxes", "with_boxes"]
@@ -221,7 +221,7 @@ def _near_boxes(boxes, points, radii, within):
 
 
 def with_boxes(env: Envelope, labels: tuple[np.ndarray, np.ndarray], boxes: np.ndarray, voxel: float):
-    """The envelope (:class:`capmap.dualarm.cloud.Envelope`) and its labels with boxes (B, 2, 3) m of
+    """The envelope (:class:`capmap.dualarm.scene.cloud.Envelope`) and its labels with boxes (B, 2, 3) m of
     ``voxel`` m voxels added as swept rectangles (:func:`box_rectangles`), labelled
     'unknown [x0 x1, y0 y1, z0 z1]'."""
     tri, r, owner = box_rectangles(boxes, voxel)

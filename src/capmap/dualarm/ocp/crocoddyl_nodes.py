@@ -25,9 +25,9 @@ import crocoddyl
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.collision import CollisionModel, Pairs
-from capmap.dualarm.settings import Weights
-from capmap.dualarm.task import AssemblyTask, node_constraints
+from capmap.dualarm.geometry.collision import CollisionModel, Pairs
+from capmap.dualarm.ocp.settings import Weights
+from capmap.dualarm.ocp.task import AssemblyTask, node_constraints
 
 __all__ = ["Context", "NodeModel", "NodeData", "equality_size"]
 

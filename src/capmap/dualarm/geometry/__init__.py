@@ -1,0 +1,3 @@
+"""Primitives and their distances (see :mod:`capmap.dualarm`)."""
+
+__all__ = []

@@ -1,0 +1,3 @@
+"""The optimal-control problem of the assembly and its solver (see :mod:`capmap.dualarm`)."""
+
+__all__ = []
