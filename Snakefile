@@ -41,8 +41,11 @@ CAPACITY_MAP = [
     out("voxels/voxels.parquet"),
     out("summary/capacity_summary.csv"),
     out("summary/capacity_3d.html"),
-    *expand(out("verify/payload_{payload}kg/{name}.png"), payload=PAYLOADS,
-            name=["workspace", "torques", "base_force", "base_moment"]),
+    *expand(
+        out("verify/payload_{payload}kg/{name}.png"),
+        payload=PAYLOADS,
+        name=["workspace", "torques", "base_force", "base_moment"],
+    ),
     out("verify/summary.csv"),
     *expand(out("tasks/{task}/{name}.png"), task=TASKS, name=["workspace", "torques", "base_force", "base_moment"]),
 ]
@@ -55,16 +58,73 @@ rule capacity_map:
 
 
 rule all:
+    default_target: True
     input:
         CAPACITY_MAP,
         expand(out("follow/{case}/{name}.png"), case=FOLLOW_CASES, name=["progress", "torques", "torque_split"]),
         [out("follow/summary.csv")] if FOLLOW_CASES else [],
-        [out(f"reconfig/{name}") for name in ("summary.csv", "manipulability.png", "joint_rates.png",
-                                                 "passive_joint.png", "animation.html")] if RECONFIG_METHODS else [],
-        [out(f"dualarm/{name}") for name in ("summary.csv", "csqp_check.csv", "constraint_errors.png", "distances.png",
-                                                "joints.png", "velocities.png", "torques.png", "convergence.png",
-                                                "animation.html")]
-        if DUALARM else [],
+        [
+            out(f"reconfig/{name}")
+            for name in ("summary.csv", "manipulability.png", "joint_rates.png", "passive_joint.png", "animation.html")
+        ]
+        if RECONFIG_METHODS
+        else [],
+        [
+            out(f"dualarm/{name}")
+            for name in (
+                "summary.csv",
+                "csqp_check.csv",
+                "constraint_errors.png",
+                "distances.png",
+                "joints.png",
+                "velocities.png",
+                "torques.png",
+                "convergence.png",
+                "animation.html",
+            )
+        ]
+        if DUALARM
+        else [],
         out("catalogue.parquet"),
         list(TABLE_PAGES.values()),
-    default_target: True
+
+
+onstart:
+    # compile the numba kernels once, before the first job, so that parallel jobs load them instead of each
+    # compiling them (capmap.kernels); the marker says in milliseconds when this code's are compiled already
+    import subprocess
+    import numpy as np
+    from capmap.io.kernel_marker import is_warm, run_key
+
+    if not is_warm(
+        run_key(
+            str(Path(RUN.robot).resolve()),
+            RUN.failure.joint,
+            np.deg2rad(RUN.failure.angle_deg),
+            RUN.dualarm is not None,
+        )
+    ):
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "capmap.kernels",
+                "--robot",
+                str(Path(RUN.robot).resolve()),
+                "--joint",
+                str(RUN.failure.joint),
+                "--angle-deg",
+                repr(RUN.failure.angle_deg),
+            ]
+            + (["--dualarm"] if RUN.dualarm else []),
+            check=False,
+        )
+
+
+onsuccess:
+    # the run's headline: per family the answer in a line or two, from the summary tables (capmap.stages.headline)
+    from capmap.stages.headline import headline
+
+    _lines = headline(OUT)
+    if _lines:
+        print("capmap: what this run found:\n" + "\n".join(f"  {line}" for line in _lines), file=sys.stderr)

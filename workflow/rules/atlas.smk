@@ -11,8 +11,6 @@ rule atlas_map:
     output:
         voxels=out("atlas/joint{joint}_angle{angle}/voxels.parquet"),
         summary=out("atlas/joint{joint}_angle{angle}/summary.parquet"),
-    params:
-        slice=params("atlas_map", "atlas_map") if RUN.atlas else code_params("atlas_map"),
     log:
         out("logs/atlas/joint{joint}_angle{angle}.log"),
     wildcard_constraints:
@@ -20,6 +18,8 @@ rule atlas_map:
         angle=r"-?\d+(\.\d+)?",
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("atlas_map", "atlas_map") if RUN.atlas else code_params("atlas_map"),
     script:
         "../scripts/atlas_map.py"
 
@@ -34,12 +34,12 @@ rule atlas_tables:
         curves=out("atlas/curves.parquet"),
         heatmap=report(out("atlas/heatmap.png"), category="Fault atlas", caption="../report/atlas_heatmap.rst"),
         curves_png=report(out("atlas/curves.png"), category="Fault atlas", caption="../report/atlas_curves.rst"),
-    params:
-        slice=params("atlas", "atlas") if RUN.atlas else code_params("atlas"),
     log:
         out("logs/atlas/atlas.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("atlas", "atlas") if RUN.atlas else code_params("atlas"),
     script:
         "../scripts/atlas.py"
 
@@ -52,12 +52,12 @@ rule atlas_catalogue:
         out("atlas/curves.parquet"),
     output:
         out("atlas/catalogue.parquet"),
-    params:
-        code=code_params("catalogue"),
     log:
         out("logs/atlas/catalogue.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        code=code_params("catalogue"),
     script:
         "../scripts/catalogue.py"
 

@@ -8,8 +8,6 @@ rule baseline_shard:
         voxels=out("voxels/voxels.parquet"),
     output:
         out("baseline/healthy_{k}_of_{n}.parquet"),
-    params:
-        slice=params("baseline_shard", "baseline_shard"),
     log:
         out("logs/baseline/shard_{k}_of_{n}.log"),
     wildcard_constraints:
@@ -17,6 +15,8 @@ rule baseline_shard:
         n=r"\d+",
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("baseline_shard", "baseline_shard"),
     script:
         "../scripts/baseline_shard.py"
 
@@ -32,12 +32,12 @@ rule baseline_map:
         convergence=out("baseline/convergence.parquet"),
         csv=out("baseline/summary.csv"),
         md=out("baseline/summary.md"),
-    params:
-        slice=params("baseline", "baseline_map"),
     log:
         out("logs/baseline/map.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("baseline", "baseline_map"),
     script:
         "../scripts/baseline_map.py"
 
@@ -49,12 +49,12 @@ rule baseline_figure:
         convergence=out("baseline/convergence.parquet"),
     output:
         report(out("baseline/loss.png"), category="Healthy-arm baseline", caption="../report/baseline.rst"),
-    params:
-        slice=params("view", "baseline_figure"),
     log:
         out("logs/baseline/figure.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("view", "baseline_figure"),
     script:
         "../scripts/baseline_figure.py"
 
@@ -67,12 +67,12 @@ rule baseline_catalogue:
         out("baseline/convergence.parquet"),
     output:
         out("baseline/catalogue.parquet"),
-    params:
-        code=code_params("catalogue"),
     log:
         out("logs/baseline/catalogue.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        code=code_params("catalogue"),
     script:
         "../scripts/catalogue.py"
 

@@ -9,13 +9,13 @@ rule model:
         robot=RUN.robot,
     output:
         out("model/joints.parquet"),
-    params:
-        slice=params("model", "model"),
     log:
         out("logs/model.log"),
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("model", "model"),
     script:
         "../scripts/model.py"
 
@@ -26,13 +26,13 @@ rule sample:
         model=out("model/joints.parquet"),
     output:
         out("sample/points.parquet"),
-    params:
-        slice=params("sample", "sample"),
     log:
         out("logs/sample.log"),
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("sample", "sample"),
     script:
         "../scripts/sample.py"
 
@@ -43,8 +43,6 @@ rule capacity:
         points=out("sample/points.parquet"),
     output:
         out("capacity/shard_{k}_of_{n}.parquet"),
-    params:
-        slice=params("capacity", "capacity"),
     log:
         out("logs/capacity/shard_{k}_of_{n}.log"),
     wildcard_constraints:
@@ -53,6 +51,8 @@ rule capacity:
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("capacity", "capacity"),
     script:
         "../scripts/capacity.py"
 
@@ -64,13 +64,13 @@ rule voxels:
     output:
         voxels=out("voxels/sampled.parquet"),
         points=out("voxels/points.parquet"),
-    params:
-        slice=params("voxels", "voxels"),
     log:
         out("logs/voxels.log"),
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("voxels", "voxels"),
     script:
         "../scripts/voxels.py"
 
@@ -83,8 +83,6 @@ rule refine:
     output:
         voxels=out("voxels/refined_{k}_of_{n}.parquet"),
         configurations=out("voxels/configurations_{k}_of_{n}.parquet"),
-    params:
-        slice=params("refine", "refine"),
     log:
         out("logs/refine/shard_{k}_of_{n}.log"),
     wildcard_constraints:
@@ -93,6 +91,8 @@ rule refine:
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("refine", "refine"),
     script:
         "../scripts/refine.py"
 
@@ -103,19 +103,19 @@ rule voxel_map:
     input:
         sampled=out("voxels/sampled.parquet"),
         refined=expand(out("voxels/refined_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS) if REFINE else [],
-        configurations=expand(out("voxels/configurations_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS)
-        if REFINE
-        else [],
+        configurations=(
+            expand(out("voxels/configurations_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS) if REFINE else []
+        ),
     output:
         voxels=out("voxels/voxels.parquet"),
         configurations=out("voxels/configurations.parquet"),
-    params:
-        slice=params("refine", "voxel_map"),
     log:
         out("logs/voxel_map.log"),
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("refine", "voxel_map"),
     script:
         "../scripts/voxel_map.py"
 
@@ -131,12 +131,12 @@ rule summary:
         csv=out("summary/capacity_summary.csv"),
         md=out("summary/capacity_summary.md"),
         png=report(out("summary/capacity_map.png"), category="Capacity map", caption="../report/capacity_map.rst"),
-    params:
-        slice=params("view", "summary"),
     log:
         out("logs/summary.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("view", "summary"),
     script:
         "../scripts/summary.py"
 
@@ -151,52 +151,54 @@ rule capacity_3d:
         tasks=expand(out("tasks/{task}/waypoints.parquet"), task=TASKS),
     output:
         report(out("summary/capacity_3d.html"), category="Capacity map", caption="../report/capacity_3d.rst"),
-    params:
-        slice=params("view", "capacity_3d"),
-        tasks=TASKS,  # the further tasks' names, in the order of input.tasks (the paths' labels)
     log:
         out("logs/capacity_3d.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("view", "capacity_3d"),
+        tasks=TASKS,  # the further tasks' names, in the order of input.tasks (the paths' labels)
     script:
         "../scripts/capacity_3d.py"
 
 
 rule plan:
-    """Improved A* through the voxels that carry the task payload (one job per payload)."""
+    """Improved A* through the voxels that carry the payload: one job per task payload (plan/payload_<m>kg)
+    and per further task (tasks/<name>)."""
     input:
         voxels=out("voxels/voxels.parquet"),
     output:
-        out("plan/payload_{payload}kg/waypoints.parquet"),
-    params:
-        slice=lambda w: params("plan", "plan", job_of(w)),
+        out("{plan_dir}/waypoints.parquet"),
     log:
-        out("logs/plan/payload_{payload}kg.log"),
+        out("logs/{plan_dir}/plan.log"),
     wildcard_constraints:
-        payload=PAYLOAD_RE,
+        plan_dir=PLAN_DIR_RE,
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("plan", "plan", job_of(w.plan_dir)),
     script:
         "../scripts/plan.py"
 
 
 rule verify:
-    """Direct line and planned path: trapezoidal timing, continuous-branch IK, loads carrying the payload."""
+    """Direct line and planned path: trapezoidal timing, continuous-branch IK, loads carrying the payload
+    (verify/payload_<m>kg, tasks/<name>)."""
     input:
-        waypoints=out("plan/payload_{payload}kg/waypoints.parquet"),
+        waypoints=lambda w: out(f"{plan_dir_of(w.verify_dir)}/waypoints.parquet"),
     output:
-        timeseries=out("verify/payload_{payload}kg/timeseries.parquet"),
-        segments=out("verify/payload_{payload}kg/segments.parquet"),
-        csv=out("verify/payload_{payload}kg/summary.csv"),
-        md=out("verify/payload_{payload}kg/summary.md"),
-    params:
-        slice=lambda w: params("verify", "verify", job_of(w)),
+        timeseries=out("{verify_dir}/timeseries.parquet"),
+        segments=out("{verify_dir}/segments.parquet"),
+        csv=out("{verify_dir}/summary.csv"),
+        md=out("{verify_dir}/summary.md"),
     log:
-        out("logs/verify/payload_{payload}kg.log"),
+        out("logs/{verify_dir}/verify.log"),
     wildcard_constraints:
-        payload=PAYLOAD_RE,
+        verify_dir=VERIFY_DIR_RE,
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("verify", "verify", job_of(w.verify_dir)),
     script:
         "../scripts/verify.py"
 
@@ -206,24 +208,40 @@ rule verify_plots:
     input:
         voxels=out("voxels/voxels.parquet"),
         configurations=out("voxels/configurations.parquet"),
-        timeseries=out("verify/payload_{payload}kg/timeseries.parquet"),
+        timeseries=out("{verify_dir}/timeseries.parquet"),
     output:
-        workspace=report(out("verify/payload_{payload}kg/workspace.png"), category="Verification",
-                         subcategory="{payload} kg", caption="../report/workspace.rst"),
-        torques=report(out("verify/payload_{payload}kg/torques.png"), category="Verification",
-                       subcategory="{payload} kg", caption="../report/loads.rst"),
-        force=report(out("verify/payload_{payload}kg/base_force.png"), category="Verification",
-                     subcategory="{payload} kg", caption="../report/loads.rst"),
-        moment=report(out("verify/payload_{payload}kg/base_moment.png"), category="Verification",
-                      subcategory="{payload} kg", caption="../report/loads.rst"),
-    params:
-        slice=lambda w: params("verify", "verify_plots", job_of(w)),
+        workspace=report(
+            out("{verify_dir}/workspace.png"),
+            category="Verification",
+            subcategory="{verify_dir}",
+            caption="../report/workspace.rst",
+        ),
+        torques=report(
+            out("{verify_dir}/torques.png"),
+            category="Verification",
+            subcategory="{verify_dir}",
+            caption="../report/loads.rst",
+        ),
+        force=report(
+            out("{verify_dir}/base_force.png"),
+            category="Verification",
+            subcategory="{verify_dir}",
+            caption="../report/loads.rst",
+        ),
+        moment=report(
+            out("{verify_dir}/base_moment.png"),
+            category="Verification",
+            subcategory="{verify_dir}",
+            caption="../report/loads.rst",
+        ),
     log:
-        out("logs/verify/plots_payload_{payload}kg.log"),
+        out("logs/{verify_dir}/plots.log"),
     wildcard_constraints:
-        payload=PAYLOAD_RE,
+        verify_dir=VERIFY_DIR_RE,
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("verify", "verify_plots", job_of(w.verify_dir)),
     script:
         "../scripts/verify_plots.py"
 
@@ -236,12 +254,12 @@ rule verify_summary:
     output:
         csv=out("verify/summary.csv"),
         md=out("verify/summary.md"),
-    params:
-        code=code_params("verify_summary"),
     log:
         out("logs/verify/summary.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        code=code_params("verify_summary"),
     script:
         "../scripts/verify_summary.py"
 
@@ -254,12 +272,12 @@ rule plan_gain:
         tasks=out("plan/gain_tasks.parquet"),
         csv=out("plan/gain.csv"),
         md=out("plan/gain.md"),
-    params:
-        slice=params("gain", "plan_gain"),
     log:
         out("logs/plan/gain.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=params("gain", "plan_gain"),
     script:
         "../scripts/plan_gain.py"
 
@@ -270,12 +288,12 @@ rule gain_catalogue:
         out("plan/gain_tasks.parquet"),
     output:
         out("plan/gain_catalogue.parquet"),
-    params:
-        code=code_params("catalogue"),
     log:
         out("logs/plan/gain_catalogue.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        code=code_params("catalogue"),
     script:
         "../scripts/catalogue.py"
 
@@ -286,73 +304,3 @@ rule experiments:
         out("plan/gain.csv"),
         out("plan/gain.md"),
         out("plan/gain_catalogue.parquet"),
-
-
-# Further tasks (config `tasks`): the same plan, verify and plot stages on their own start, goal,
-# payload and start configuration, one job each, under results/<run>/tasks/<name>/.
-
-
-rule plan_task:
-    """A* for one further task."""
-    input:
-        voxels=out("voxels/voxels.parquet"),
-    output:
-        out("tasks/{task}/waypoints.parquet"),
-    params:
-        slice=lambda w: params("plan", "plan", job_of(w)),
-    log:
-        out("logs/tasks/{task}_plan.log"),
-    wildcard_constraints:
-        task=TASK_RE,
-    conda:
-        "../envs/capmap.yaml"
-    script:
-        "../scripts/plan.py"
-
-
-rule verify_task:
-    """Direct line and planned path of one further task, carrying its payload."""
-    input:
-        waypoints=out("tasks/{task}/waypoints.parquet"),
-    output:
-        timeseries=out("tasks/{task}/timeseries.parquet"),
-        segments=out("tasks/{task}/segments.parquet"),
-        csv=out("tasks/{task}/summary.csv"),
-        md=out("tasks/{task}/summary.md"),
-    params:
-        slice=lambda w: params("verify", "verify", job_of(w)),
-    log:
-        out("logs/tasks/{task}_verify.log"),
-    wildcard_constraints:
-        task=TASK_RE,
-    conda:
-        "../envs/capmap.yaml"
-    script:
-        "../scripts/verify.py"
-
-
-rule verify_task_plots:
-    """Workspace with both paths; loads against their limits (one further task)."""
-    input:
-        voxels=out("voxels/voxels.parquet"),
-        configurations=out("voxels/configurations.parquet"),
-        timeseries=out("tasks/{task}/timeseries.parquet"),
-    output:
-        workspace=report(out("tasks/{task}/workspace.png"), category="Verification", subcategory="task {task}",
-                         caption="../report/workspace.rst"),
-        torques=report(out("tasks/{task}/torques.png"), category="Verification", subcategory="task {task}",
-                       caption="../report/loads.rst"),
-        force=report(out("tasks/{task}/base_force.png"), category="Verification", subcategory="task {task}",
-                     caption="../report/loads.rst"),
-        moment=report(out("tasks/{task}/base_moment.png"), category="Verification", subcategory="task {task}",
-                      caption="../report/loads.rst"),
-    params:
-        slice=lambda w: params("verify", "verify_plots", job_of(w)),
-    log:
-        out("logs/tasks/{task}_plots.log"),
-    wildcard_constraints:
-        task=TASK_RE,
-    conda:
-        "../envs/capmap.yaml"
-    script:
-        "../scripts/verify_plots.py"

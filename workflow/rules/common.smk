@@ -15,7 +15,9 @@ from capmap.io.runs import stale_outputs
 
 CONFIG_ARGS = "".join(f" --configfile {shlex.quote(str(f))}" for f in workflow.overwrite_configfiles) + (
     " --config " + " ".join(shlex.quote(a) for a in workflow.config_settings.config_args)
-    if workflow.config_settings.config_args else "")  # the run's config, repeated in printed commands
+    if workflow.config_settings.config_args
+    else ""
+)  # the run's config, repeated in printed commands
 rebuild_hint_config(CONFIG_ARGS)  # the jobs' rebuild hints (capmap.io.datasets.read) name the config too
 
 # validate once, before any job: schema, robot file, locked joint, limits, task poses, follow cases
@@ -34,17 +36,35 @@ def out(path):
 print(f"capmap: run {RUN.name!r}: outputs under {OUT}/", file=sys.stderr)
 print(f"capmap: {RUN.failure.describe()}", file=sys.stderr)
 print(f"capmap: {RUN.limits.describe()}", file=sys.stderr)
-for _t in RUN.tasks:  # a further task starts at the IK solution nearest its q_start_deg (the locked joint's value not used)
-    print(f"capmap: task {_t.name}: start configuration [{', '.join(f'{v:.2f}' for v in _t.q_start_deg)}] deg", file=sys.stderr)
+for (
+    _t
+) in RUN.tasks:  # a further task starts at the IK solution nearest its q_start_deg (the locked joint's value not used)
+    print(
+        f"capmap: task {_t.name}: start configuration [{', '.join(f'{v:.2f}' for v in _t.q_start_deg)}] deg",
+        file=sys.stderr,
+    )
 # the report's scenario text (workflow/report/workflow.rst sees only the config): what the checks resolved
-config["resolved"] = {"joint_torque_nm": RUN.limits.torque_text(), "torque_limit_source": RUN.limits.torque_limit_source}
+config["resolved"] = {
+    "joint_torque_nm": RUN.limits.torque_text(),
+    "torque_limit_source": RUN.limits.torque_limit_source,
+}
 print(f"capmap: estimate: {RUN.estimate.describe(RUN.voxel_edge_m)}", file=sys.stderr)
-for _path in [p for c in ("catalogue.parquet", "atlas/catalogue.parquet", "baseline/catalogue.parquet",
-                                                "plan/gain_catalogue.parquet")
-              for p in missing_catalogued(out(c))]:
+for _path in [
+    p
+    for c in (
+        "catalogue.parquet",
+        "atlas/catalogue.parquet",
+        "baseline/catalogue.parquet",
+        "plan/gain_catalogue.parquet",
+    )
+    for p in missing_catalogued(out(c))
+]:
     # Snakemake would not rebuild it by itself (its consumers are up to date): say so, with the command
-    print(f"capmap: warning: {_path} is in the catalogue but missing; rebuild it and what depends on it with: "
-          f"snakemake --cores 2 all{CONFIG_ARGS} --forcerun {_path}", file=sys.stderr)
+    print(
+        f"capmap: warning: {_path} is in the catalogue but missing; rebuild it and what depends on it with: "
+        f"snakemake --cores 2 all{CONFIG_ARGS} --forcerun {_path}",
+        file=sys.stderr,
+    )
 SHARDS = RUN.shards
 REFINE = RUN.refine is not None  # voxels.refine: false keeps the sampled minima
 PLAN_JOBS = {payload_label(m): main_task(RUN.task, RUN.failure, m) for m in RUN.task.payload_kg}  # by payload label
@@ -53,6 +73,17 @@ PAYLOAD_RE = "|".join(p.replace(".", r"\.") for p in PAYLOADS)
 TASK_JOBS = {t.name: t for t in RUN.tasks}  # the further tasks of `tasks`, by name
 TASKS = list(TASK_JOBS)
 TASK_RE = "|".join(TASKS) or "(?!)"
+# one plan / verify job per payload of the task and per further task; its folders (the rules' wildcards)
+PLAN_DIRS = {
+    **{f"plan/payload_{p}kg": j for p, j in PLAN_JOBS.items()},
+    **{f"tasks/{t}": j for t, j in TASK_JOBS.items()},
+}
+VERIFY_DIRS = {
+    **{f"verify/payload_{p}kg": f"plan/payload_{p}kg" for p in PAYLOADS},
+    **{f"tasks/{t}": f"tasks/{t}" for t in TASKS},
+}
+PLAN_DIR_RE = "|".join(d.replace(".", r"\.") for d in PLAN_DIRS)
+VERIFY_DIR_RE = "|".join(d.replace(".", r"\.") for d in VERIFY_DIRS)
 FOLLOW_CASES = list(RUN.follow.cases) if RUN.follow else []  # "space", "ground": those configured under follow
 
 
@@ -74,9 +105,14 @@ def _script(name):
     return Path(workflow.basedir) / "workflow" / "scripts" / f"{name}.py"
 
 
-def job_of(w):
-    """The plan/verify job of a rule's wildcards: a payload of the main task, or a further task."""
-    return PLAN_JOBS[w.payload] if "payload" in w.keys() else TASK_JOBS[w.task]
+def plan_dir_of(verify_dir):
+    """The plan folder of a verify folder (verify/payload_<m>kg -> plan/payload_<m>kg; tasks/<name> itself)."""
+    return VERIFY_DIRS[verify_dir]
+
+
+def job_of(job_dir):
+    """The plan/verify job of its plan or verify folder: a payload of the main task, or a further task."""
+    return PLAN_DIRS[VERIFY_DIRS.get(job_dir, job_dir)]
 
 
 def follow_job():
@@ -97,28 +133,3 @@ def dualarm_files(*keys):
     if da is None:
         return []
     return [getattr(da, k) for k in keys] + ([da.cloud_file] if "scene" in keys and da.cloud_file else [])
-
-
-onstart:
-    # compile the numba kernels once, before the first job, so that parallel jobs load them instead of each
-    # compiling them (capmap.kernels); the marker says in milliseconds when this code's are compiled already
-    import subprocess
-
-    import numpy as np
-
-    from capmap.io.kernel_marker import is_warm, run_key
-
-    if not is_warm(run_key(str(Path(RUN.robot).resolve()), RUN.failure.joint, np.deg2rad(RUN.failure.angle_deg),
-                           RUN.dualarm is not None)):
-        subprocess.run([sys.executable, "-m", "capmap.kernels", "--robot", str(Path(RUN.robot).resolve()), "--joint",
-                        str(RUN.failure.joint), "--angle-deg", repr(RUN.failure.angle_deg)]
-                       + (["--dualarm"] if RUN.dualarm else []), check=False)
-
-
-onsuccess:
-    # the run's headline: per family the answer in a line or two, from the summary tables (capmap.stages.headline)
-    from capmap.stages.headline import headline
-
-    _lines = headline(OUT)
-    if _lines:
-        print("capmap: what this run found:\n" + "\n".join(f"  {line}" for line in _lines), file=sys.stderr)

@@ -8,13 +8,13 @@ rule dualarm_scan:
         dualarm_files("scene"),
     output:
         out("dualarm/cloud.parquet"),
-    params:
-        slice=lambda w: params("dualarm_scan", "dualarm_scan"),
     log:
         out("logs/dualarm/scan.log"),
     priority: 10
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("dualarm_scan", "dualarm_scan"),
     script:
         "../scripts/dualarm_scan.py"
 
@@ -26,13 +26,13 @@ rule dualarm_envelope:
         files=dualarm_files("scene"),
     output:
         out("dualarm/environment.parquet"),
-    params:
-        slice=lambda w: params("dualarm_envelope", "dualarm_envelope"),
     log:
         out("logs/dualarm/envelope.log"),
     priority: 10
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("dualarm_envelope", "dualarm_envelope"),
     script:
         "../scripts/dualarm_envelope.py"
 
@@ -44,13 +44,13 @@ rule dualarm_unknown:
         environment=out("dualarm/environment.parquet"),
     output:
         out("dualarm/unknown.parquet"),
-    params:
-        slice=lambda w: params("dualarm_unknown", "dualarm_unknown"),
     log:
         out("logs/dualarm/unknown.log"),
     priority: 10
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("dualarm_unknown", "dualarm_unknown"),
     script:
         "../scripts/dualarm_unknown.py"
 
@@ -62,13 +62,13 @@ rule dualarm_capsules:
         dualarm_files("robot") + ([RUN.dualarm.scene] if DUALARM else []),  # the scene's panel: the fingers close on it
     output:
         out("dualarm/robot_capsules.parquet"),
-    params:
-        slice=lambda w: params("dualarm_capsules", "dualarm_capsules"),
     log:
         out("logs/dualarm/capsules.log"),
     priority: 10
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("dualarm_capsules", "dualarm_capsules"),
     script:
         "../scripts/dualarm_capsules.py"
 
@@ -88,13 +88,13 @@ rule dualarm_optimise:
         torques=out("dualarm/torques.parquet"),
         csv=out("dualarm/summary.csv"),
         md=out("dualarm/summary.md"),
-    params:
-        slice=lambda w: params("dualarm_optimise", "dualarm_optimise"),
     log:
         out("logs/dualarm/optimise.log"),
     priority: 10
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("dualarm_optimise", "dualarm_optimise"),
     script:
         "../scripts/dualarm_optimise.py"
 
@@ -108,12 +108,12 @@ rule dualarm_check:
     output:
         csv=out("dualarm/csqp_check.csv"),
         md=out("dualarm/csqp_check.md"),
-    params:
-        slice=lambda w: params("dualarm_check", "dualarm_check"),
     log:
         out("logs/dualarm/check.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("dualarm_check", "dualarm_check"),
     script:
         "../scripts/dualarm_check.py"
 
@@ -127,22 +127,28 @@ rule dualarm_plots:
         outer=out("dualarm/outer.parquet"),
         torques=out("dualarm/torques.parquet"),
     output:
-        errors=report(out("dualarm/constraint_errors.png"), category="Dual-arm assembly",
-                      caption="../report/dualarm_errors.rst"),
-        distances=report(out("dualarm/distances.png"), category="Dual-arm assembly",
-                         caption="../report/dualarm_distances.rst"),
+        errors=report(
+            out("dualarm/constraint_errors.png"), category="Dual-arm assembly", caption="../report/dualarm_errors.rst"
+        ),
+        distances=report(
+            out("dualarm/distances.png"), category="Dual-arm assembly", caption="../report/dualarm_distances.rst"
+        ),
         joints=report(out("dualarm/joints.png"), category="Dual-arm assembly", caption="../report/dualarm_joints.rst"),
-        velocities=report(out("dualarm/velocities.png"), category="Dual-arm assembly",
-                          caption="../report/dualarm_joints.rst"),
-        torques=report(out("dualarm/torques.png"), category="Dual-arm assembly", caption="../report/dualarm_torques.rst"),
-        convergence=report(out("dualarm/convergence.png"), category="Dual-arm assembly",
-                           caption="../report/dualarm_convergence.rst"),
-    params:
-        code=code_params("dualarm_plots"),
+        velocities=report(
+            out("dualarm/velocities.png"), category="Dual-arm assembly", caption="../report/dualarm_joints.rst"
+        ),
+        torques=report(
+            out("dualarm/torques.png"), category="Dual-arm assembly", caption="../report/dualarm_torques.rst"
+        ),
+        convergence=report(
+            out("dualarm/convergence.png"), category="Dual-arm assembly", caption="../report/dualarm_convergence.rst"
+        ),
     log:
         out("logs/dualarm/plots.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        code=code_params("dualarm_plots"),
     script:
         "../scripts/dualarm_plots.py"
 
@@ -155,11 +161,11 @@ rule dualarm_animation:
         capsules=out("dualarm/robot_capsules.parquet"),
     output:
         report(out("dualarm/animation.html"), category="Dual-arm assembly", caption="../report/dualarm_animation.rst"),
-    params:
-        slice=lambda w: params("dualarm_animation", "dualarm_animation"),
     log:
         out("logs/dualarm/animation.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("dualarm_animation", "dualarm_animation"),
     script:
         "../scripts/dualarm_animation.py"

@@ -10,8 +10,6 @@ rule follow:
         toppra=out("follow/{case}/toppra.parquet"),
         csv=out("follow/{case}/summary.csv"),
         md=out("follow/{case}/summary.md"),
-    params:
-        slice=lambda w: params(f"follow_{w.case}", "follow", follow_job() if w.case == "space" else None),
     log:
         out("logs/follow/{case}.log"),
     wildcard_constraints:
@@ -19,6 +17,8 @@ rule follow:
     priority: 10
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params(f"follow_{w.case}", "follow", follow_job() if w.case == "space" else None),
     script:
         "../scripts/follow.py"
 
@@ -30,20 +30,32 @@ rule follow_plots:
         timeseries=out("follow/{case}/timeseries.parquet"),
         toppra=out("follow/{case}/toppra.parquet"),
     output:
-        s=report(out("follow/{case}/progress.png"), category="Following", subcategory="{case}",
-                 caption="../report/follow_progress.rst"),
-        torques=report(out("follow/{case}/torques.png"), category="Following", subcategory="{case}",
-                       caption="../report/follow_torques.rst"),
-        split=report(out("follow/{case}/torque_split.png"), category="Following", subcategory="{case}",
-                     caption="../report/follow_torque_split.rst"),
-    params:
-        slice=lambda w: params(f"follow_{w.case}", "follow_plots", follow_job() if w.case == "space" else None),
+        s=report(
+            out("follow/{case}/progress.png"),
+            category="Following",
+            subcategory="{case}",
+            caption="../report/follow_progress.rst",
+        ),
+        torques=report(
+            out("follow/{case}/torques.png"),
+            category="Following",
+            subcategory="{case}",
+            caption="../report/follow_torques.rst",
+        ),
+        split=report(
+            out("follow/{case}/torque_split.png"),
+            category="Following",
+            subcategory="{case}",
+            caption="../report/follow_torque_split.rst",
+        ),
     log:
         out("logs/follow/plots_{case}.log"),
     wildcard_constraints:
         case="space|ground",
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params(f"follow_{w.case}", "follow_plots", follow_job() if w.case == "space" else None),
     script:
         "../scripts/follow_plots.py"
 
@@ -55,11 +67,11 @@ rule follow_summary:
     output:
         csv=out("follow/summary.csv"),
         md=out("follow/summary.md"),
-    params:
-        code=code_params("follow_summary"),
     log:
         out("logs/follow/summary.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        code=code_params("follow_summary"),
     script:
         "../scripts/follow_summary.py"

@@ -9,14 +9,14 @@ rule reconfig:
     output:
         table=out("reconfig/{method}.parquet"),
         timing=out("reconfig/{method}_timing.json"),
-    params:
-        slice=lambda w: params(f"reconfig_{w.method}", "reconfig"),
     log:
         out("logs/reconfig/{method}.log"),
     wildcard_constraints:
         method="nullspace|pinv",
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params(f"reconfig_{w.method}", "reconfig"),
     script:
         "../scripts/reconfig.py"
 
@@ -29,12 +29,12 @@ rule reconfig_summary:
     output:
         csv=out("reconfig/summary.csv"),
         md=out("reconfig/summary.md"),
-    params:
-        code=code_params("reconfig_summary"),
     log:
         out("logs/reconfig/summary.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        code=code_params("reconfig_summary"),
     script:
         "../scripts/reconfig_summary.py"
 
@@ -44,18 +44,23 @@ rule reconfig_plots:
     input:
         expand(out("reconfig/{method}.parquet"), method=RECONFIG_METHODS),
     output:
-        manipulability=report(out("reconfig/manipulability.png"), category="Reconfiguration",
-                              caption="../report/reconfig_manipulability.rst"),
-        rates=report(out("reconfig/joint_rates.png"), category="Reconfiguration",
-                     caption="../report/reconfig_rates.rst"),
-        passive=report(out("reconfig/passive_joint.png"), category="Reconfiguration",
-                       caption="../report/reconfig_passive.rst"),
-    params:
-        code=code_params("reconfig_plots"),
+        manipulability=report(
+            out("reconfig/manipulability.png"),
+            category="Reconfiguration",
+            caption="../report/reconfig_manipulability.rst",
+        ),
+        rates=report(
+            out("reconfig/joint_rates.png"), category="Reconfiguration", caption="../report/reconfig_rates.rst"
+        ),
+        passive=report(
+            out("reconfig/passive_joint.png"), category="Reconfiguration", caption="../report/reconfig_passive.rst"
+        ),
     log:
         out("logs/reconfig/plots.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        code=code_params("reconfig_plots"),
     script:
         "../scripts/reconfig_plots.py"
 
@@ -66,13 +71,12 @@ rule reconfig_animation:
         robot=lambda w: RUN.reconfig.robot,
         tables=expand(out("reconfig/{method}.parquet"), method=RECONFIG_METHODS),
     output:
-        report(out("reconfig/animation.html"), category="Reconfiguration",
-               caption="../report/reconfig_animation.rst"),
-    params:
-        slice=lambda w: params("reconfig_animation", "reconfig_animation"),
+        report(out("reconfig/animation.html"), category="Reconfiguration", caption="../report/reconfig_animation.rst"),
     log:
         out("logs/reconfig/animation.log"),
     conda:
         "../envs/capmap.yaml"
+    params:
+        slice=lambda w: params("reconfig_animation", "reconfig_animation"),
     script:
         "../scripts/reconfig_animation.py"
