@@ -16,8 +16,8 @@ ALLOWED = {
     "errors": set(),
     "core": {"errors"},
     "capacity": {"core", "config", "errors"},  # config: only in its build modules (BUILDERS)
-    "following": {"core", "errors"},
-    "reconfig": {"core", "errors"},
+    "following": {"core", "config", "errors"},  # config: only in its build module
+    "reconfig": {"core", "config", "errors"},  # config: only in its build module
     "dualarm": {"core", "errors"},
     "io": {"errors"},
     # config is data; the modules of CONFIG_NUMERICS_LEFT still build numerics types (to move to their families' build)
@@ -34,10 +34,10 @@ ALLOWED = {
 }
 NUMERICS = {"core", "capacity", "following", "reconfig", "dualarm"}
 # where a family turns its config sections into numerics: the only modules of a family that import config
-BUILDERS = {"capmap.capacity.build", "capmap.capacity.sizing"}
+BUILDERS = {"capmap.capacity.build", "capmap.capacity.sizing", "capmap.reconfig.build", "capmap.following.build"}
 # config modules that still import numerics types (robot, scene and platform files; the dual-arm and
 # reconfiguration sections' settings): the list may only shrink
-CONFIG_NUMERICS_LEFT = {"capmap.config.dualarm", "capmap.config.reconfig", "capmap.config.platform_file",
+CONFIG_NUMERICS_LEFT = {"capmap.config.dualarm", "capmap.config.platform_file",
                         "capmap.config.robot_file", "capmap.config.scene_file"}
 for _part_name in ALLOWED:
     ALLOWED[_part_name] = ALLOWED[_part_name] | {"_lazy"}

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from capmap.capacity.build import rotation_from_rpy
 from capmap.config.robot_file import load
+from capmap.core.kinematics import rotation_from_rpy
 from capmap.core.limits import AffineLimits
 from capmap.core.profiles import scurve
 from capmap.core.reduction import free, lock

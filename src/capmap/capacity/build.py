@@ -15,7 +15,6 @@ turns a capacity config section into numerics.
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from capmap.capacity import directions as dirs_mod
 from capmap.capacity.baseline import SelfMotion, screening_subset, self_motion_angles
@@ -31,20 +30,15 @@ from capmap.config.run import RunConfig
 from capmap.config.validation import per_item
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
-from capmap.core.kinematics import rotation_log
+from capmap.core.kinematics import rotation_from_rpy, rotation_log
 from capmap.core.reduction import LockedArm
 from capmap.core.reduction import lock as lock_joint
 from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError, ConfigError
 
-__all__ = ["rotation_from_rpy", "task_rotation", "task_motion", "directions_of", "load_limits", "refine_settings",
+__all__ = ["task_rotation", "task_motion", "directions_of", "load_limits", "refine_settings",
            "locked_arm", "resolve_failure", "run_arm", "capacity_problem", "healthy_problem", "configuration_name"]
-
-
-def rotation_from_rpy(rpy_deg) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll) (3, 3) from [roll, pitch, yaw] deg."""
-    return pin.rpy.rpyToMatrix(*np.deg2rad(np.asarray(rpy_deg, dtype=float)))
 
 
 def task_rotation(task: TaskConfig) -> np.ndarray:

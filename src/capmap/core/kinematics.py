@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from capmap.errors import CapmapError
 
-__all__ = ["Chain", "inverse_transform", "rotation_log", "pose_error", "align_z", "FLIP_Z"]
+__all__ = ["rotation_from_rpy", "Chain", "inverse_transform", "rotation_log", "pose_error", "align_z", "FLIP_Z"]
 
 
 def align_z(axis: np.ndarray) -> np.ndarray:
@@ -174,6 +174,11 @@ def _cross1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
     b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+
+
+def rotation_from_rpy(rpy_deg) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll) (3, 3) from [roll, pitch, yaw] deg."""
+    return pin.rpy.rpyToMatrix(*np.deg2rad(np.asarray(rpy_deg, dtype=float)))
 
 
 def rotation_log(R: np.ndarray) -> np.ndarray:

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from capmap.config.reconfig import rate_limits, reconfig_problem
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
+from capmap.reconfig.build import planner_settings, reconfig_problem
 from capmap.reconfig.multiarm import platform_model
 from capmap.reconfig.planner import reconfigure
 from capmap.reconfig.problem import closure_errors, summarise
@@ -31,8 +31,7 @@ def stage_reconfig(method: str, out: str, out_timing: str, slice_json: str) -> N
     log = stage_logger(__name__, f"reconfig {method}")
     problem = reconfig_problem(cfg)
     split = problem.split
-    kappa0 = cfg.kappa0 if method == "nullspace" else 0.0  # the pseudo-inverse has no null-space gain
-    settings = problem.settings(method, cfg.dt_s, kappa0, rate_limits(cfg, problem), cfg.min_time_scale)
+    settings = planner_settings(cfg, problem, method)  # the pseudo-inverse has no null-space gain
     log.info(f"{split.unlocked} unlocked in the loop of capture {split.capture}: moving side {split.moving.dof} "
              f"joints ({', '.join(split.moving.joints)}), fixed side {split.fixed.dof}; capture closed by IK with a "
              f"change of {np.rad2deg(np.abs(problem.correction_rad).max()):.2e} deg")

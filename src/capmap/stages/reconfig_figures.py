@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from capmap.config.reconfig import reconfig_problem
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.reconfig import animation, joint_rates, manipulability, passive_joint
+from capmap.reconfig.build import reconfig_problem
 from capmap.reconfig.multiarm import link_segments, platform_model
 from capmap.reconfig.tables import column
 from capmap.stages.common import stage_config
