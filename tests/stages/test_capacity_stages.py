@@ -1,0 +1,173 @@
+"""The capacity family's stages called one after another as the rules call them (their slices from
+capmap.config.slices, no Snakemake) on a tiny map: 300 joint samples, 2 m voxels, 12 directions, every
+voxel refined a little. Each stage's output is held against an independent computation: capacities
+against Pinocchio's per-configuration path, voxel minima against a pandas groupby, the refinement
+against its own start (never above it, every value attained at its worst point), the plan against
+the map, the verification against its own samples' loads, the healthy arm against the locked one."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from capmap.capacity.build import capacity_problem, healthy_problem
+from capmap.capacity.engine import capacity_over_directions, coefficients_pinocchio
+from capmap.checks import check_run_config
+from capmap.config import canonical, main_task, stage_slice
+from capmap.config.validation import load_yaml
+from capmap.io import datasets
+from capmap.stages.atlas import stage_atlas_map
+from capmap.stages.baseline import stage_baseline_shard
+from capmap.stages.capacity import stage_capacity, stage_model, stage_sample, stage_voxels
+from capmap.stages.refine import stage_refine, stage_voxel_map
+from tests.scenario import ROOT
+
+SHARDS = 2
+
+
+def _doc() -> dict:
+    doc = copy.deepcopy(load_yaml(ROOT / "tests" / "data" / "tiny.yaml"))
+    for key in ("follow", "reconfig", "dualarm"):
+        doc.pop(key, None)
+    doc.update(run="stages", shards=SHARDS, voxels={"edge_m": 2.0, "refine": {"min_points": 4, "max_points": 24,
+                                                                               "near_min_points": 8}},
+               baseline={"step_deg": 60, "check_voxels": 3},
+               atlas={"joints": [4], "angles_deg": [130], "edge_m": 3.0, "directions": {"kind": "sphere", "n": 12},
+                      "sampling": {"mode": "voxel_fill", "n_points": 150, "jitter_per_voxel": 0, "seed": 3}})
+    doc["robot"] = str(ROOT / doc["robot"])
+    return doc
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """The tiny run's checked config and its folder with every capacity stage's output in it."""
+    cfg = check_run_config(_doc(), "stages.yaml")
+    d = tmp_path_factory.mktemp("stages")
+
+    def sl(stage, job=None):
+        return canonical(stage_slice(cfg, stage, job))
+
+    stage_model(cfg.robot, str(d / "joints.parquet"), sl("model"))
+    stage_sample(str(d / "points.parquet"), sl("sample"))
+    for k in range(SHARDS):
+        stage_capacity(str(d / "points.parquet"), str(d / f"cap{k}.parquet"), sl("capacity"), k, SHARDS)
+    stage_voxels([str(d / f"cap{k}.parquet") for k in range(SHARDS)], str(d / "sampled.parquet"),
+                 str(d / "cappoints.parquet"), sl("voxels"))
+    for k in range(SHARDS):
+        stage_refine(str(d / "sampled.parquet"), str(d / f"ref{k}.parquet"), str(d / f"conf{k}.parquet"), sl("refine"),
+                     k, SHARDS)
+    stage_voxel_map(str(d / "sampled.parquet"), [str(d / f"ref{k}.parquet") for k in range(SHARDS)],
+                    [str(d / f"conf{k}.parquet") for k in range(SHARDS)], str(d / "voxels.parquet"),
+                    str(d / "configurations.parquet"), sl("refine"))
+    return cfg, d, sl
+
+
+def _reference(problem, points: np.ndarray) -> np.ndarray:
+    """Each point's least capacity over its IK branches and the problem's directions (kg, NaN unreachable)
+    by Pinocchio's per-configuration path."""
+    sol = problem.branches(points)
+    out = np.full(len(points), np.nan)
+    for i, n in enumerate(sol.n_solutions):
+        if n:
+            coef = coefficients_pinocchio(problem.dyn, sol.q[i, :n])
+            cap, _ = capacity_over_directions(coef, problem.directions, problem.motion, problem.dyn.gravity,
+                                              problem.limits)
+            out[i] = cap.min()
+    return out
+
+
+def test_model_and_sample_stages(run):
+    cfg, d, _ = run
+    joints = datasets.read(d / "joints.parquet")
+    assert len(joints) == 7 and joints.mass_kg.gt(0).all()
+    pts = datasets.read(d / "points.parquet")
+    assert len(pts) > cfg.sampling.n_points and np.array_equal(pts.point_id, np.arange(len(pts)))
+
+
+def test_capacity_stage_against_pinocchio(run):
+    cfg, d, _ = run
+    cap = pd.concat([datasets.read(d / f"cap{k}.parquet") for k in range(SHARDS)])
+    pts = datasets.read(d / "points.parquet")
+    assert sorted(cap.point_id) == sorted(pts.point_id)  # the shards split the points, none twice
+    rows = cap[cap.reachable].sample(12, random_state=1)
+    ref = _reference(capacity_problem(cfg), rows[["x_m", "y_m", "z_m"]].to_numpy())
+    np.testing.assert_allclose(rows.capacity_kg, ref, rtol=1e-8, atol=1e-6)
+
+
+def test_voxels_stage_is_the_minimum_of_its_points(run):
+    _, d, _ = run
+    vox = datasets.read(d / "sampled.parquet")
+    pts = datasets.read(d / "cappoints.parquet")
+    reach = pts[pts.reachable]
+    least = reach.groupby(["i", "j", "k"]).capacity_kg.min()
+    got = vox.set_index(["i", "j", "k"]).capacity_kg.loc[least.index]
+    np.testing.assert_array_equal(got.to_numpy(), least.to_numpy())
+    assert vox.n_points.sum() == len(pts)
+
+
+def test_refine_stages_never_raise_a_value_and_each_is_attained(run):
+    cfg, d, _ = run
+    sampled, refined = datasets.read(d / "sampled.parquet"), datasets.read(d / "voxels.parquet")
+    reach = refined.n_reachable > 0
+    assert np.all(refined.capacity_kg[reach] <= sampled.capacity_kg[reach] + 1e-9)
+    assert np.array_equal(refined.capacity_sampled_kg[reach], sampled.capacity_kg[reach])
+    rows = refined[reach].sample(10, random_state=2)
+    ref = _reference(capacity_problem(cfg), rows[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy())
+    np.testing.assert_allclose(rows.capacity_kg, ref, rtol=1e-8, atol=1e-6)
+    conf = datasets.read(d / "configurations.parquet")  # the least configuration is the all-branch value
+    least = conf.groupby(["i", "j", "k"]).capacity_kg.min()
+    np.testing.assert_allclose(refined.set_index(["i", "j", "k"]).capacity_kg.loc[least.index], least, atol=1e-9)
+
+
+def test_plan_and_verify_stages(run):
+    from capmap.stages.verify import stage_plan, stage_verify
+
+    cfg, d, sl = run
+    payload = cfg.task.payload_kg[0]
+    job = main_task(cfg.task, cfg.failure, payload)
+    stage_plan(str(d / "voxels.parquet"), str(d / "wp.parquet"), sl("plan", job))
+    wp = datasets.read(d / "wp.parquet")
+    status = wp.attrs["capmap"]["status"]
+    if status == "ok":  # every voxel on the path carries the payload on the map
+        assert (wp.voxel_capacity_kg >= payload).all()
+        np.testing.assert_allclose(wp[["x_m", "y_m", "z_m"]].iloc[[0, -1]].to_numpy(), [job.start_m, job.goal_m])
+    else:
+        assert status == "no_path" and len(wp) == 0
+    stage_verify(str(d / "wp.parquet"), str(d / "ts.parquet"), str(d / "seg.parquet"), str(d / "v.csv"),
+                 str(d / "v.md"), sl("verify", job))
+    ts, summary = datasets.read(d / "ts.parquet"), pd.read_csv(d / "v.csv")
+    direct = summary[summary.path == "direct"].iloc[0]
+    mine = ts[ts.path == "direct"]
+    # the path's capacity is the least of its samples'; feasible exactly when the payload fits under it
+    assert direct.capacity_kg == pytest.approx(mine.state_capacity_kg.min(), rel=1e-12)
+    names = [c for c in ts.columns if c.startswith(("tau_", "base_f", "base_m"))]
+    assert names and bool(direct.feasible) == (direct.capacity_kg >= payload and direct.tracking == "ok"
+                                               and direct.joint_range == "ok")
+
+
+def test_baseline_stage_is_never_below_the_locked_arm(run):
+    cfg, d, sl = run
+    stage_baseline_shard(str(d / "voxels.parquet"), str(d / "healthy.parquet"), sl("baseline_shard"), 0, 1)
+    h = datasets.read(d / "healthy.parquet")
+    assert len(h) > 0
+    # at a healthy voxel's worst point the healthy value is the best posture over the swept angles, and the
+    # failed arm's own angle is on the sweep: never below the locked arm's value there (Pinocchio's path)
+    rows = h[h.healthy_capacity_kg.notna()].sample(8, random_state=3)
+    pts = rows[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
+    locked = _reference(capacity_problem(cfg), pts)
+    ok = np.isfinite(locked)
+    assert np.all(rows.healthy_capacity_kg.to_numpy()[ok] >= locked[ok] * (1 - 1e-9) - 1e-6)
+    assert np.allclose(healthy_problem(cfg, cfg.baseline.step_deg).value(pts).capacity_kg, rows.healthy_capacity_kg)
+
+
+def test_atlas_map_stage(run):
+    cfg, d, sl = run
+    stage_atlas_map(str(d / "atlas_vox.parquet"), str(d / "atlas_sum.parquet"), sl("atlas_map"), 4, 130.0)
+    vox, rows = datasets.read(d / "atlas_vox.parquet"), datasets.read(d / "atlas_sum.parquet")
+    assert list(rows.payload_kg) == list(cfg.task.payload_kg) and (rows.joint == 4).all()
+    reach = vox[vox.n_reachable > 0]
+    assert rows.reachable_volume_m3.iloc[0] == pytest.approx(len(reach) * cfg.atlas.edge_m ** 3)
+    assert rows.capacity_max_kg.iloc[0] == pytest.approx(reach.capacity_kg.max())
