@@ -149,7 +149,7 @@ def cell(jobs: dict[str, int]) -> str:
 
 _ORDER = {r: i for i, r in enumerate(
     "model sample capacity voxels refine voxel_map summary capacity_3d plan plan_gain verify verify_plots "
-    "verify_summary plan_task verify_task verify_task_plots follow follow_plots follow_summary reconfig "
+    "verify_summary follow follow_plots follow_summary reconfig "
     "reconfig_summary reconfig_plots reconfig_animation dualarm_scan dualarm_envelope dualarm_unknown dualarm_capsules "
     "dualarm_optimise dualarm_check dualarm_plots dualarm_animation atlas_map atlas_tables atlas_catalogue "
     "baseline_shard baseline_map baseline_figure baseline_catalogue "
