@@ -139,3 +139,70 @@ def test_config_is_data(name):
         assert numerics, f"{name} imports no numerics any more: drop it from CONFIG_NUMERICS_LEFT"
     else:
         assert not numerics, f"{name} imports {numerics}: config is data (build numerics in the family's build module)"
+
+
+MAX_FUNCTION_LINES = 80  # a non-kernel function; a numba kernel may be longer where splitting costs speed
+MAX_PARAMETERS = 7  # a public non-kernel function's (self and cls not counted): more go into a dataclass
+# still over (each to be split or given a parameter object): the lists may only shrink
+LONG_LEFT = {"capmap.capacity.refine.refine", "capmap.following.follower.follow",
+             "capmap.plots.capacity_3d.capacity_3d_html", "capmap.capacity.branch_planning._search"}
+STAGES_LEFT = {"capmap.stages.dualarm_solve.stage_dualarm_optimise"}
+PARAMETERS_LEFT = {
+    "capmap.capacity.folds.ConfigBrackets.track",
+    "capmap.core.ik.semi.kernels.pack", "capmap.core.ik.polish.polish", "capmap.dualarm.ocp.assembly.arm_ik",
+    "capmap.dualarm.geometry.broadphase.static_balls", "capmap.dualarm.geometry.broadphase.pair_groups",
+    "capmap.dualarm.ocp.motion.plan_assembly", "capmap.dualarm.ocp.solver.solve", "capmap.dualarm.ocp.solver.solve_csqp",
+    "capmap.following.toppra_reference.time_optimal", "capmap.plots.baseline.baseline_figure",
+    "capmap.plots.dualarm.animation", "capmap.stages.baseline.stage_baseline_map",
+    "capmap.stages.capacity_figures.stage_summary", "capmap.stages.dualarm_figures.stage_dualarm_plots",
+    "capmap.stages.dualarm_solve.stage_dualarm_optimise", "capmap.stages.verify_figures.stage_verify_plots"}
+STAGE_LINES = 40  # a stage: read, call one family function, write
+
+
+def _functions():
+    """(qualified name, node, is a numba kernel, is nested) of every function of the package."""
+    out = []
+    for name, path in MODULES.items():
+        tree = ast.parse(path.read_text())
+
+        def visit(node, prefix, nested):
+            for child in ast.iter_child_nodes(node):
+                if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    decos = " ".join(ast.unparse(d) for d in child.decorator_list)
+                    kernel = any(k in decos for k in ("jit", "_inline", "numba"))
+                    out.append((f"{prefix}.{child.name}", child, kernel, nested))
+                    visit(child, f"{prefix}.{child.name}", True)
+                elif isinstance(child, ast.ClassDef):
+                    visit(child, f"{prefix}.{child.name}", nested)
+        visit(tree, name, False)
+    return out
+
+
+FUNCTIONS = _functions()
+
+
+def test_functions_are_short():
+    long = {q: f.end_lineno - f.lineno + 1 for q, f, kernel, nested in FUNCTIONS
+            if not kernel and not nested and f.end_lineno - f.lineno + 1 > MAX_FUNCTION_LINES}
+    assert set(long) <= LONG_LEFT, f"over {MAX_FUNCTION_LINES} lines: {sorted(set(long) - LONG_LEFT)}"
+    assert not LONG_LEFT - set(long), f"short now, drop from LONG_LEFT: {sorted(LONG_LEFT - set(long))}"
+
+
+def _n_params(f) -> int:
+    a = f.args
+    names = [x.arg for x in a.posonlyargs + a.args + a.kwonlyargs] + [x.arg for x in (a.vararg, a.kwarg) if x]
+    return len([n for n in names if n not in ("self", "cls")])
+
+
+def test_public_functions_take_at_most_seven_parameters():
+    many = {q for q, f, kernel, nested in FUNCTIONS if not kernel and not nested and not f.name.startswith("_")
+            and _n_params(f) > MAX_PARAMETERS}
+    assert many <= PARAMETERS_LEFT, f"over {MAX_PARAMETERS} parameters: {sorted(many - PARAMETERS_LEFT)}"
+    assert not PARAMETERS_LEFT - many, f"fixed, drop from PARAMETERS_LEFT: {sorted(PARAMETERS_LEFT - many)}"
+
+
+def test_stages_are_thin():
+    long = {q for q, f, _, nested in FUNCTIONS if q.startswith("capmap.stages.") and f.name.startswith("stage_")
+            and f.end_lineno - f.lineno + 1 > STAGE_LINES}
+    assert long <= STAGES_LEFT, f"stages over {STAGE_LINES} lines: {sorted(long - STAGES_LEFT)}"
+    assert not STAGES_LEFT - long, f"thin now, drop from STAGES_LEFT: {sorted(STAGES_LEFT - long)}"

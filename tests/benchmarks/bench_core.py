@@ -32,6 +32,7 @@ import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
 from capmap.capacity import directions, engine  # noqa: E402
+from capmap.capacity.problem import CapacityProblem, point_capacity  # noqa: E402
 from capmap.config.robot_file import load  # noqa: E402
 from capmap.core import ik  # noqa: E402
 from capmap.core.dynamics import ArmDynamics  # noqa: E402
@@ -51,18 +52,21 @@ def _init(step):
     arm = _arm()  # model built once per worker, one Data per worker
     _worker.update(dyn=ArmDynamics(arm), dirs=directions.paper_grid(step), exact=directions.exact(),
                    limits=engine.LoadLimits.uniform(7, 700, 200, 500).for_arm(arm))
+    _worker.update(grid_problem=CapacityProblem(arm, np.eye(3), engine.Motion(0.15, 0.03), _worker["limits"], _worker["dirs"]),
+                   exact_problem=CapacityProblem(arm, np.eye(3), engine.Motion(0.15, 0.03), _worker["limits"],
+                                                 _worker["exact"]))
 
 
 def _capacity_chunk(args):
     q, n = args
-    pc = engine.point_capacity(_worker["dyn"], q, n, _worker["dirs"], engine.Motion(0.15, 0.03), _worker["limits"])
+    pc = point_capacity(_worker["grid_problem"], q, n)
     return int(pc.n_states.sum()), resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def _exact_chunk(args):
     """The exact minimum over the sphere of directions (directions.kind: exact) of the same points."""
     q, n = args
-    engine.point_capacity(_worker["dyn"], q, n, _worker["exact"], engine.Motion(0.15, 0.03), _worker["limits"])
+    point_capacity(_worker["exact_problem"], q, n)
     return int(n.sum())
 
 

@@ -7,13 +7,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.capacity.baseline import SelfMotion, healthy_capacity, screening_subset, self_motion_angles
+from capmap.capacity.baseline import HealthyProblem, SelfMotion, healthy_capacity, screening_subset, self_motion_angles
 from capmap.capacity.directions import Directions, paper_grid, sphere
-from capmap.capacity.engine import LoadLimits, Motion, point_capacity
+from capmap.capacity.engine import LoadLimits, Motion
+from capmap.capacity.problem import CapacityProblem, point_capacity
 from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
-from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
 from tests.reference.posture_capacity import posture_capacity
@@ -38,6 +38,11 @@ def _self_motion(robot, joint: int, through: float, step: float) -> SelfMotion:
     lo, hi = np.rad2deg(robot.q_lower[joint - 1]), np.rad2deg(robot.q_upper[joint - 1])
     return SelfMotion.build(self_motion_angles(lo, hi, through, step), lambda a: lock(robot, joint, np.deg2rad(a)),
                             LIMITS.for_arm)
+
+
+def _hp(sm: SelfMotion, dirs: Directions, screen: Directions) -> HealthyProblem:
+    """The healthy question of ``sm`` at the task orientation and motion over ``dirs``, screened by ``screen``."""
+    return HealthyProblem(CapacityProblem(sm.arms[0], TASK_R, MOTION, sm.limits, dirs), sm, screen)
 
 
 def test_angles_hold_the_failed_angle_one_turn_or_the_range():
@@ -71,7 +76,7 @@ def test_healthy_value_is_the_best_posture_by_brute_force(robot, joint, point):
     each computed independently (Pinocchio + Newton-Euler + LP) over the same directions."""
     dirs = sphere(24)
     sm = _self_motion(robot, joint, 100.0 if joint == 1 else 130.0, 60.0)
-    got = healthy_capacity(sm, point[None], TASK_R, dirs, _subset(dirs, 6), MOTION)
+    got = healthy_capacity(_hp(sm, dirs, _subset(dirs, 6)), point[None])
     best = -np.inf
     for arm in sm.arms:
         sol = ik.solve(arm, point[None], TASK_R)
@@ -93,12 +98,13 @@ def _per_solution_max(sm: SelfMotion, points: np.ndarray, dirs: Directions) -> t
     best = np.full(len(points), -np.inf)
     locked = np.full((len(points), len(sm.arms)), np.nan)
     for t, arm in enumerate(sm.arms):  # each angle's own arm, dynamics and limits
-        dyn, lim = ArmDynamics(arm), LIMITS.for_arm(arm)
+        lim = LIMITS.for_arm(arm)
         sol = ik.solve(arm, points, TASK_R)
         p, b = np.nonzero(np.arange(sol.q.shape[1])[None, :] < sol.n_solutions[:, None])
-        one = point_capacity(dyn, sol.q[p, b][:, None, :], np.ones(len(p), dtype=int), dirs, MOTION, lim)
+        problem = CapacityProblem(arm, TASK_R, MOTION, lim, dirs)
+        one = point_capacity(problem, sol.q[p, b][:, None, :], np.ones(len(p), dtype=int))
         np.maximum.at(best, p, one.capacity_kg)
-        locked[:, t] = point_capacity(dyn, sol.q, sol.n_solutions, dirs, MOTION, lim).capacity_kg
+        locked[:, t] = point_capacity(problem, sol.q, sol.n_solutions).capacity_kg
     return np.where(np.isfinite(best), best, np.nan), locked
 
 
@@ -116,7 +122,7 @@ def test_branch_and_bound_equals_every_candidate_evaluated(sweep, n_screen):
     """Any screening subset (down to one direction) gives the exact maximum: pruning only drops
     candidates whose bound cannot beat the best found."""
     sm, points, dirs = sweep
-    got = healthy_capacity(sm, points, TASK_R, dirs, _subset(dirs, n_screen), MOTION)
+    got = healthy_capacity(_hp(sm, dirs, _subset(dirs, n_screen)), points)
     ref, _ = _per_solution_max(sm, points, dirs)
     assert np.array_equal(np.isnan(got.capacity_kg), np.isnan(ref))
     ok = np.isfinite(ref)
@@ -127,9 +133,9 @@ def test_branch_and_bound_equals_every_candidate_evaluated(sweep, n_screen):
 
 def test_a_ceiling_stops_only_points_at_or_above_it(sweep):
     sm, points, dirs = sweep
-    exact = healthy_capacity(sm, points, TASK_R, dirs, _subset(dirs, 8), MOTION)
+    exact = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points)
     ceiling = np.nan_to_num(exact.capacity_kg, nan=1.0) * np.where(np.arange(len(points)) % 2, 0.9, 1.1)
-    got = healthy_capacity(sm, points, TASK_R, dirs, _subset(dirs, 8), MOTION, ceiling)
+    got = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points, ceiling)
     below = np.isfinite(exact.capacity_kg) & (exact.capacity_kg < ceiling)
     np.testing.assert_allclose(got.capacity_kg[below], exact.capacity_kg[below], rtol=1e-12)
     above = np.isfinite(exact.capacity_kg) & ~below
@@ -139,15 +145,15 @@ def test_a_ceiling_stops_only_points_at_or_above_it(sweep):
 
 def test_healthy_never_below_the_locked_arm_at_any_swept_angle_on_any_configuration(sweep):
     sm, points, dirs = sweep
-    got = healthy_capacity(sm, points, TASK_R, dirs, _subset(dirs, 8), MOTION)
+    got = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points)
     _, locked = _per_solution_max(sm, points, dirs)
     reach = np.isfinite(locked)
     assert reach.any(axis=1).sum() > 60
     assert np.all(got.capacity_kg[:, None][reach.any(axis=1)] >= np.nanmax(locked, axis=1)[reach.any(axis=1), None] - 1e-9)
     for t, arm in enumerate(sm.arms):  # per configuration too
         sol = ik.solve(arm, points, TASK_R)
-        pc = point_capacity(ArmDynamics(arm), sol.q, sol.n_solutions, dirs, MOTION, LIMITS.for_arm(arm),
-                            configurations=arm_configurations(arm))
+        problem = CapacityProblem(arm, TASK_R, MOTION, LIMITS.for_arm(arm), dirs, labels=arm_configurations(arm))
+        pc = point_capacity(problem, sol.q, sol.n_solutions)
         has = np.isfinite(pc.config_capacity_kg)
         assert np.all(np.repeat(got.capacity_kg[:, None], has.shape[1], axis=1)[has] >= pc.config_capacity_kg[has] - 1e-9)
 
@@ -156,9 +162,9 @@ def test_groups_need_only_their_least_value_exact(sweep):
     """With the points' voxels given, each voxel's least value is exact and attained; every other value
     is a lower bound of the point's own (a posture found) at or above that least value."""
     sm, points, dirs = sweep
-    exact = healthy_capacity(sm, points, TASK_R, dirs, _subset(dirs, 8), MOTION)
+    exact = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points)
     groups = np.random.default_rng(3).integers(0, 12, len(points))
-    got = healthy_capacity(sm, points, TASK_R, dirs, _subset(dirs, 8), MOTION, groups=groups)
+    got = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points, groups=groups)
     assert got.n_full.sum() < exact.n_full.sum()
     for g in np.unique(groups):
         mine = (groups == g) & np.isfinite(exact.capacity_kg)
@@ -173,14 +179,14 @@ def test_groups_need_only_their_least_value_exact(sweep):
 
 def test_hints_and_ceilings_keep_each_groups_least_value_below_its_ceiling_exact(sweep):
     sm, points, dirs = sweep
-    exact = healthy_capacity(sm, points, TASK_R, dirs, _subset(dirs, 8), MOTION)
+    exact = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points)
     rng = np.random.default_rng(4)
     groups = rng.integers(0, 12, len(points))
     low = {g: np.nanmin(exact.capacity_kg[groups == g], initial=np.inf) for g in np.unique(groups)}
     factor = {g: 1.05 if g % 2 else 0.95 for g in low}  # the group's least value below / above its ceiling
     ceiling = np.array([low[g] * factor[g] if np.isfinite(low[g]) else np.inf for g in groups])
     hint = rng.integers(-1, len(sm.angles_deg), len(points))
-    got = healthy_capacity(sm, points, TASK_R, dirs, _subset(dirs, 8), MOTION, ceiling, groups, hint)
+    got = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points, ceiling, groups, hint)
     assert np.array_equal(np.isnan(got.capacity_kg), np.isnan(exact.capacity_kg))
     fin = np.isfinite(exact.capacity_kg)
     assert np.all(got.capacity_kg[fin] <= exact.capacity_kg[fin] + 1e-9)  # a posture's value: never above the best

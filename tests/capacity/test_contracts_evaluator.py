@@ -9,7 +9,7 @@ orders above that and far below any capacity difference that matters."""
 import numpy as np
 import pytest
 
-from capmap.capacity.baseline import SelfMotion, screening_subset, self_motion_angles
+from capmap.capacity.baseline import HealthyProblem, SelfMotion, screening_subset, self_motion_angles
 from capmap.capacity.directions import grid_axes, sphere
 from capmap.capacity.engine import LoadLimits, Motion, capacity_over_directions, coefficients_pinocchio
 from capmap.capacity.evaluator import Evaluator, HealthyEvaluator, LockedEvaluator
@@ -65,7 +65,8 @@ def _healthy():
                     out[i] = max(out[i], _posture_reference(arm, sol.q[i, :n]).max())
         return np.where(np.isfinite(out), out, np.nan)
 
-    return HealthyEvaluator(sm, TASK_R, DIRS, screening_subset(DIRS, 6), MOTION, n_voxels=4, chunk=3), reference
+    hp = HealthyProblem(CapacityProblem(sm.arms[0], TASK_R, MOTION, sm.limits, DIRS), sm, screening_subset(DIRS, 6))
+    return HealthyEvaluator(hp, n_voxels=4, chunk=3), reference
 
 
 EVALUATORS = {"locked": _locked, "healthy": _healthy}

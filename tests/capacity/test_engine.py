@@ -7,9 +7,9 @@ from capmap.capacity.engine import (
     Motion,
     capacity_over_directions,
     coefficients,
-    point_capacity,
     state_capacity,
 )
+from capmap.capacity.problem import CapacityProblem, point_capacity
 from capmap.config.robot_file import load
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.ik import solve
@@ -78,7 +78,7 @@ def test_point_capacity_is_min_over_branches_and_directions(scenario_arm):
     limits = LIMITS.for_arm(scenario_arm)
     sol = solve(scenario_arm, X_DES[None], TASK_R)
     dirs = paper_grid(30)
-    pc = point_capacity(dyn, sol.q, sol.n_solutions, dirs, MOTION, limits)
+    pc = point_capacity(CapacityProblem(dyn.arm, TASK_R, MOTION, limits, dirs), sol.q, sol.n_solutions)
     brute = min(state_capacity(dyn, sol.q[0, k], 0.15 * u, 0.03 * u, limits)[0]
                 for k in range(sol.n_solutions[0]) for u in dirs.u)
     assert pc.capacity_kg[0] == pytest.approx(brute, rel=1e-9)
@@ -89,9 +89,9 @@ def test_point_capacity_is_min_over_branches_and_directions(scenario_arm):
 
 
 def test_unreachable_point_is_nan(scenario_arm):
-    dyn = ArmDynamics(scenario_arm)
     sol = solve(scenario_arm, np.array([[40.0, 0, 0]]), TASK_R)
-    pc = point_capacity(dyn, sol.q, sol.n_solutions, sphere(10), MOTION, LIMITS.for_arm(scenario_arm))
+    pc = point_capacity(CapacityProblem(scenario_arm, TASK_R, MOTION, LIMITS.for_arm(scenario_arm), sphere(10)), sol.q,
+                        sol.n_solutions)
     assert np.isnan(pc.capacity_kg[0]) and pc.binding[0] == -1
 
 

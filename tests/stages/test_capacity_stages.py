@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from capmap.capacity.baseline import healthy_capacity
 from capmap.capacity.build import capacity_problem, healthy_problem
 from capmap.capacity.engine import capacity_over_directions, coefficients_pinocchio
 from capmap.checks import check_run_config
@@ -160,7 +161,8 @@ def test_baseline_stage_is_never_below_the_locked_arm(run):
     locked = _reference(capacity_problem(cfg), pts)
     ok = np.isfinite(locked)
     assert np.all(rows.healthy_capacity_kg.to_numpy()[ok] >= locked[ok] * (1 - 1e-9) - 1e-6)
-    assert np.allclose(healthy_problem(cfg, cfg.baseline.step_deg).value(pts).capacity_kg, rows.healthy_capacity_kg)
+    assert np.allclose(healthy_capacity(healthy_problem(cfg, cfg.baseline.step_deg), pts).capacity_kg,
+                       rows.healthy_capacity_kg)
 
 
 def test_atlas_map_stage(run):

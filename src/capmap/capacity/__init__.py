@@ -45,7 +45,7 @@ _EXPORTS = {
     'line_query': 'query',
     'LoadLimits': 'engine',
     'Motion': 'engine',
-    'point_capacity': 'engine',
+    'point_capacity': 'problem',
     'plan': 'planning',
     'judge': 'verification',
     'verify_path': 'verification',

@@ -37,13 +37,15 @@ import numpy as np
 
 from capmap.capacity.directions import Directions
 from capmap.capacity.engine import Motion, argmin_per_group, direction_minimum
+from capmap.capacity.problem import CapacityProblem
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
 from capmap.errors import CapmapError
 
-__all__ = ["self_motion_angles", "SelfMotion", "HealthyCapacity", "healthy_capacity", "screening_subset"]
+__all__ = ["self_motion_angles", "SelfMotion", "HealthyProblem", "HealthyCapacity", "healthy_capacity",
+           "screening_subset"]
 
 
 def self_motion_angles(lower_deg: float, upper_deg: float, through_deg: float, step_deg: float) -> np.ndarray:
@@ -135,12 +137,22 @@ def _capacity(sm: SelfMotion, held_rad: np.ndarray, q: np.ndarray, dirs: Directi
     return cap, binding
 
 
-def healthy_capacity(sm: SelfMotion, points: np.ndarray, rotation: np.ndarray, directions: Directions,
-                     screen: Directions, motion: Motion, ceiling: np.ndarray | None = None,
+@dataclass(frozen=True)
+class HealthyProblem:
+    """The healthy arm's question: the failed arm's ``problem`` (its end-effector rotation, motion and
+    direction set), the self-motion ``sm`` over the failed joint's angles and the ``screen`` subset of
+    the directions (:func:`screening_subset`) that bounds each candidate first."""
+
+    problem: CapacityProblem
+    sm: SelfMotion
+    screen: Directions
+
+
+def healthy_capacity(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray | None = None,
                      groups: np.ndarray | None = None, hint: np.ndarray | None = None) -> HealthyCapacity:
-    """The healthy value of N points (N, 3) m at end-effector ``rotation`` (3, 3): the maximum over
-    ``sm``'s angles and each angle's IK solutions of the solution's minimum over ``directions``;
-    ``screen`` a subset of ``directions`` (:func:`screening_subset`) bounding each candidate first.
+    """The healthy value of N points (N, 3) m at the problem's end-effector rotation (3, 3): the maximum
+    over ``hp.sm``'s angles and each angle's IK solutions of the solution's minimum over the problem's
+    directions; ``hp.screen`` a subset of them bounding each candidate first.
 
     For a voxel's minimum only its lowest point needs its exact value. ``ceiling`` (N,) kg: a point
     whose value reaches its ceiling stops there; ``groups`` (N,) int (the points' voxels): a point also
@@ -150,6 +162,7 @@ def healthy_capacity(sm: SelfMotion, points: np.ndarray, rotation: np.ndarray, d
     when one reaches its ceiling (a neighbour's best angle: most points of a voxel do not lower its
     minimum). A stopped point has ``exact`` False and capacity_kg a value at or above that ceiling (a
     posture's, so at most its maximum); the least value of each group (with its ceiling) is exact."""
+    sm, rotation, directions, motion = hp.sm, hp.problem.rotation, hp.problem.directions, hp.problem.motion
     N = len(points)
     ceiling = np.full(N, np.inf) if ceiling is None else np.asarray(ceiling, dtype=float)
     out = HealthyCapacity(np.full(N, np.nan), np.full(N, np.nan), np.full((N, sm.arms[0].n_active), np.nan),
@@ -180,17 +193,17 @@ def healthy_capacity(sm: SelfMotion, points: np.ndarray, rotation: np.ndarray, d
             out.n_candidates[stop] = out.n_full[stop] = np.bincount(pr, minlength=N)[stop]
             rest &= ~stop
     if rest.any():
-        sub = _branch_and_bound(sm, points[rest], rotation, directions, screen, motion, ceiling[rest],
+        sub = _branch_and_bound(hp, points[rest], ceiling[rest],
                                 None if groups is None else np.asarray(groups)[rest])
         for f in HealthyCapacity.__dataclass_fields__:
             getattr(out, f)[rest] = getattr(sub, f)
     return out
 
 
-def _branch_and_bound(sm: SelfMotion, points: np.ndarray, rotation: np.ndarray, directions: Directions,
-                      screen: Directions, motion: Motion, ceiling: np.ndarray, groups: np.ndarray | None
+def _branch_and_bound(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray, groups: np.ndarray | None
                       ) -> HealthyCapacity:
     """:func:`healthy_capacity` without hints: every candidate screened, then evaluated in order."""
+    sm, rotation, directions, motion = hp.sm, hp.problem.rotation, hp.problem.directions, hp.problem.motion
     N = len(points)
     ceiling = ceiling.copy()
     groups = None if groups is None else np.unique(np.asarray(groups), return_inverse=True)[1].reshape(-1)
@@ -206,7 +219,7 @@ def _branch_and_bound(sm: SelfMotion, points: np.ndarray, rotation: np.ndarray, 
     pt = np.concatenate(cand_pt) if cand_pt else np.zeros(0, dtype=int)
     tt = np.concatenate(cand_t) if cand_t else np.zeros(0, dtype=int)
     qq = np.concatenate(cand_q) if cand_q else np.zeros((0, n_act))
-    ub = _capacity(sm, sm.held_rad[tt], qq, screen, motion)[0]
+    ub = _capacity(sm, sm.held_rad[tt], qq, hp.screen, motion)[0]
     order = np.lexsort((-ub, pt))  # per point, by decreasing bound
     pt, tt, qq, ub = pt[order], tt[order], qq[order], ub[order]
     start = np.searchsorted(pt, np.arange(N))

@@ -8,6 +8,7 @@ y(m) = y0 + m s, with limits |y_k| <= L_k. The largest admissible m is therefore
 and m* = 0 when some |y0_k| > L_k already (the state violates a limit with no payload).
 Over a set of directions, y0 and s are evaluated from the exact polynomial coefficients
 (:class:`capmap.core.coefficients.Coefficients`, batched; re-exported here) with one matrix product.
+A point's capacity over its IK branches: :func:`capmap.capacity.problem.point_capacity`.
 """
 
 from __future__ import annotations
@@ -18,9 +19,8 @@ import numpy as np
 
 from capmap.capacity.directions import Directions
 from capmap.capacity.sphere import min_over_sphere
-from capmap.capacity.sweep import min_over_directions, min_per_pair
+from capmap.capacity.sweep import min_over_directions
 from capmap.core.coefficients import Coefficients
-from capmap.core.configuration import Configurations
 from capmap.core.dynamics import ArmDynamics, output_names
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
@@ -28,7 +28,7 @@ from capmap.errors import CapmapError
 
 __all__ = ["LoadLimits", "Motion", "Coefficients", "coefficients", "coefficients_pinocchio", "state_affine", "joint_state_affine",
            "state_capacity", "direction_features", "affine_over_directions", "capacity_over_directions",
-           "PointCapacity", "point_capacity", "direction_minimum", "argmin_per_group", "motion_features", "margin_pct",
+           "PointCapacity", "direction_minimum", "argmin_per_group", "motion_features", "margin_pct",
            "SINGULAR"]
 
 SINGULAR = "singular"
@@ -195,70 +195,3 @@ def motion_features(u: np.ndarray, motion: Motion) -> np.ndarray:
     so that y0 = C @ features with C (.., 10) the stacked coefficients [c0, L, Q]."""
     v, a = motion.v_max_mps, motion.a_max_mps2
     return np.concatenate([np.ones((len(u), 1)), a * u, v**2 * direction_features(u)], axis=1)  # (D, 10)
-
-
-def point_capacity(dyn: ArmDynamics, q_sets: np.ndarray, n_solutions: np.ndarray, directions: Directions,
-                   motion: Motion, limits: AffineLimits, axes: Directions | None = None,
-                   configurations: Configurations | None = None) -> PointCapacity:
-    """Capacity of N points from their IK configuration sets.
-
-    q_sets: (N, K, n_active) rad, NaN-padded beyond n_solutions (N,) per point; ``limits`` on
-    ``dyn.arm``'s outputs (:meth:`LoadLimits.for_arm`). With ``axes`` (directions in antipodal
-    pairs, e.g. :func:`~capmap.capacity.directions.grid_axes`), also the capacity along each
-    pair's line (moving along u or -u), min over the configuration set: axis_capacity_kg (N, P).
-    With ``configurations`` (the chain's labels, :mod:`capmap.core.configuration`), the same
-    minima per configuration label (C labels): config_capacity_kg (N, C), config_binding (N, C)
-    and, with ``axes``, config_axis_capacity_kg (N, C, P); the all-branch values are their minima
-    over C.
-    """
-    N, K = q_sets.shape[:2]
-    names = limits.names + (SINGULAR,)
-    cap = np.full(N, np.nan)
-    binding = np.full(N, -1)
-    branch = np.full(N, -1)
-    direction = np.full(N, -1)
-    worst_u = np.full((N, 3), np.nan)
-    valid = np.arange(K)[None, :] < np.asarray(n_solutions)[:, None]
-    pts, brs = np.nonzero(valid)
-    axis_cap = None if axes is None else np.full((N, len(axes.pairs)), np.nan)
-    if len(pts):
-        coef = coefficients(dyn, q_sets[pts, brs])
-        c_cfg, worst_dir, u_cfg, b_cfg = direction_minimum(coef, directions, motion, dyn.gravity, limits)
-        if axes is not None:
-            a = motion.a_max_mps2
-            per_axis, _ = min_per_pair(coef.stacked(), coef.S, motion_features(axes.u, motion), a * axes.u, dyn.gravity,
-                                       limits.limit, axes.pairs)
-            per_axis[coef.singular] = 0.0
-            axis_cap[:] = np.inf
-            np.minimum.at(axis_cap, pts, per_axis)
-            axis_cap[np.asarray(n_solutions) == 0] = np.nan
-        sel = argmin_per_group(c_cfg, pts)  # min over each point's configurations
-        p = pts[sel]
-        cap[p] = c_cfg[sel]
-        branch[p] = brs[sel]
-        direction[p] = worst_dir[sel]
-        worst_u[p] = u_cfg[sel]
-        binding[p] = b_cfg[sel]
-    per_config = {}
-    if configurations is not None:
-        C = len(configurations.names)
-        lab = configurations.labels(q_sets[pts, brs]) if len(pts) else np.zeros(0, dtype=int)
-        cc = np.full((N, C), np.nan)
-        cb = np.full((N, C), -1)
-        if len(pts):
-            group = pts * C + lab  # an aspect can hold several solutions of a point: their minimum
-            sel = argmin_per_group(c_cfg, group)
-            cc.reshape(-1)[group[sel]] = c_cfg[sel]
-            cb.reshape(-1)[group[sel]] = b_cfg[sel]
-        nb = np.zeros((N, C), dtype=int)
-        np.add.at(nb, (pts, lab), 1)
-        per_config = {"config_capacity_kg": cc, "config_binding": cb, "config_branches": nb}
-        if axes is not None:
-            ca = np.full((N, C, len(axes.pairs)), np.inf)
-            if len(pts):
-                np.minimum.at(ca, (pts, lab), per_axis)
-            ca[~np.isfinite(cc)] = np.nan
-            per_config["config_axis_capacity_kg"] = ca
-    return PointCapacity(capacity_kg=cap, binding=binding, branch=branch, direction=direction, worst_u=worst_u,
-                         n_states=np.asarray(n_solutions) * len(directions), names=names, axis_capacity_kg=axis_cap,
-                         **per_config)

@@ -25,9 +25,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from capmap.capacity.baseline import SelfMotion, healthy_capacity
-from capmap.capacity.directions import Directions
-from capmap.capacity.engine import Motion, argmin_per_group
+from capmap.capacity.baseline import HealthyProblem, healthy_capacity
+from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine_data import Evaluation
 
@@ -63,19 +62,17 @@ class LockedEvaluator:
 
 
 class HealthyEvaluator:
-    """The healthy arm's points (:func:`capmap.capacity.baseline.healthy_capacity`): the arm ``sm`` over
-    its swept joint's angles at end-effector ``rotation`` (3, 3), ``directions`` screened by ``screen``,
-    ``motion``; ``n_voxels`` the grid's voxel count (the owners' range). A voxel's points are evaluated
+    """The healthy arm's points (:func:`capmap.capacity.baseline.healthy_capacity`) of ``hp`` (the arm over
+    its swept joint's angles, the task's rotation, motion and directions, the screening set); ``n_voxels``
+    the grid's voxel count (the owners' range). A voxel's points are evaluated
     together, ``chunk`` at a time; each voxel's least value exact, the others may stop at it, tried first
     at the angle of the voxel's least value so far. No per-axis or per-configuration values.
     ``angle_deg`` after a call: each point's angle of its value (NaN: unreachable)."""
 
     pointwise = False
 
-    def __init__(self, sm: SelfMotion, rotation: np.ndarray, directions: Directions, screen: Directions,
-                 motion: Motion, n_voxels: int, chunk: int = 1000):
-        self.sm, self.rotation, self.directions, self.screen, self.motion = sm, rotation, directions, screen, motion
-        self.chunk, self.n_evaluated = int(chunk), 0
+    def __init__(self, hp: HealthyProblem, n_voxels: int, chunk: int = 1000):
+        self.hp, self.chunk, self.n_evaluated = hp, int(chunk), 0
         self.hint_of = np.full(int(n_voxels), -1)  # per voxel: the angle (index) of its least value's posture
         self.angle_deg = np.zeros(0)
 
@@ -86,8 +83,8 @@ class HealthyEvaluator:
         cap, binding, angle = np.full(N, np.nan), np.full(N, -1), np.full(N, np.nan)
         for r in range(0, N, self.chunk):
             rows = order[r:r + self.chunk]
-            hc = healthy_capacity(self.sm, points[rows], self.rotation, self.directions, self.screen, self.motion,
-                                  None if ceiling is None else ceiling[rows], None if owner is None else owner[rows],
+            hc = healthy_capacity(self.hp, points[rows], None if ceiling is None else ceiling[rows],
+                                  None if owner is None else owner[rows],
                                   None if owner is None else self.hint_of[owner[rows]])
             cap[rows], binding[rows], angle[rows] = hc.capacity_kg, hc.binding, hc.angle_deg
         self.n_evaluated += N
@@ -95,6 +92,6 @@ class HealthyEvaluator:
             c = np.where(np.isfinite(cap), cap, np.inf)
             i = argmin_per_group(c, owner)
             new = np.isfinite(c[i]) & (c[i] < (np.inf if ceiling is None else ceiling[i]))
-            self.hint_of[owner[i[new]]] = np.searchsorted(self.sm.angles_deg, angle[i[new]])
+            self.hint_of[owner[i[new]]] = np.searchsorted(self.hp.sm.angles_deg, angle[i[new]])
         self.angle_deg = angle
         return Evaluation(cap, np.zeros((N, 0)), binding, np.isfinite(cap).astype(int))

@@ -6,22 +6,19 @@ voxels' worst points, and the family's column schemas of these tables. No file I
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from capmap.capacity import sampling
-from capmap.capacity.baseline import SelfMotion, healthy_capacity
-from capmap.capacity.directions import Directions
+from capmap.capacity.baseline import HealthyProblem, healthy_capacity
 from capmap.capacity.evaluator import HealthyEvaluator
-from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
 from capmap.capacity.tables import grid_of
 from capmap.capacity.voxels import Grid
 from capmap.core.reduction import free
 
-__all__ = ["HEALTHY_COLUMNS", "BASELINE_COLUMNS", "HealthyProblem", "healthy_samples", "baseline_shard",
+__all__ = ["HEALTHY_COLUMNS", "BASELINE_COLUMNS", "healthy_samples", "baseline_shard",
            "angle_convergence"]
 
 HEALTHY_COLUMNS = ["x_m", "y_m", "z_m", "healthy_capacity_kg", "healthy_binding", "healthy_angle_deg", "n_points",
@@ -32,25 +29,6 @@ HEALTHY_COLUMNS = ["x_m", "y_m", "z_m", "healthy_capacity_kg", "healthy_binding"
 BASELINE_COLUMNS = ["i", "j", "k", *HEALTHY_COLUMNS[:6], "n_points", "converged", "capacity_kg",
                     "arm_configuration_capacity_kg", "loss_kg", "arm_configuration_loss_kg"]
 _CHUNK = 1000  # points per call of the evaluation (memory: ~36 angles x 8 solutions each)
-
-
-@dataclass(frozen=True)
-class HealthyProblem:
-    """The healthy arm's question: the failed arm's ``problem`` (rotation, motion, directions), the
-    self-motion ``sm`` over the failed joint's angles and the ``screen`` subset of the directions."""
-
-    problem: CapacityProblem
-    sm: SelfMotion
-    screen: Directions
-
-    def value(self, points: np.ndarray):
-        """The exact healthy value of points (N, 3) m (:func:`capmap.capacity.baseline.healthy_capacity`)."""
-        p = self.problem
-        return healthy_capacity(self.sm, points, p.rotation, p.directions, self.screen, p.motion)
-
-    def evaluator(self, n_voxels: int) -> HealthyEvaluator:
-        p = self.problem
-        return HealthyEvaluator(self.sm, p.rotation, p.directions, self.screen, p.motion, n_voxels, _CHUNK)
 
 
 def healthy_samples(robot, sc, edge_m: float) -> tuple[np.ndarray, Grid]:
@@ -73,9 +51,9 @@ def _lattice_union(a: Grid, b: Grid) -> Grid:
 
 
 def baseline_shard(hp: HealthyProblem, failed: pd.DataFrame, samples: tuple[np.ndarray, Grid],
-                   settings: RefineSettings | None, shard: int, shards: int, rng: np.random.Generator,
+                   settings: RefineSettings | None, part: tuple[int, int], rng: np.random.Generator,
                    log) -> tuple[pd.DataFrame, dict]:
-    """The healthy arm's voxels with flat index % shards == shard: its sampled points there (``samples``:
+    """Shard ``part`` = (k, n) of the healthy arm: its voxels with flat index % n == k, its sampled points there (``samples``:
     positions and their grid, :func:`healthy_samples`) and the failed map's worst point of each voxel,
     then each voxel's minimum refined as the map's (``settings``; None: not refined). One row per voxel
     that a point reaches (:data:`HEALTHY_COLUMNS`) and the provenance fields (angles, seconds, points)."""
@@ -87,9 +65,10 @@ def baseline_shard(hp: HealthyProblem, failed: pd.DataFrame, samples: tuple[np.n
     shift = np.rint((fg.lower - grid.lower) / grid.edge_m).astype(int)
     pos = np.concatenate([samples[0], fr[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()])
     flat = np.concatenate([grid.flat(grid.index(samples[0])), grid.flat(fr[["i", "j", "k"]].to_numpy() + shift)])
+    shard, shards = part
     mine = flat % shards == shard
     pos, flat = pos[mine], flat[mine]
-    ev = hp.evaluator(grid.n_voxels)
+    ev = HealthyEvaluator(hp, grid.n_voxels, _CHUNK)
     # the first point of each voxel exactly, then the others against it (only a lower value needs to be exact)
     first = np.zeros(len(flat), dtype=bool)
     first[np.unique(flat, return_index=True)[1]] = True
@@ -119,7 +98,7 @@ def _healthy_table(hp: HealthyProblem, grid: Grid, res: VoxelMinima, log) -> pd.
     """One row per reached voxel (:data:`HEALTHY_COLUMNS`); each worst point evaluated again, exactly, for
     its angle and binding limit."""
     reach = np.isfinite(res.capacity_kg)
-    final = hp.value(res.worst_m[reach])
+    final = healthy_capacity(hp, res.worst_m[reach])
     names = list(hp.sm.limits.names) + ["singular"]
     off = final.capacity_kg - res.capacity_kg[reach]  # > 0 only where a tie kept a point stopped at its ceiling
     if len(off) and np.nanmax(np.abs(off)) > 1e-9 * max(1.0, np.nanmax(np.abs(final.capacity_kg))):
@@ -165,7 +144,7 @@ def angle_convergence(problems: tuple[HealthyProblem, HealthyProblem, HealthyPro
     pts = rows[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
     out = pd.DataFrame({"x_m": pts[:, 0], "y_m": pts[:, 1], "z_m": pts[:, 2]})
     for col, hp in zip(("healthy_capacity_kg", "healthy_half_step_kg", "healthy_quarter_step_kg"), problems):
-        out[col] = hp.value(pts).capacity_kg
+        out[col] = healthy_capacity(hp, pts).capacity_kg
     base = out.healthy_capacity_kg.where(out.healthy_capacity_kg > 0)
     out["rise_half_step_rel"] = (out.healthy_half_step_kg - out.healthy_capacity_kg) / base
     out["rise_quarter_step_rel"] = (out.healthy_quarter_step_kg - out.healthy_capacity_kg) / base

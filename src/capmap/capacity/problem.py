@@ -18,7 +18,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from capmap.capacity.directions import Directions
-from capmap.capacity.engine import Motion, PointCapacity, point_capacity
+from capmap.capacity.engine import (
+    SINGULAR,
+    Motion,
+    PointCapacity,
+    argmin_per_group,
+    coefficients,
+    direction_minimum,
+    motion_features,
+)
+from capmap.capacity.sweep import min_per_pair
 from capmap.core import ik
 from capmap.core.configuration import Configurations
 from capmap.core.dynamics import ArmDynamics
@@ -26,7 +35,7 @@ from capmap.core.ik.finish import IKSolutions
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm
 
-__all__ = ["CapacityProblem"]
+__all__ = ["CapacityProblem", "point_capacity"]
 
 
 @dataclass(frozen=True)
@@ -57,8 +66,7 @@ class CapacityProblem:
     def capacity(self, sol: IKSolutions) -> PointCapacity:
         """Each point's capacity (kg, min over its branches in ``sol`` x the directions), with the per-axis
         and per-configuration minima the problem asks for."""
-        return point_capacity(self.dyn, sol.q, sol.n_solutions, self.directions, self.motion, self.limits,
-                              self.axes, self.labels)
+        return point_capacity(self, sol.q, sol.n_solutions)
 
     def solve(self, points_m: np.ndarray, chunk: int = 2000) -> tuple[IKSolutions, PointCapacity]:
         """IK and capacity of N points (N, 3) m, ``chunk`` points at a time (memory: chunk x branches x
@@ -78,8 +86,75 @@ class CapacityProblem:
         """The capacity of each configuration q_rad (K, n_active) rad on its own (K rows: the branch's
         minimum over the directions, its worst direction and binding limit)."""
         q = np.asarray(q_rad, dtype=float).reshape(-1, self.arm.n_active)
-        return point_capacity(self.dyn, q[:, None, :], np.ones(len(q), dtype=int), self.directions, self.motion,
-                              self.limits)
+        return point_capacity(self, q[:, None, :], np.ones(len(q), dtype=int), extras=False)
+
+
+def point_capacity(problem: CapacityProblem, q_sets: np.ndarray, n_solutions: np.ndarray,
+                   extras: bool = True) -> PointCapacity:
+    """Capacity of N points of ``problem`` from their IK configuration sets.
+
+    q_sets: (N, K, n_active) rad, NaN-padded beyond n_solutions (N,) per point; each point's least
+    value over its configurations x the problem's directions. With ``extras`` and the problem's
+    ``axes`` (directions in antipodal pairs, e.g. :func:`~capmap.capacity.directions.grid_axes`), also
+    the capacity along each pair's line (moving along u or -u), min over the configuration set:
+    axis_capacity_kg (N, P). With ``extras`` and the problem's ``labels`` (the chain's configuration
+    labels, :mod:`capmap.core.configuration`), the same minima per configuration label (C labels):
+    config_capacity_kg (N, C), config_binding (N, C) and, with axes, config_axis_capacity_kg (N, C, P);
+    the all-branch values are their minima over C.
+    """
+    dyn, directions, motion, limits = problem.dyn, problem.directions, problem.motion, problem.limits
+    axes, configurations = (problem.axes, problem.labels) if extras else (None, None)
+    N, K = q_sets.shape[:2]
+    names = limits.names + (SINGULAR,)
+    cap = np.full(N, np.nan)
+    binding = np.full(N, -1)
+    branch = np.full(N, -1)
+    direction = np.full(N, -1)
+    worst_u = np.full((N, 3), np.nan)
+    valid = np.arange(K)[None, :] < np.asarray(n_solutions)[:, None]
+    pts, brs = np.nonzero(valid)
+    axis_cap = None if axes is None else np.full((N, len(axes.pairs)), np.nan)
+    if len(pts):
+        coef = coefficients(dyn, q_sets[pts, brs])
+        c_cfg, worst_dir, u_cfg, b_cfg = direction_minimum(coef, directions, motion, dyn.gravity, limits)
+        if axes is not None:
+            a = motion.a_max_mps2
+            per_axis, _ = min_per_pair(coef.stacked(), coef.S, motion_features(axes.u, motion), a * axes.u, dyn.gravity,
+                                       limits.limit, axes.pairs)
+            per_axis[coef.singular] = 0.0
+            axis_cap[:] = np.inf
+            np.minimum.at(axis_cap, pts, per_axis)
+            axis_cap[np.asarray(n_solutions) == 0] = np.nan
+        sel = argmin_per_group(c_cfg, pts)  # min over each point's configurations
+        p = pts[sel]
+        cap[p] = c_cfg[sel]
+        branch[p] = brs[sel]
+        direction[p] = worst_dir[sel]
+        worst_u[p] = u_cfg[sel]
+        binding[p] = b_cfg[sel]
+    per_config = {}
+    if configurations is not None:
+        C = len(configurations.names)
+        lab = configurations.labels(q_sets[pts, brs]) if len(pts) else np.zeros(0, dtype=int)
+        cc = np.full((N, C), np.nan)
+        cb = np.full((N, C), -1)
+        if len(pts):
+            group = pts * C + lab  # an aspect can hold several solutions of a point: their minimum
+            sel = argmin_per_group(c_cfg, group)
+            cc.reshape(-1)[group[sel]] = c_cfg[sel]
+            cb.reshape(-1)[group[sel]] = b_cfg[sel]
+        nb = np.zeros((N, C), dtype=int)
+        np.add.at(nb, (pts, lab), 1)
+        per_config = {"config_capacity_kg": cc, "config_binding": cb, "config_branches": nb}
+        if axes is not None:
+            ca = np.full((N, C, len(axes.pairs)), np.inf)
+            if len(pts):
+                np.minimum.at(ca, (pts, lab), per_axis)
+            ca[~np.isfinite(cc)] = np.nan
+            per_config["config_axis_capacity_kg"] = ca
+    return PointCapacity(capacity_kg=cap, binding=binding, branch=branch, direction=direction, worst_u=worst_u,
+                         n_states=np.asarray(n_solutions) * len(directions), names=names, axis_capacity_kg=axis_cap,
+                         **per_config)
 
 
 def _concat(parts: list[PointCapacity]) -> PointCapacity:

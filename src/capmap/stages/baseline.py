@@ -33,7 +33,7 @@ def stage_baseline_shard(voxels: str, out: str, slice_json: str, shard: int, sha
     settings = None if rf is None else refine_settings(rf, run.task.payload_kg)
     rng = np.random.default_rng([0 if rf is None else rf.seed, shard, shards, 7])
     samples = healthy_samples(hp.problem.arm.robot, run.sampling, run.voxel_edge_m)
-    df, meta = baseline_shard(hp, datasets.read(voxels), samples, settings, shard, shards, rng, log)
+    df, meta = baseline_shard(hp, datasets.read(voxels), samples, settings, (shard, shards), rng, log)
     datasets.write(df, out, datasets.provenance("baseline", cfg.doc, shard=shard, shards=shards, **meta))
     log.info(f"done: {len(df)} voxels, {meta['points_evaluated']} points evaluated "
              f"({meta['points_evaluated'] / max(len(df), 1):.1f} per voxel), "
