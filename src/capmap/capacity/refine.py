@@ -44,31 +44,11 @@ from collections.abc import Callable
 import numpy as np
 
 from capmap.capacity.evaluator import Evaluator
-from capmap.capacity.folds import ConfigBrackets, FoldBrackets
-from capmap.capacity.patterns import COMPASS, CORNERS, around, rows_in
 from capmap.capacity.refine_data import Evaluation, RefineSettings, VoxelMinima
+from capmap.capacity.refine_rounds import Rounds, argmin_columns
 from capmap.capacity.voxels import Grid
 
 __all__ = ["RefineSettings", "Evaluation", "VoxelMinima", "refine", "argmin_columns"]
-
-
-def _near(cap: np.ndarray, s: RefineSettings) -> np.ndarray:
-    """(V, G) values -> (V,): some value within near_band of a payload."""
-    if not s.payloads_kg:
-        return np.zeros(len(cap), dtype=bool)
-    p = np.asarray(s.payloads_kg, dtype=float)
-    return np.any(np.abs(cap[..., None] - p) <= s.near_band * p, axis=(1, 2))
-
-
-def _groups(ev: Evaluation, C: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Point results as groups: all branches (group 0), then each configuration: capacity (N, G)
-    and binding (N, G) and axis capacities (N, G, A), +inf where a group has no solution."""
-    c, a, b = ev.capacity_kg[:, None], ev.axis_capacity_kg[:, None, :], ev.binding[:, None]
-    if C:
-        c = np.concatenate([c, ev.config_capacity_kg], axis=1)
-        a = np.concatenate([a, ev.config_axis_capacity_kg], axis=1)
-        b = np.concatenate([b, ev.config_binding], axis=1)
-    return np.where(np.isfinite(c), c, np.inf), b, np.where(np.isfinite(a), a, np.inf)
 
 
 def refine(grid: Grid, start: VoxelMinima, evaluator: Evaluator, settings: RefineSettings,
@@ -93,194 +73,19 @@ def refine(grid: Grid, start: VoxelMinima, evaluator: Evaluator, settings: Refin
     The start's worst point is evaluated again in the first round, so that the configurations' minima
     hold the point of the all-branch one (the lowest of them is then at most the all-branch value).
     A configuration that no point of a voxel holds stays NaN there."""
-    s = settings
-    C = 0 if start.config_capacity_kg is None else start.config_capacity_kg.shape[1]
-    V, A = start.axis_capacity_kg.shape
-    # groups: 0 = all branches, 1.. = configurations; +inf: no point of the group seen yet
-    cap = start.capacity_kg.astype(float)[:, None]
-    axis = start.axis_capacity_kg.astype(float)[:, None, :]
-    worst = start.worst_m.astype(float)[:, None, :]
-    binding = start.binding.astype(int)[:, None]
-    n_grp = start.n_reachable.astype(int)[:, None]
-    if C:
-        cap = np.concatenate([cap, start.config_capacity_kg], axis=1)
-        axis = np.concatenate([axis, start.config_axis_capacity_kg], axis=1)
-        worst = np.concatenate([worst, start.config_worst_m], axis=1)
-        binding = np.concatenate([binding, start.config_binding], axis=1)
-        n_grp = np.concatenate([n_grp, start.config_n_points], axis=1)
-    reach0 = np.isfinite(start.capacity_kg)
-    cap = np.where(np.isfinite(cap) | ~reach0[:, None], cap, np.inf)  # unreachable voxels stay NaN
-    axis = np.where(np.isfinite(axis) | ~reach0[:, None, None], axis, np.inf)
-    n_pts = start.n_points.astype(int).copy()
-    n_reach = start.n_reachable.astype(int).copy()
-    change = np.zeros(V)
-
-    def flat0() -> np.ndarray:  # (V, G): the group's value and every axis 0, nothing left to fall
-        return (cap == 0.0) & np.all(np.nan_to_num(axis, nan=0.0) == 0.0, axis=2)
-
-    def zero() -> np.ndarray:  # nothing can fall further in any group (groups not seen: nothing to fall)
-        z = flat0() | ~np.isfinite(cap)
-        z[:, 0] &= np.isfinite(cap[:, 0])
-        return np.all(z, axis=1)
-
-    # a voxel whose configurations are not known yet is refined at least once
-    converged = ~reach0 | (zero() & ~np.any(np.isinf(cap[:, 1:]), axis=1))
-    stopped = np.zeros(V, dtype=bool)  # still falling when the compasses reached their finest step
-    idx3 = np.stack(np.unravel_index(start.voxel, grid.shape), axis=1)
-    fs = FoldBrackets.empty(V, C)  # per voxel: a bracket [a, b] of different branch counts, once one is seen
-    fold, fa, fb = fs.fold, fs.fa, fs.fb
-    axis_worst = np.repeat(worst[:, :, None, :], A, axis=2)  # (V, G, A, 3): where each axis minimum is
-    axis_open = np.ones(axis.shape, dtype=bool)  # axis minima still falling (their compass continues)
-    grp_open = np.ones(cap.shape, dtype=bool)  # group minima still falling
-    cb = ConfigBrackets.empty(V, C)  # per voxel and configuration: a bracket of different solution counts
-    settled = np.zeros(V, dtype=bool)  # every group quiet but an open bracket: only the bisections go on
-    seen = np.zeros((0, 4))  # (voxel, point) of every point evaluated: none twice
-    rounds, evaluated = 0, 0
-    while True:
-        z = zero()
-        bisect = np.flatnonzero(fold & ~z & (np.linalg.norm(fb - fa, axis=1) > s.fold_tol_m))
-        kv, kc, kmid = cb.midpoints(s.fold_tol_m)  # each configuration's boundary, bisected
-        keep = ~z[kv] & ~flat0()[kv, 1 + kc]  # (not where nothing can fall further, in the voxel or the group)
-        kv, kc, kmid = kv[keep], kc[keep], kmid[keep]
-        searching = np.flatnonzero(~converged & ~stopped & ~settled & (n_pts < s.max_points))
-        active = np.union1d(np.union1d(searching, bisect), kv)
-        if not len(active):
-            break
-        rounds += 1
-        # new points: the voxel's corners in the first round; then a compass around the worst point of the
-        # all-branch value, of each configuration and of each axis minimum still falling (one per distinct
-        # point); uniform points up to the voxel's least count; the brackets' midpoints
-        if rounds == 1:  # with configurations, the start's worst point again: its value on each of them
-            local = np.repeat(active, 8)
-            local_pts = grid.lower + (idx3[local] + np.tile(CORNERS, (len(active), 1))) * grid.edge_m
-            again = active[np.all(np.isfinite(start.worst_m[active]), axis=1)] if C else active[:0]
-            local, local_pts = np.concatenate([local, again]), np.concatenate([local_pts, start.worst_m[again]])
-        else:
-            h = grid.edge_m * 0.5 ** rounds
-            has = searching[np.isfinite(cap[searching, 0]) & grp_open[searching, 0]]
-            v, g = np.nonzero(grp_open[searching, 1:] & np.isfinite(cap[searching, 1:]))
-            v, g = searching[v], g + 1
-            cv, centres = [v], [worst[v, g]]
-            v, g, a = np.nonzero(axis_open[searching] & np.isfinite(axis[searching]))
-            v = searching[v]
-            cv.append(v)
-            centres.append(axis_worst[v, g, a])
-            cv, centres = np.concatenate(cv), np.concatenate(centres)
-            # minima at the same point (often a corner, or the all-branch worst) share one compass
-            known = np.column_stack([has, worst[has, 0]])
-            rows = np.column_stack([cv, centres])
-            _, keep = np.unique(rows, axis=0, return_index=True)
-            keep = keep[~rows_in(rows[keep], known)]
-            v, centre = cv[keep], centres[keep]
-            local = np.concatenate([np.repeat(has, len(COMPASS)), np.repeat(v, len(COMPASS))])
-            local_pts = np.concatenate([around(worst[has, 0], COMPASS, h, grid, idx3[has]),
-                                        around(centre, COMPASS, h, grid, idx3[v])])
-        rows = np.column_stack([local, local_pts])  # a point of a voxel evaluated once (compasses clip to corners)
-        _, first = np.unique(rows, axis=0, return_index=True)
-        first = np.sort(first)
-        first = first[~rows_in(rows[first], seen)]
-        n_first = len(first)  # then the brackets' midpoints, in this order (the brackets find them by index)
-        local = np.concatenate([local[first], bisect, kv])
-        local_pts = np.concatenate([local_pts[first], 0.5 * (fa[bisect] + fb[bisect]), kmid])
-        n_local = np.bincount(local, minlength=V)[active]
-        need = np.where(_near(cap[active], s), s.near_min_points, s.min_points)
-        # (from the second round: the corners and the first compass count before any uniform point)
-        new = np.where(np.isin(active, searching) & (rounds > 1), np.clip(need - n_pts[active] - n_local, 0, None), 0)
-        uniform = np.repeat(active, new)
-        owner = np.concatenate([local, uniform])
-        pts = np.concatenate([local_pts,
-                              grid.lower + (idx3[uniform] + rng.uniform(0.0, 1.0, (len(uniform), 3))) * grid.edge_m])
-        new = new + n_local
-        ev, n_unique = _evaluate_once(evaluator, pts, cap[owner, 0], owner)
+    st = Rounds.begin(grid, start)
+    while (plan := st.plan(settings)) is not None:
+        st.rounds += 1
+        owner, pts, new, n_first = st.points(start, plan, settings, rng)
+        ev, n_unique = _evaluate_once(evaluator, pts, st.cap[owner, 0], owner)
         if progress:
-            progress(rounds, len(active), n_unique)
-        evaluated += n_unique
-        seen = np.concatenate([seen, np.column_stack([owner, pts])])
-        c, b, ac = _groups(ev, C)
-        old = cap[active].copy()
-        axis_old = axis[active].copy()
-        # per group and per (group, axis): the new minimum of each voxel and where it is (one sort for all)
-        G = 1 + C
-        vs, rows_min = argmin_columns(np.concatenate([c, ac.reshape(len(pts), G * A)], axis=1), owner)
-        best_i, best_a = rows_min[:, :G], rows_min[:, G:].reshape(len(vs), G, A)
-        gi = np.arange(G)
-        val = c[best_i, gi]
-        lower = val < cap[vs]
-        vv, gg = np.nonzero(lower)
-        cap[vs[vv], gg] = val[vv, gg]
-        worst[vs[vv], gg] = pts[best_i[vv, gg]]
-        binding[vs[vv], gg] = b[best_i[vv, gg], gg]
-        np.add.at(n_grp, owner, np.isfinite(c).astype(int))
-        aval = ac[best_a, gi[None, :, None], np.arange(A)[None, None, :]]
-        vv, gg, aa = np.nonzero(aval < axis[vs])
-        axis[vs[vv], gg, aa] = aval[vv, gg, aa]
-        axis_worst[vs[vv], gg, aa] = pts[best_a[vv, gg, aa]]
-        drop = _rel_drop(old, cap[active])  # (active, G)
-        axis_drop = _rel_drop(axis_old, axis[active])  # (active, G, A)
-        cnt = ev.config_branches if C else np.zeros((len(pts), 0), dtype=int)
-        fs.track(owner, pts, ev.n_branches, cnt, n_first, bisect)
-        mid = n_first + len(bisect) + np.arange(len(kv))
-        cb.track(kv, kc, pts[mid], cnt[mid, kc], owner, pts, cnt, fs.ref_pt, fs.ref_c)
-        n_pts[active] += new
-        np.add.at(n_reach, owner, np.isfinite(ev.capacity_kg).astype(int))
-        open_fold = fold[active] & (np.linalg.norm(fb[active] - fa[active], axis=1) > s.fold_tol_m)
-        # a closed bracket with capacity 0 is a singular fold: across it every axis falls to 0 as well; the
-        # configurations whose solutions it ends (different counts at its two ends, within fold_tol_m of it)
-        # fall to 0 there, their worst point the bracket's end on their side
-        singular = active[fold[active] & ~open_fold & (cap[active, 0] == 0.0)]
-        ends = np.zeros((len(singular), 1 + C), dtype=bool)
-        ends[:, 1:] = fs.ca[singular] != fs.cb[singular]
-        on_b = fs.cb[singular] > fs.ca[singular]
-        for g in range(1, 1 + C):
-            e = ends[:, g]
-            worst[singular[e], g] = np.where(on_b[e, g - 1][:, None], fb[singular[e]], fa[singular[e]])
-            binding[singular[e], g] = binding[singular[e], 0]
-        cap[singular] = np.where(ends, 0.0, cap[singular])
-        axis[singular] = np.where((cap[singular] == 0.0)[:, :, None], 0.0, axis[singular])
-        # the configurations an open fold ends (different solution counts at its two ends) wait for the
-        # bisection: their minimum lies at the fold, where the bracket closes; no compass for them
-        pending = np.zeros((len(active), 1 + C), dtype=bool)
-        pending[:, 1:] = open_fold[:, None] & (fs.ca[active] != fs.cb[active])
-        # a group whose value and axes are all 0 has nothing left to fall
-        done = flat0()[active]
-        # every group and every axis has converged too
-        quiet = pending | done
-        grp_drop = np.where(quiet, 0.0, np.maximum(drop, np.nan_to_num(axis_drop.max(axis=2, initial=0.0))))
-        change[active] = grp_drop.max(axis=1)
-        grp_open[active] = grp_drop >= s.rel_tol
-        axis_open[active] = (axis_drop >= s.rel_tol) & ~quiet[:, :, None] & (0.5 ** (rounds + 1) >= s.finest_step)
-        enough = (n_pts[active] >= s.min_points) & (~_near(cap[active], s) | (n_pts[active] >= s.near_min_points))
-        open_cfg = np.any(cb.open(s.fold_tol_m)[active] & ~flat0()[active, 1:], axis=1)
-        converged[active] = ((change[active] < s.rel_tol) & enough & ~open_fold & ~open_cfg) | zero()[active]
-        settled[active] = (change[active] < s.rel_tol) & enough & (open_fold | open_cfg)
-        if 0.5 ** (rounds + 1) < s.finest_step:  # the compasses have reached their finest step: stop
-            stopped[active] = True
-    unseen = np.isinf(cap)  # groups no point held: NaN
-    cap[unseen] = np.nan
-    axis[np.isinf(axis)] = np.nan
-    worst[unseen] = np.nan
-    binding[unseen] = -1
-    per_config = {}
-    if C:
-        per_config = dict(config_capacity_kg=cap[:, 1:], config_axis_capacity_kg=axis[:, 1:], config_worst_m=worst[:, 1:],
-                          config_binding=binding[:, 1:], config_n_points=n_grp[:, 1:])
-    return VoxelMinima(voxel=start.voxel, capacity_kg=cap[:, 0], axis_capacity_kg=axis[:, 0], n_points=n_pts,
-                       n_reachable=n_reach, last_change=change, converged=converged, worst_m=worst[:, 0],
-                       binding=binding[:, 0], rounds=rounds, n_evaluated=evaluated, **per_config)
-
-
-def argmin_columns(values: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The groups present in groups (N,) int, ascending (G,), and per group and column of values (N, K)
-    the row of the smallest value (G, K); ties go to the first row (as
-    :func:`capmap.capacity.engine.argmin_per_group` on each column, with one sort for all columns)."""
-    order = np.argsort(groups, kind="stable")
-    g = groups[order]
-    starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]]) if len(g) else np.zeros(0, dtype=int)
-    v = values[order]
-    mins = np.minimum.reduceat(v, starts, axis=0)
-    seg = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(order)]))
-    pos = np.where(v == mins[seg], np.arange(len(order))[:, None], len(order))
-    return g[starts], order[np.minimum.reduceat(pos, starts, axis=0)]
+            progress(st.rounds, len(plan.active), n_unique)
+        st.evaluated += n_unique
+        st.seen = np.concatenate([st.seen, np.column_stack([owner, pts])])
+        drop, axis_drop = st.absorb(ev, owner, pts, plan)
+        st.track(ev, owner, pts, plan, n_first)
+        st.settle(plan, new, drop, axis_drop, settings)
+    return st.result()
 
 
 def _evaluate_once(evaluator: Evaluator, pts: np.ndarray, ceiling: np.ndarray, owner: np.ndarray
@@ -299,13 +104,3 @@ def _evaluate_once(evaluator: Evaluator, pts: np.ndarray, ceiling: np.ndarray, o
     ev = evaluator.evaluate(pts[first], ceil, owner[first])
     return Evaluation(*(None if (x := getattr(ev, f)) is None else x[inv] for f in Evaluation.__dataclass_fields__)), \
         len(first)
-
-
-def _rel_drop(old: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """(old - new) / old elementwise, 0 where old is not positive or new is 0 (nothing left to fall);
-    from +inf (not seen before) 1 where new is finite and positive, else 0."""
-    fin = np.isfinite(old)
-    with np.errstate(invalid="ignore"):  # inf - inf where old is not finite: replaced below
-        d = np.where(fin & (old > 0), (old - new) / np.where(fin & (old > 0), old, 1.0), 0.0)
-    d = np.where(np.isinf(old), np.where(np.isinf(new), 0.0, 1.0), d)
-    return np.where(new == 0.0, 0.0, d)
