@@ -94,6 +94,10 @@ def _search(s: MoveCache, start_m: np.ndarray, goal_m: np.ndarray, q0: np.ndarra
         g_of[i] = g_new
         heapq.heappush(heap, (g_new + float(np.linalg.norm(goal_m - pos)), -g_new, i))
 
+    def improves(key, g_new):  # a state not reached yet, or reached more dearly and not closed
+        j = key_of.get(key)
+        return j is None or (j not in closed and g_new < g_of[j] - 1e-12)
+
     def arrive(v, q, parent, cap, g_new):
         key, q_c = s.state_at(v, q)
         push(key, s.centre_of(v), q_c, v, "voxel", parent, cap, g_new)
@@ -135,25 +139,32 @@ def _search(s: MoveCache, start_m: np.ndarray, goal_m: np.ndarray, q0: np.ndarra
                 q1, cap = single(i, goal_m)
                 if q1 is not None:
                     push("goal", goal_m, q1, v, "goal", i, cap, g + float(np.linalg.norm(goal_m - centre[1])))
-        w, p1, sets, counts = s.voxel_moves(v)
-        if not len(w):
-            continue
-        ok, path = track_moves(pb, np.repeat(q[None], len(w), axis=0), sets, counts)
-        step = np.linalg.norm(p1 - pos, axis=1)
-        arrivals = []  # tracked moves that would improve a state not yet closed: only these are loaded
-        for e in np.flatnonzero(ok):
-            key, q_c = s.state_at(int(w[e]), path[e, -1])
-            j = key_of.get(key)
-            if j is None or (j not in closed and g + step[e] < g_of[j] - 1e-12):
-                arrivals.append((e, key, q_c))
-        if not arrivals:
-            continue
-        e_ok = np.array([a[0] for a in arrivals])
-        cap = move_capacity(pb, np.repeat(q[None], len(e_ok), axis=0), path[e_ok], (p1[e_ok] - pos) / step[e_ok, None])
-        for (e, key, q_c), c in zip(arrivals, cap):
+        for key, p1, q_c, w, c, g_new in _moves_out(s, pos, q, v, g, improves):
             if c >= payload_kg:
-                push(key, p1[e], q_c, int(w[e]), "voxel", i, c, g + float(step[e]))
+                push(key, p1, q_c, w, "voxel", i, c, g_new)
     return nodes, None, expanded
+
+
+def _moves_out(s: MoveCache, pos: np.ndarray, q: np.ndarray, v: int, g: float, improves) -> list[tuple]:
+    """The moves from state (pos, q) in voxel v, reached at cost g, to its neighbours that track on the
+    branch and would improve a state (``improves(key, g_new)``): (state key, arrival point (3,), q there,
+    voxel, the move's capacity kg, cost there); only these moves are loaded."""
+    pb = s.problem
+    w, p1, sets, counts = s.voxel_moves(v)
+    if not len(w):
+        return []
+    ok, path = track_moves(pb, np.repeat(q[None], len(w), axis=0), sets, counts)
+    step = np.linalg.norm(p1 - pos, axis=1)
+    arrivals = []  # tracked moves that would improve a state not yet closed: only these are loaded
+    for e in np.flatnonzero(ok):
+        key, q_c = s.state_at(int(w[e]), path[e, -1])
+        if improves(key, g + step[e]):
+            arrivals.append((e, key, q_c))
+    if not arrivals:
+        return []
+    e_ok = np.array([a[0] for a in arrivals])
+    cap = move_capacity(pb, np.repeat(q[None], len(e_ok), axis=0), path[e_ok], (p1[e_ok] - pos) / step[e_ok, None])
+    return [(key, p1[e], q_c, int(w[e]), c, g + float(step[e])) for (e, key, q_c), c in zip(arrivals, cap)]
 
 
 def _result(s: MoveCache, nodes: list, goal: int, expanded: int) -> BranchPlan:

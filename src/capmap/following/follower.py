@@ -80,34 +80,76 @@ class FollowResult:
         return float(self.t_s[-1])
 
 
-def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: float,
-           max_time_factor: float = 20.0) -> FollowResult:
-    """Run the follower from rest at s = 0 until it rests at the end of the path (see the module
-    docstring). Raises SolverFailed if it has not arrived within max_time_factor x the
-    command's duration."""
+@dataclass(frozen=True)
+class _LoopData:
+    """What the follower's loop reads, computed once: the control period dt, path length L, speed limit,
+    torque limits, the end tolerance and approach acceleration, the catch-up gains, the step counts, the
+    command sampled at every period, the path dynamics' grid (a, b, c, dq, spacing h, G intervals), the
+    squared speed ceiling on it and the friction terms."""
+
+    dt: float
+    L: float
+    v_max: float
+    limits: AffineLimits
+    end_tol: float
+    a_end: float
+    kp: float
+    kv: float
+    n_max: int
+    n_cmd: int
+    sc_all: list
+    sdc_all: list
+    sddc_all: list
+    grid_a: np.ndarray
+    grid_b: np.ndarray
+    grid_c: np.ndarray
+    h: float
+    G: int
+    vlim2: list
+    friction: bool
+    grid_dq: np.ndarray | None
+    f_c: np.ndarray | None
+    f_v: np.ndarray | None
+
+
+def _loop_data(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: float,
+               max_time_factor: float) -> _LoopData:
+    """The follower's inputs checked and laid out for its loop (see :class:`_LoopData`)."""
     dt = float(period_s)
     if not dt > 0:
         raise CapmapError(f"period_s = {period_s!r} must be > 0")
     if not catch_up_hz > 0:
         raise CapmapError(f"catch_up_hz = {catch_up_hz!r} must be > 0")
-    pdyn, limits, v_max = prep.dynamics, prep.limits, prep.v_max_mps
+    pdyn = prep.dynamics
     L = command.length_m
     if abs(L - pdyn.s[-1]) > 1e-9 * max(1.0, L):
         raise CapmapError(f"command length {L} m differs from the path length {pdyn.s[-1]} m")
     w = 2 * math.pi * catch_up_hz
-    kp, kv = w * w, 2 * w
-    n_max = math.ceil(max_time_factor * command.duration_s / dt) + 2
     n_cmd = math.ceil(command.duration_s / dt) + 2
     sc_all, sdc_all, sddc_all = (x.tolist() for x in command.evaluate(np.arange(n_cmd + 1) * dt))
-    grid_a, grid_b, grid_c, h = pdyn.a, pdyn.b, pdyn.c, float(pdyn.s[1] - pdyn.s[0])
     friction = pdyn.has_friction
-    if friction:
-        grid_dq, f_c, f_v = pdyn.dq, pdyn.coulomb_nm, pdyn.viscous_nms
-    vlim2 = (prep.v_limit**2).tolist()  # interpolate squared speeds: exact on a constant-deceleration braking curve
-    G = len(pdyn.s) - 1
-    # a discrete follower braking at beta can stop only within ~beta dt^2 of the end
-    end_tol = max(END_TOL_M, prep.brake_end_mps2 * dt * dt)
-    a_end = command.a_peak_mps2
+    return _LoopData(
+        dt=dt, L=L, v_max=prep.v_max_mps, limits=prep.limits,
+        # a discrete follower braking at beta can stop only within ~beta dt^2 of the end
+        end_tol=max(END_TOL_M, prep.brake_end_mps2 * dt * dt), a_end=command.a_peak_mps2, kp=w * w, kv=2 * w,
+        n_max=math.ceil(max_time_factor * command.duration_s / dt) + 2, n_cmd=n_cmd, sc_all=sc_all, sdc_all=sdc_all,
+        sddc_all=sddc_all, grid_a=pdyn.a, grid_b=pdyn.b, grid_c=pdyn.c, h=float(pdyn.s[1] - pdyn.s[0]),
+        G=len(pdyn.s) - 1,
+        vlim2=(prep.v_limit**2).tolist(),  # interpolate squared speeds: exact on a constant-deceleration braking curve
+        friction=friction, grid_dq=pdyn.dq if friction else None, f_c=pdyn.coulomb_nm if friction else None,
+        f_v=pdyn.viscous_nms if friction else None)
+
+
+def follow(prep: PreparedPath, command: SCurve, period_s: float, catch_up_hz: float,
+           max_time_factor: float = 20.0) -> FollowResult:
+    """Run the follower from rest at s = 0 until it rests at the end of the path (see the module
+    docstring). Raises SolverFailed if it has not arrived within max_time_factor x the
+    command's duration."""
+    lp = _loop_data(prep, command, period_s, catch_up_hz, max_time_factor)
+    dt, L, v_max, limits, end_tol, a_end, kp, kv = lp.dt, lp.L, lp.v_max, lp.limits, lp.end_tol, lp.a_end, lp.kp, lp.kv
+    n_max, n_cmd, sc_all, sdc_all, sddc_all = lp.n_max, lp.n_cmd, lp.sc_all, lp.sdc_all, lp.sddc_all
+    grid_a, grid_b, grid_c, h, G, vlim2 = lp.grid_a, lp.grid_b, lp.grid_c, lp.h, lp.G, lp.vlim2
+    friction, grid_dq, f_c, f_v = lp.friction, lp.grid_dq, lp.f_c, lp.f_v
 
     def ceiling(s_next: float) -> float:
         """Speed ceiling (v_max, velocity limit and braking curves) at a position."""

@@ -81,26 +81,7 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
         x=xyz[zero, 0].tolist(), y=xyz[zero, 1].tolist(), z=xyz[zero, 2].tolist(), mode="markers",
         name="0 kg: a singular surface crosses the voxel", marker=dict(size=2.5, color="crimson", opacity=0.6),
         text=hover(c[zero], bind[zero]), hovertemplate=hov))
-    line = np.vstack([start_m, goal_m])
-    fig.add_trace(go.Scatter3d(x=line[:, 0].tolist(), y=line[:, 1].tolist(), z=line[:, 2].tolist(), mode="lines",
-                               name="direct line",
-                               line=dict(color="red", width=5, dash="dash")))
-    for k, p in enumerate(paths):
-        pts = np.asarray(p.points_m, float)
-        colour = ["black", "darkorange", "magenta", "cyan", "saddlebrown", "royalblue"][k % 6]
-        text = [""] * len(pts)
-        if p.ends:
-            text[0], text[-1] = f"{p.ends}: start", f"{p.ends}: goal"
-            if len(pts) == 1:
-                text[0] = f"{p.ends}: start and goal"
-        fig.add_trace(go.Scatter3d(x=pts[:, 0].tolist(), y=pts[:, 1].tolist(), z=pts[:, 2].tolist(),
-                                   mode="lines+markers+text" if p.ends else "lines+markers", name=p.label,
-                                   text=text if p.ends else None, textfont=dict(color=colour),
-                                   line=dict(width=6, color=colour), marker=dict(size=3, color=colour)))
-    for pos, name, colour in ((start_m, "start", "green"), (goal_m, "goal", "red")):
-        fig.add_trace(go.Scatter3d(x=[float(pos[0])], y=[float(pos[1])], z=[float(pos[2])], mode="markers+text",
-                                   name=name, text=[name],
-                                   marker=dict(size=8, color=colour, symbol="diamond")))
+    _add_paths(fig, go, start_m, goal_m, paths)
     steps = [dict(method="skip", label=f"{v:g}", args=[None]) for v in levels]
     cuts = [dict(method="skip", label=f"{z:.2f}", args=[None]) for z in heights]
     active = int(np.searchsorted(levels, first))
@@ -126,9 +107,39 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
                         "z": np.asarray(m[1])[:, 2].round(4).tolist(), "c": np.asarray(m[2], float).round(2).tolist(),
                         "b": [names.index(str(b)) if str(b) in names else -1 for b in m[3]]}
                        for m in maps])
-    # on a slider step or a map button: the shown map's voxels up to the height cut, >= the payload level in
-    # trace 0, the others in trace 1, its 0 kg voxels in trace 2
-    script = ("const M = " + data + ", L = " + json.dumps(levels.tolist()) + ", H = " + json.dumps(heights.tolist())
+    script = _script(data, levels, heights, names, active)
+    return fig.to_html(include_plotlyjs=True, full_html=True, post_script=script, div_id="capmap-3d",
+                       config={"displaylogo": False})
+
+
+def _add_paths(fig, go, start_m: np.ndarray, goal_m: np.ndarray, paths: list[PlannedPath]) -> None:
+    """The direct line, each planned path (its ends labelled) and the start and goal markers."""
+    line = np.vstack([start_m, goal_m])
+    fig.add_trace(go.Scatter3d(x=line[:, 0].tolist(), y=line[:, 1].tolist(), z=line[:, 2].tolist(), mode="lines",
+                               name="direct line",
+                               line=dict(color="red", width=5, dash="dash")))
+    for k, p in enumerate(paths):
+        pts = np.asarray(p.points_m, float)
+        colour = ["black", "darkorange", "magenta", "cyan", "saddlebrown", "royalblue"][k % 6]
+        text = [""] * len(pts)
+        if p.ends:
+            text[0], text[-1] = f"{p.ends}: start", f"{p.ends}: goal"
+            if len(pts) == 1:
+                text[0] = f"{p.ends}: start and goal"
+        fig.add_trace(go.Scatter3d(x=pts[:, 0].tolist(), y=pts[:, 1].tolist(), z=pts[:, 2].tolist(),
+                                   mode="lines+markers+text" if p.ends else "lines+markers", name=p.label,
+                                   text=text if p.ends else None, textfont=dict(color=colour),
+                                   line=dict(width=6, color=colour), marker=dict(size=3, color=colour)))
+    for pos, name, colour in ((start_m, "start", "green"), (goal_m, "goal", "red")):
+        fig.add_trace(go.Scatter3d(x=[float(pos[0])], y=[float(pos[1])], z=[float(pos[2])], mode="markers+text",
+                                   name=name, text=[name],
+                                   marker=dict(size=8, color=colour, symbol="diamond")))
+
+
+def _script(data: str, levels: np.ndarray, heights: np.ndarray, names: list[str], active: int) -> str:
+    """The page's script: on a slider step or a map button, the shown map's voxels up to the height cut,
+    >= the payload level in trace 0, the others in trace 1, its 0 kg voxels in trace 2."""
+    return ("const M = " + data + ", L = " + json.dumps(levels.tolist()) + ", H = " + json.dumps(heights.tolist())
               + ", B = " + json.dumps(names) + ";\n"
               "const gd = document.getElementById('{plot_id}');\n"
               "let level = L[" + str(active) + "], zmax = H[H.length - 1], shown = 0;\n"
@@ -153,5 +164,3 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
               "  draw();\n"
               "});\n"
               "gd.on('plotly_buttonclicked', function (ev) { shown = ev.active; draw(); });\n")
-    return fig.to_html(include_plotlyjs=True, full_html=True, post_script=script, div_id="capmap-3d",
-                       config={"displaylogo": False})
