@@ -8,6 +8,7 @@ the map, the verification against its own samples' loads, the healthy arm agains
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -173,3 +174,84 @@ def test_atlas_map_stage(run):
     reach = vox[vox.n_reachable > 0]
     assert rows.reachable_volume_m3.iloc[0] == pytest.approx(len(reach) * cfg.atlas.edge_m ** 3)
     assert rows.capacity_max_kg.iloc[0] == pytest.approx(reach.capacity_kg.max())
+
+
+@pytest.fixture(scope="module")
+def planned(run):
+    """The main task's plan and verification at its first payload (the figure stages read them)."""
+    from capmap.stages.verify import stage_plan, stage_verify
+
+    cfg, d, sl = run
+    job = main_task(cfg.task, cfg.failure, cfg.task.payload_kg[0])
+    if not (d / "wp.parquet").exists():
+        stage_plan(str(d / "voxels.parquet"), str(d / "wp.parquet"), sl("plan", job))
+        stage_verify(str(d / "wp.parquet"), str(d / "ts.parquet"), str(d / "seg.parquet"), str(d / "v.csv"),
+                     str(d / "v.md"), sl("verify", job))
+    return job
+
+
+def test_summary_3d_and_verify_figure_stages(run, planned):
+    from capmap.stages.capacity_figures import stage_capacity_3d, stage_summary
+    from capmap.stages.verify_figures import stage_verify_plots
+
+    cfg, d, sl = run
+    stage_summary(str(d / "voxels.parquet"), str(d / "configurations.parquet"), str(d / "cappoints.parquet"),
+                  [str(d / "wp.parquet")], str(d / "s.csv"), str(d / "s.md"), str(d / "map.png"), sl("view"))
+    summary = pd.read_csv(d / "s.csv")
+    vox = datasets.read(d / "voxels.parquet")
+    reach = vox[vox.n_reachable > 0]
+    text = " ".join(map(str, summary.to_numpy().ravel()))
+    assert str(len(reach)) in text or f"{len(reach):,}" in text  # the reachable voxels, counted independently
+    assert (d / "map.png").stat().st_size > 10_000
+    stage_capacity_3d(str(d / "voxels.parquet"), str(d / "configurations.parquet"), [str(d / "wp.parquet")],
+                      str(d / "map.html"), sl("view"))
+    html = (d / "map.html").read_text()
+    assert "Plotly" in html and "capmap-3d" in html
+    pngs = [str(d / f"{n}.png") for n in ("workspace", "torques", "force", "moment")]
+    stage_verify_plots(str(d / "voxels.parquet"), str(d / "configurations.parquet"), str(d / "ts.parquet"), *pngs,
+                       sl("verify", planned))
+    assert all(Path(p).stat().st_size > 10_000 for p in pngs)
+
+
+def test_gain_stage_on_the_tiny_map(run):
+    from capmap.stages.gain import stage_plan_gain
+
+    cfg, d, sl = run
+    stage_plan_gain(str(d / "voxels.parquet"), str(d / "gain.parquet"), str(d / "gain.csv"), str(d / "gain.md"),
+                    sl("gain"))
+    tasks, summary = datasets.read(d / "gain.parquet"), pd.read_csv(d / "gain.csv")
+    assert set(summary.payload_kg) == set(tasks.payload_kg)
+    for m, grp in tasks.groupby("payload_kg"):  # the summary counts the task table's rows
+        assert int(summary.set_index("payload_kg").loc[m, "tasks"]) == len(grp)
+
+
+def test_baseline_map_and_figure_stages(run):
+    from capmap.stages.baseline import stage_baseline_map
+    from capmap.stages.capacity_figures import stage_baseline_figure
+
+    cfg, d, sl = run
+    if not (d / "healthy.parquet").exists():
+        stage_baseline_shard(str(d / "voxels.parquet"), str(d / "healthy.parquet"), sl("baseline_shard"), 0, 1)
+    stage_baseline_map([str(d / "healthy.parquet")], str(d / "voxels.parquet"), str(d / "configurations.parquet"),
+                       str(d / "b.parquet"), str(d / "conv.parquet"), str(d / "b.csv"), str(d / "b.md"), sl("baseline"))
+    b = datasets.read(d / "b.parquet")
+    both = b.healthy_capacity_kg.notna()
+    np.testing.assert_allclose(b.loss_kg[both], (b.healthy_capacity_kg - b.capacity_kg.fillna(0.0))[both])
+    assert len(datasets.read(d / "conv.parquet")) == min(cfg.baseline.check_voxels, int(both.sum()))
+    stage_baseline_figure(str(d / "b.parquet"), str(d / "conv.parquet"), str(d / "loss.png"), sl("view"))
+    assert (d / "loss.png").stat().st_size > 10_000
+
+
+def test_atlas_tables_stage(run):
+    from capmap.stages.atlas import stage_atlas
+
+    cfg, d, sl = run
+    if not (d / "atlas_sum.parquet").exists():
+        stage_atlas_map(str(d / "atlas_vox.parquet"), str(d / "atlas_sum.parquet"), sl("atlas_map"), 4, 130.0)
+    stage_atlas([str(d / "atlas_sum.parquet")], [str(d / "atlas_vox.parquet")], str(d / "atlas.parquet"),
+                str(d / "curves.parquet"), str(d / "heat.png"), str(d / "curves.png"), sl("atlas"))
+    curves = datasets.read(d / "curves.parquet")
+    vox = datasets.read(d / "atlas_vox.parquet")
+    reach = vox.capacity_kg[vox.n_reachable > 0].to_numpy()
+    for m, vol in zip(curves.payload_kg[::17], curves.volume_m3[::17]):  # the volume carrying m, counted here
+        assert vol == pytest.approx((reach >= m).sum() * cfg.atlas.edge_m ** 3)
