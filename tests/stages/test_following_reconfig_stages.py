@@ -1,0 +1,73 @@
+"""The following and reconfiguration stages called as their rules call them (slices from
+capmap.config.slices, no Snakemake) on the tiny config's cases, each output held against physics the
+test states itself: the follower never beats TOPP-RA's time-optimal duration on the same path and
+limits, ends at the path's end at rest and keeps every joint torque within its limit (to the control
+period's rounding); the reconfiguration drives the passive joint along the law to its target."""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from capmap.checks import check_run_config
+from capmap.config import canonical, stage_slice
+from capmap.config.validation import load_yaml
+from capmap.io import datasets
+from capmap.stages.following import stage_follow
+from capmap.stages.following_figures import stage_follow_plots
+from capmap.stages.reconfig import stage_reconfig, stage_reconfig_summary
+from capmap.stages.reconfig_figures import stage_reconfig_animation, stage_reconfig_plots
+from tests.scenario import ROOT
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    doc = copy.deepcopy(load_yaml(ROOT / "tests" / "data" / "tiny.yaml"))
+    doc.pop("dualarm", None)
+    doc["robot"] = str(ROOT / doc["robot"])
+    doc["follow"]["ground"]["robot"] = str(ROOT / doc["follow"]["ground"]["robot"])
+    doc["reconfig"]["robot"] = str(ROOT / doc["reconfig"]["robot"])
+    return check_run_config(doc, "tiny.yaml")
+
+
+def test_follow_ground_stage_is_never_faster_than_toppra_and_keeps_its_limits(cfg, tmp_path):
+    d = tmp_path
+    stage_follow("ground", str(d / "ts.parquet"), str(d / "tp.parquet"), str(d / "s.csv"), str(d / "s.md"),
+                 canonical(stage_slice(cfg, "follow_ground")))
+    ts, row = datasets.read(d / "ts.parquet"), pd.read_csv(d / "s.csv").iloc[0]
+    g = cfg.follow.ground
+    assert row.follower_duration_s >= row.toppra_duration_s * (1 - 1e-9)  # TOPP-RA is time-optimal
+    assert ts.s_m.iloc[-1] == pytest.approx(np.linalg.norm(g.line_m), abs=1e-4) and abs(ts.sd_mps.iloc[-1]) < 1e-3
+    tau = ts[[f"tau_j{j}_nm" for j in range(1, 7)]].abs().to_numpy()
+    # a limit held at each control instant, to the period's rounding (the state moves within a period)
+    assert np.all(tau <= np.asarray(g.joint_torque_nm) * (1 + 1e-3))
+    stage_follow_plots(str(d / "ts.parquet"), str(d / "tp.parquet"), str(d / "p.png"), str(d / "t.png"),
+                       str(d / "split.png"), "{}")
+    assert all((d / n).stat().st_size > 10_000 for n in ("p.png", "t.png", "split.png"))
+
+
+def test_reconfig_stages_follow_the_law_to_its_target(cfg, tmp_path):
+    d, rc = tmp_path, cfg.reconfig
+    tables, timings, completed = [], [], 0
+    for method, stage in (("pinv", "reconfig_pinv"), ("nullspace", "reconfig_nullspace")):
+        stage_reconfig(method, str(d / f"{method}.parquet"), str(d / f"{method}.json"),
+                       canonical(stage_slice(cfg, stage)))
+        tables.append(str(d / f"{method}.parquet"))
+        timings.append(str(d / f"{method}.json"))
+        df = datasets.read(d / f"{method}.parquet")
+        if df.attrs["capmap"]["status"] == "completed":  # the passive joint reaches the law's end values
+            completed += 1
+            assert df.passive_theta_deg.iloc[-1] == pytest.approx(rc.theta_deg, abs=1e-6)
+            assert df.passive_d_m.iloc[-1] == pytest.approx(rc.d_m, abs=1e-9)
+        assert json.loads((d / f"{method}.json").read_text())  # its timing
+    assert completed >= 1  # the tiny law is within reach of at least one method
+    stage_reconfig_summary(tables, timings, str(d / "s.csv"), str(d / "s.md"))
+    assert set(pd.read_csv(d / "s.csv").method) == {"pinv", "nullspace"}
+    stage_reconfig_plots(tables, str(d / "m.png"), str(d / "r.png"), str(d / "p.png"))
+    assert all((d / n).stat().st_size > 10_000 for n in ("m.png", "r.png", "p.png"))
+    stage_reconfig_animation(tables, str(d / "a.html"), canonical(stage_slice(cfg, "reconfig_animation")))
+    assert (d / "a.html").stat().st_size > 10_000
