@@ -5,7 +5,7 @@ again, so a broken mesh is still found before any job; an unreadable memo is bui
 import pytest
 
 from capmap import checks
-from capmap.config.dualarm import load_dual_arm_file
+from capmap.dualarm.build import load_dual_arm_file
 from capmap.dualarm.scene.robot import build_dual_arm
 from capmap.errors import CapmapError
 from tests.config.test_referenced_files import MESHES, local  # noqa: F401 (the fixture)

@@ -18,7 +18,7 @@ ALLOWED = {
     "capacity": {"core", "config", "errors"},  # config: only in its build modules (BUILDERS)
     "following": {"core", "config", "errors"},  # config: only in its build module
     "reconfig": {"core", "config", "errors"},  # config: only in its build module
-    "dualarm": {"core", "errors"},
+    "dualarm": {"core", "config", "errors"},  # config: only in its build module
     "io": {"errors"},
     # config is data; the modules of CONFIG_NUMERICS_LEFT still build numerics types (to move to their families' build)
     "config": {"core", "following", "reconfig", "dualarm", "io", "errors"},
@@ -34,10 +34,11 @@ ALLOWED = {
 }
 NUMERICS = {"core", "capacity", "following", "reconfig", "dualarm"}
 # where a family turns its config sections into numerics: the only modules of a family that import config
-BUILDERS = {"capmap.capacity.build", "capmap.capacity.sizing", "capmap.reconfig.build", "capmap.following.build"}
-# config modules that still import numerics types (robot, scene and platform files; the dual-arm and
-# reconfiguration sections' settings): the list may only shrink
-CONFIG_NUMERICS_LEFT = {"capmap.config.dualarm", "capmap.config.platform_file",
+BUILDERS = {"capmap.capacity.build", "capmap.capacity.sizing", "capmap.reconfig.build", "capmap.following.build",
+            "capmap.dualarm.build"}
+# config modules that still import numerics types (the robot, scene and platform file loaders): the list may
+# only shrink
+CONFIG_NUMERICS_LEFT = {"capmap.config.platform_file",
                         "capmap.config.robot_file", "capmap.config.scene_file"}
 for _part_name in ALLOWED:
     ALLOWED[_part_name] = ALLOWED[_part_name] | {"_lazy"}

@@ -20,7 +20,6 @@ from capmap.capacity.sizing import estimate_map
 from capmap.capacity.voxels import Grid
 from capmap.config.atlas import AtlasConfig
 from capmap.config.capacity import DirectionsConfig, TaskConfig
-from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.estimate import check_duration, check_steps, line_duration_s
 from capmap.config.failure import Failure
 from capmap.config.following import FollowConfig
@@ -36,6 +35,7 @@ from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free
 from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
+from capmap.dualarm.build import load_dual_arm_file, unknown_settings
 from capmap.dualarm.scene.robot import build_dual_arm
 from capmap.dualarm.scene.solids import surface_points
 from capmap.errors import CapmapError, ConfigError
@@ -312,8 +312,8 @@ def dual_arm_limits(robot_file: str, thickness_m: float) -> tuple[str, np.ndarra
 def _dualarm_sizes(da, scene) -> None:
     """The user's cloud file readable; the horizons, the re-check grid and the synthetic scan fit."""
     if da.cloud_file is not None:
-        check_cloud_file(da.cloud_file, viewpoints=len(da.scan.viewpoints))
-    u = da.unknown
+        check_cloud_file(da.cloud_file, viewpoints=len(da.scan.viewpoints_m))
+    u = unknown_settings(da.unknown)
     n_vox = float(np.prod(np.ceil((u.work_upper - u.work_lower) / u.voxel_m)))
     check_steps(n_vox, "dualarm.unknown.voxel_m", f"a carving grid of {n_vox:.3g} voxels of {u.voxel_m:g} m over "
                 "dualarm.unknown.work_volume_m", "raise")

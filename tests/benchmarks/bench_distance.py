@@ -29,8 +29,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 sys.path.insert(0, ROOT)  # tests.reference: the coal shapes of the distance tests
 
 from capmap.checks import check_run_config  # noqa: E402
-from capmap.config.dualarm import cloud_source, fit_settings, horizon, load_dual_arm_file, weights  # noqa: E402
+from capmap.config.dualarm import cloud_source, fit_config, horizon, weights_config  # noqa: E402
 from capmap.config.scene_file import load_scene  # noqa: E402
+from capmap.dualarm.build import al_settings, fit_settings, load_dual_arm_file, scan_settings, weights  # noqa: E402
 from capmap.dualarm.geometry.distance import segment_segment, segment_triangle  # noqa: E402
 from capmap.dualarm.ocp.assembly import assemble, warm_start  # noqa: E402
 from capmap.dualarm.ocp.motion import plan_assembly  # noqa: E402
@@ -87,8 +88,11 @@ def _default_problem():
     d = yaml.safe_load(open(os.path.join(ROOT, "config", "config.yaml")))["dualarm"]
     scene = load_scene(os.path.join(ROOT, d["scene"]))
     robot = fit_capsules(build_dual_arm(load_dual_arm_file(os.path.join(ROOT, d["robot"])), float(scene.panel.size[0])))[0]
-    _, settings, seed = cloud_source(d)
-    fit, fit_seed = fit_settings(d)
+    _, scan_cfg, seed = cloud_source(d)
+    settings = scan_settings(scan_cfg)
+    fit_cfg, fit_seed = fit_config(d)
+
+    fit = fit_settings(fit_cfg)
     env = fit_envelope(scan(scene, settings, np.random.default_rng(seed))[0], fit, np.random.default_rng(fit_seed))
     labels = (nearest_solid(scene, env.tri.mean(axis=1)), nearest_solid(scene, env.seg.mean(axis=1)))
     h = horizon(d)
@@ -103,7 +107,7 @@ def _node_costs(d, robot, asm):
     keep = node_pairs(asm, xs[:, :asm.model.nq], d["solver"]["filter_m"])
     times = {}
     for compiled in (True, False):
-        ctx = context(asm, weights(d), (robot.q_lower, robot.q_upper, robot.v_max), compiled, mu=1e4)
+        ctx = context(asm, weights(weights_config(d)), (robot.q_lower, robot.q_upper, robot.v_max), compiled, mu=1e4)
         models = [node_model(ctx, k, asm.pairs.subset(keep[k])) for k in range(N)]
         datas = [m.createData() for m in models]
 
@@ -131,7 +135,7 @@ def _solves(robot, parts, asm):
     limits = (robot.q_lower, robot.q_upper, robot.v_max)
     for compiled in (True, False):
         t0 = time.perf_counter()
-        m = plan_assembly(asm, robot, da.weights, da.solver, da.fine_factor, compiled=compiled)
+        m = plan_assembly(asm, robot, weights(da.weights), al_settings(da.solver), da.fine_factor, compiled=compiled)
         t = time.perf_counter() - t0
         print(f"default dualarm_optimise ({'compiled' if compiled else 'Pinocchio'} node models): solve {m.solve_s:.2f} s"
               f" ({len(m.sol.stats)} outer / {sum(s.inner_iterations for s in m.sol.stats)} FDDP iterations), "
@@ -143,7 +147,7 @@ def _solves(robot, parts, asm):
     xs0, us0 = initial_guess(warm_start(casm), casm.task.dt)
     for compiled in (True, False):
         t0 = time.perf_counter()
-        r = solve_csqp(casm, da.weights, limits, xs0, us0, ch.max_iterations, ch.tolerance, compiled=compiled)
+        r = solve_csqp(casm, weights(da.weights), limits, xs0, us0, ch.max_iterations, ch.tolerance, compiled=compiled)
         print(f"CSQP check ({'compiled' if compiled else 'Pinocchio'} node models, N = {ch.horizon.nodes}): "
               f"{time.perf_counter() - t0:.2f} s, {r.iterations} iterations, converged {r.converged}")
 

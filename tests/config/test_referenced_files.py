@@ -8,8 +8,8 @@ import pytest
 import yaml
 
 from capmap.config import robot_file
-from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.robot_file import referenced_files
+from capmap.dualarm.build import load_dual_arm_file
 from capmap.dualarm.scene.robot import build_dual_arm
 from capmap.errors import ConfigError
 from capmap.io.fingerprint import file_fingerprints

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config.dualarm import cloud_source, fit_settings, load_dual_arm_file
+from capmap.config.dualarm import cloud_source, fit_config
 from capmap.config.scene_file import load_scene
+from capmap.dualarm.build import fit_settings, load_dual_arm_file, scan_settings
 from capmap.dualarm.geometry.chain import pack
 from capmap.dualarm.ocp.assembly import assemble, warm_start
 from capmap.dualarm.ocp.crocoddyl_nodes import Context
@@ -36,8 +37,11 @@ def robot(scene):
 
 @pytest.fixture(scope="session")
 def envelope(scene):
-    _, settings, seed = cloud_source(SECTION)
-    fit, fit_seed = fit_settings(SECTION)
+    _, scan_cfg, seed = cloud_source(SECTION)
+    settings = scan_settings(scan_cfg)
+    fit_cfg, fit_seed = fit_config(SECTION)
+
+    fit = fit_settings(fit_cfg)
     pts, _ = scan(scene, settings, np.random.default_rng(seed))
     env = fit_envelope(pts, fit, np.random.default_rng(fit_seed))
     labels = (nearest_solid(scene, env.tri.mean(axis=1)), nearest_solid(scene, env.seg.mean(axis=1)))

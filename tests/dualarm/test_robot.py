@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.config.dualarm import load_dual_arm_file
+from capmap.dualarm.build import load_dual_arm_file
 from capmap.dualarm.scene.robot import build_dual_arm, fit_capsules
 from capmap.dualarm.tables import capsule_table
 from capmap.errors import CapmapError

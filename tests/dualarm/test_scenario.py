@@ -12,7 +12,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.config.dualarm import horizon, weights
+from capmap.config.dualarm import horizon, weights_config
+from capmap.dualarm.build import weights
 from capmap.dualarm.ocp.assembly import warm_start
 from capmap.dualarm.ocp.settings import ALSettings
 from capmap.dualarm.ocp.solver import initial_guess, solve
@@ -27,8 +28,8 @@ def solved(robot, scene, make_assembly):
     asm = make_assembly(h.nodes, h.dt_s, h.pre_insertion_node)
     xs0, us0 = initial_guess(warm_start(asm), asm.task.dt)
     t0 = time.perf_counter()
-    sol = solve(asm, weights(SECTION), (robot.q_lower, robot.q_upper, robot.v_max), ALSettings(**SECTION["solver"]),
-                xs0, us0)
+    sol = solve(asm, weights(weights_config(SECTION)), (robot.q_lower, robot.q_upper, robot.v_max),
+                ALSettings(**SECTION["solver"]), xs0, us0)
     secs = time.perf_counter() - t0
     print(f"\nscenario: {len(sol.stats)} outer / {sum(s.inner_iterations for s in sol.stats)} FDDP iterations "
           f"in {secs:.1f} s")

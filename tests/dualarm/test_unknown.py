@@ -11,7 +11,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.config.dualarm import cloud_source, fit_settings, unknown_settings
+from capmap.config.dualarm import cloud_source, fit_config, unknown_config
+from capmap.dualarm.build import fit_settings, scan_settings, unknown_settings
 from capmap.dualarm.geometry.distance import segment_triangle
 from capmap.dualarm.scene.cloud import depth, fit_envelope
 from capmap.dualarm.scene.solids import Box, scan, surface_points
@@ -24,11 +25,14 @@ HIDDEN = Box("shelf", np.array([0.60, 0.30, 0.45]), np.array([0.70, 0.40, 0.50])
 
 
 def _model(scene):
-    _, settings, seed = cloud_source(SECTION)
-    fit, fit_seed = fit_settings(SECTION)
+    _, scan_cfg, seed = cloud_source(SECTION)
+    settings = scan_settings(scan_cfg)
+    fit_cfg, fit_seed = fit_config(SECTION)
+
+    fit = fit_settings(fit_cfg)
     pts, view = scan(scene, settings, np.random.default_rng(seed))
     env = fit_envelope(pts, fit, np.random.default_rng(fit_seed))
-    u = unknown_settings(SECTION)
+    u = unknown_settings(unknown_config(SECTION))
     grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
     space = unknown_space(grid, pts, settings.viewpoints[view], 3 * settings.noise_m, lambda c, r: depth(c, env) <= -r)
     return pts, view, env, space
@@ -67,7 +71,8 @@ def test_every_surface_in_the_work_volume_is_fitted_or_unknown(scene, default):
 
 def test_a_face_no_camera_sees_is_held_by_unknown_space(hidden):
     scene, (pts, view, env, space) = hidden
-    _, settings, _ = cloud_source(SECTION)
+    _, scan_cfg, _ = cloud_source(SECTION)
+    settings = scan_settings(scan_cfg)
     exact, _ = scan(scene, replace(settings, noise_m=0.0), np.random.default_rng(0))  # the same scan without noise
     top = np.abs(exact[:, 2] - 0.50) < 1e-9
     over = (exact[:, 0] > 0.6) & (exact[:, 0] < 0.7) & (exact[:, 1] > 0.3) & (exact[:, 1] < 0.4)

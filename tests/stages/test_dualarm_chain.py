@@ -16,6 +16,7 @@ import pytest
 from capmap.checks import check_run_config
 from capmap.config import canonical, stage_slice
 from capmap.config.validation import load_yaml
+from capmap.dualarm.build import al_settings
 from capmap.dualarm.scene.cloud import uncovered
 from capmap.dualarm.tables import envelope_from
 from capmap.io import datasets
@@ -80,7 +81,7 @@ def test_the_optimised_motion_against_pinocchio(chain):
     drift = max(np.linalg.norm(pin.log6(rel[0].inverse() * r).vector) for r in rel)
     # the AL loop stops once every violation is below its tolerance (per node, m or rad): the relative pose,
     # compared over the nodes, within 20 times it (measured 3e-8 at a 5e-8 tolerance)
-    assert 0 < drift < 20 * cfg.dualarm.solver.tolerance, drift
+    assert 0 < drift < 20 * al_settings(cfg.dualarm.solver).tolerance, drift
     assert str(summary.iloc[0]) in ("True", "False")  # converged or not, said
     assert np.all(np.isfinite(q)) and len(datasets.read(d / "fine.parquet")) > len(traj)
 

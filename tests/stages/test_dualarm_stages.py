@@ -14,6 +14,7 @@ from capmap.config.dualarm import DualArmConfig, cloud_source
 from capmap.config.run import RunConfig
 from capmap.config.scene_file import load_scene
 from capmap.config.typed import partial, to_doc
+from capmap.dualarm.build import scan_settings
 from capmap.dualarm.scene.cloud import uncovered
 from capmap.dualarm.scene.solids import scan
 from capmap.dualarm.tables import envelope_from
@@ -36,7 +37,8 @@ def _slice(cloud: dict) -> str:
 @pytest.fixture(scope="module")
 def user_cloud(tmp_path_factory):
     """A scan of the scene written as a user's CSV file (coarse, from the default viewpoints)."""
-    _, settings, _ = cloud_source(SECTION)
+    _, scan_cfg, _ = cloud_source(SECTION)
+    settings = scan_settings(scan_cfg)
     pts, view = scan(load_scene(SCENE), settings, np.random.default_rng(5))
     path = tmp_path_factory.mktemp("cloud") / "scan.csv"
     pd.DataFrame(pts, columns=["x_m", "y_m", "z_m"]).assign(intensity=1.0, viewpoint=view).to_csv(path, index=False)

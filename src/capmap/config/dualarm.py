@@ -1,4 +1,5 @@
-"""Config section of the dual-arm family (``dualarm``) and its robot file format.
+"""Config section of the dual-arm family (``dualarm``): frozen data; its numerics are built in
+:mod:`capmap.dualarm.build`, which also reads the dual-arm robot files.
 
 A dual-arm robot file names a URDF (a path relative to the file, or a file shipped by a pip
 package), the two arms' joints and gripper frames, the joints to lock and their values, and
@@ -10,27 +11,78 @@ capsules cover: visual and/or collision, default both) and the self-collision ru
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
-import numpy as np
-
-from capmap.config.robot_file import check_meshes, check_urdf, package_file, urdf_package_dir
 from capmap.config.typed import FILE
-from capmap.config.validation import load_yaml
-from capmap.dualarm.ocp.settings import ALSettings, Weights
-from capmap.dualarm.scene.cloud import FitSettings
-from capmap.dualarm.scene.robot import CapsuleGroup, DualArmDescription
-from capmap.dualarm.scene.solids import ScanSettings
-from capmap.dualarm.scene.unknown import UnknownSettings
 from capmap.errors import ConfigError
 
-__all__ = ["DualArmConfig", "Horizon", "load_dual_arm_file", "cloud_source", "fit_settings", "horizon", "CheckSettings",
-           "unknown_settings",
-           "check_settings",
-           "weights"]
+__all__ = ["DualArmConfig", "Horizon", "CheckSettings", "ScanConfig", "FitConfig", "WeightsConfig", "SolverConfig",
+           "UnknownConfig", "cloud_source", "fit_config", "horizon", "check_settings", "unknown_config", "weights_config"]
 
-_ROBOT_KEYS = {"name", "description", "urdf", "arms", "locked", "capsules", "self_gap", "body_skip", "hold", "cover"}
-_COVER = ("visual", "collision")
+
+@dataclass(frozen=True)
+class ScanConfig:
+    """``dualarm.cloud``: the cameras' viewpoints (V of them, m, base frame), the synthetic scan's point
+    spacing and range noise (m; 0 for a user's cloud file, whose viewpoints these are)."""
+
+    viewpoints_m: tuple[tuple[float, float, float], ...]
+    spacing_m: float
+    noise_m: float
+
+
+@dataclass(frozen=True)
+class FitConfig:
+    """``dualarm.fit``: the envelope fit's settings given in the config; None: the fit's own default
+    (:class:`capmap.dualarm.scene.cloud.FitSettings`, where each default lives)."""
+
+    plane_tol_m: float | None = None
+    normal_tol_deg: float | None = None
+    neighbours: int | None = None
+    cell_m: float | None = None
+    min_fill: float | None = None
+    min_width_m: float | None = None
+    absorb: float | None = None
+    min_patch_points: int | None = None
+    margin_m: float | None = None
+    max_capsule_radius_m: float | None = None
+    ransac_iterations: int | None = None
+    thin_m: float | None = None
+
+
+@dataclass(frozen=True)
+class WeightsConfig:
+    """``dualarm.weights`` (control: one per arm joint, 14) and ``dualarm.margin_m`` (m)."""
+
+    control: tuple[float, ...]
+    velocity: float
+    panel: float
+    margin_m: float
+
+
+@dataclass(frozen=True)
+class SolverConfig:
+    """``dualarm.solver``: the augmented-Lagrangian loop's settings given in the config; None: the
+    solver's own default (:class:`capmap.dualarm.ocp.settings.ALSettings`)."""
+
+    mu0: float | None = None
+    mu_factor: float | None = None
+    decrease: float | None = None
+    mu_max: float | None = None
+    max_outer: int | None = None
+    max_inner: int | None = None
+    inner_stop: float | None = None
+    tolerance: float | None = None
+    filter_m: float | None = None
+
+
+@dataclass(frozen=True)
+class UnknownConfig:
+    """``dualarm.unknown``: the work volume's lower and upper corners (m) and, given, the carving voxel
+    edge and the near distance (m; None: :class:`capmap.dualarm.scene.unknown.UnknownSettings`' defaults)."""
+
+    work_lower: tuple[float, float, float]
+    work_upper: tuple[float, float, float]
+    voxel_m: float | None = None
+    near_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -63,15 +115,15 @@ class DualArmConfig:
     robot: str = field(metadata=FILE)
     scene: str = field(metadata=FILE)
     cloud_file: str | None = field(metadata=FILE)
-    scan: ScanSettings | None  # a user's cloud: its viewpoints here too (spacing and noise unused)
+    scan: ScanConfig | None  # a user's cloud: its viewpoints here too (spacing and noise unused)
     scan_seed: int
-    fit: FitSettings
+    fit: FitConfig
     fit_seed: int
     horizon: Horizon
-    weights: Weights
-    solver: ALSettings
+    weights: WeightsConfig
+    solver: SolverConfig
     check: CheckSettings
-    unknown: UnknownSettings
+    unknown: UnknownConfig
     fine_factor: int = 5  # the defaults of dualarm.fine_factor and dualarm.animation_fps
     animation_fps: float = 25.0
 
@@ -79,17 +131,21 @@ class DualArmConfig:
     def from_doc(cls, d: dict) -> "DualArmConfig":
         """The whole section (every key a job might read; see the piece builders below)."""
         cloud_file, scan, scan_seed = cloud_source(d)
-        fit, fit_seed = fit_settings(d)
+        fit, fit_seed = fit_config(d)
         return cls(robot=d["robot"], scene=d["scene"], cloud_file=cloud_file, scan=scan, scan_seed=scan_seed, fit=fit,
-                   fit_seed=fit_seed, horizon=horizon(d), weights=weights(d), solver=ALSettings(**d["solver"]),
-                   check=check_settings(d), unknown=unknown_settings(d),
+                   fit_seed=fit_seed, horizon=horizon(d), weights=weights_config(d), solver=SolverConfig(**d["solver"]),
+                   check=check_settings(d), unknown=unknown_config(d),
                    **{k: d[k] for k in ("fine_factor", "animation_fps") if k in d})
 
 
 # --------------------------------------------------------------------------- the section's pieces (from the YAML)
 
 
-def cloud_source(d: dict) -> tuple[str | None, ScanSettings | None, int]:
+def _points(v) -> tuple[tuple[float, float, float], ...]:
+    return tuple(tuple(float(x) for x in p) for p in v)
+
+
+def cloud_source(d: dict) -> tuple[str | None, ScanConfig | None, int]:
     """``dualarm.cloud``: (the user's file, its viewpoints (spacing and noise 0), 0) or (None, the scan's
     settings, its seed)."""
     cloud = d["cloud"]
@@ -101,28 +157,29 @@ def cloud_source(d: dict) -> tuple[str | None, ScanSettings | None, int]:
         if "viewpoints_m" not in cloud:
             raise ConfigError("dualarm.cloud.viewpoints_m is required with dualarm.cloud.file: the cameras' positions "
                               "tell observed free space from space no camera saw (which is taken as occupied)")
-        return cloud["file"], ScanSettings(np.asarray(cloud["viewpoints_m"], float), 0.0, 0.0), 0
+        return cloud["file"], ScanConfig(_points(cloud["viewpoints_m"]), 0.0, 0.0), 0
     missing = [k for k in ("viewpoints_m", "spacing_m", "noise_m", "seed") if k not in cloud]
     if missing:
         raise ConfigError(f"dualarm.cloud.{missing[0]} is required for a synthetic scan (or give dualarm.cloud.file)")
-    scan = ScanSettings(np.asarray(cloud["viewpoints_m"], float), float(cloud["spacing_m"]), float(cloud["noise_m"]))
+    scan = ScanConfig(_points(cloud["viewpoints_m"]), float(cloud["spacing_m"]), float(cloud["noise_m"]))
     return None, scan, int(cloud["seed"])
 
 
-def unknown_settings(d: dict) -> UnknownSettings:
+def unknown_config(d: dict) -> UnknownConfig:
     """``dualarm.unknown``."""
     u = d["unknown"]
-    box = np.array([u["work_volume_m"][ax] for ax in ("x_m", "y_m", "z_m")], dtype=float)
-    if not (box[:, 0] < box[:, 1]).all():
+    box = [tuple(float(v) for v in u["work_volume_m"][ax]) for ax in ("x_m", "y_m", "z_m")]
+    if not all(lo < hi for lo, hi in box):
         raise ConfigError(f"dualarm.unknown.work_volume_m = {u['work_volume_m']}: each lower bound must be < its upper")
-    return UnknownSettings(box[:, 0], box[:, 1], **{k: float(u[k]) for k in ("voxel_m", "near_m") if k in u})
+    return UnknownConfig(tuple(b[0] for b in box), tuple(b[1] for b in box),
+                         **{k: float(u[k]) for k in ("voxel_m", "near_m") if k in u})
 
 
-def fit_settings(d: dict) -> tuple[FitSettings, int]:
-    """``dualarm.fit`` over the defaults, and its RANSAC seed."""
+def fit_config(d: dict) -> tuple[FitConfig, int]:
+    """``dualarm.fit`` (the keys given), and its RANSAC seed."""
     fit = dict(d.get("fit", {}))
     seed = int(fit.pop("seed", 0))
-    return FitSettings(**fit), seed
+    return FitConfig(**fit), seed
 
 
 def _horizon(key: str, h: dict) -> Horizon:
@@ -145,71 +202,11 @@ def check_settings(d: dict) -> CheckSettings:
                                                    if k in c})  # else CheckSettings' defaults
 
 
-def weights(d: dict) -> Weights:
-    """``dualarm.weights`` and ``dualarm.margin_m``."""
+def weights_config(d: dict) -> WeightsConfig:
+    """``dualarm.weights`` (one control weight for every joint, or 14) and ``dualarm.margin_m``."""
     w = d["weights"]
-    control = np.broadcast_to(np.asarray(w["control"], float), (14,)).copy()
-    return Weights(control, float(w["velocity"]), float(w["panel"]), float(d["margin_m"]))
-
-
-def load_dual_arm_file(path: str | Path) -> DualArmDescription:
-    """Read a dual-arm robot file; one-line errors naming the file and key."""
-    path = Path(path)
-    doc = load_yaml(path)
-    src = str(path)
-    if not isinstance(doc, dict):
-        raise ConfigError(f"{src}: a robot file must be a mapping of keys, got {type(doc).__name__}")
-    extra = sorted(set(doc) - _ROBOT_KEYS)
-    if extra:
-        raise ConfigError(f"{src}: unknown key {extra[0]} (allowed: {', '.join(sorted(_ROBOT_KEYS))})")
-    for key in ("name", "urdf", "arms", "capsules"):
-        if key not in doc:
-            raise ConfigError(f"{src}: {key} is required in a dual-arm robot file")
-    urdf = doc["urdf"]
-    if "package" in urdf:
-        urdf_path = package_file(urdf["package"], urdf["path"], src)
-    else:
-        urdf_path = (path.parent / urdf["path"]) if not Path(urdf["path"]).is_absolute() else Path(urdf["path"])
-        if not urdf_path.is_file():
-            raise ConfigError(f"{src}: urdf.path = {urdf['path']!r}: no such file")
-    check_urdf(urdf_path, src)
-    package_dir = urdf_package_dir(urdf_path)
-    check_meshes(urdf_path, [package_dir], src)
-    arms = doc["arms"]
-    if sorted(arms) != ["left", "right"]:
-        raise ConfigError(f"{src}: arms must be exactly 'left' and 'right' (found {sorted(arms)})")
-    fingers = {}
-    for side in ("left", "right"):
-        if not isinstance(arms[side], dict) or len(arms[side].get("joints", [])) != 7 or "gripper" not in arms[side]:
-            raise ConfigError(f"{src}: arms.{side} needs 7 joints and a gripper frame")
-        extra = sorted(set(arms[side]) - {"joints", "gripper", "fingers"})
-        if extra:
-            raise ConfigError(f"{src}: arms.{side}: unknown key {extra[0]} (allowed: fingers, gripper, joints)")
-        fl = arms[side].get("fingers", [])
-        if not isinstance(fl, list) or any(not isinstance(f, dict) or sorted(f) != ["joint", "pad"]
-                                           or not all(isinstance(v, str) for v in f.values()) for f in fl):
-            raise ConfigError(f"{src}: arms.{side}.fingers must be a list of {{joint: <prismatic joint>, pad: <geometry "
-                              "object>}} (the fingers closed on the held part's thickness)")
-        fingers[side] = tuple((f["joint"], f["pad"]) for f in fl)
-        clash = [j for j, _ in fingers[side] if j in doc.get("locked", {})]
-        if clash:
-            raise ConfigError(f"{src}: {clash[0]} is both a finger of arms.{side} (closed on the held part) and in "
-                              "locked: give it in one place")
-    groups = []
-    for part in ("left", "right", "body"):
-        for k, g in enumerate(doc["capsules"].get(part, [])):
-            if "name" not in g or not g.get("geometry"):
-                raise ConfigError(f"{src}: capsules.{part}[{k}] needs a name and a list of geometry")
-            groups.append(CapsuleGroup(g["name"], tuple(g["geometry"]), part))
-    names = [g.name for g in groups]
-    if len(set(names)) != len(names):
-        raise ConfigError(f"{src}: capsule names must be unique")
-    cover = doc.get("cover", list(_COVER))
-    if (not isinstance(cover, list) or not cover or any(c not in _COVER for c in cover)
-            or len(set(cover)) != len(cover)):
-        raise ConfigError(f"{src}: cover = {cover!r} must be a list of {' and/or '.join(_COVER)} (default both: the "
-                          "capsules cover the visual meshes and the collision geometry)")
-    return DualArmDescription(doc["name"], urdf_path, package_dir, {s: tuple(arms[s]["joints"]) for s in arms},
-                              {s: arms[s]["gripper"] for s in arms}, {k: float(v) for k, v in doc.get("locked", {}).items()},
-                              tuple(groups), int(doc.get("body_skip", 0)), int(doc.get("hold", 0)),
-                              int(doc.get("self_gap", 2)), tuple(cover), fingers)
+    c = [float(v) for v in w["control"]] if isinstance(w["control"], (list, tuple)) else [float(w["control"])]
+    control = tuple(c * 14 if len(c) == 1 else c)
+    if len(control) != 14:
+        raise ConfigError(f"dualarm.weights.control has {len(control)} values: give one, or one per arm joint (14)")
+    return WeightsConfig(control, float(w["velocity"]), float(w["panel"]), float(d["margin_m"]))

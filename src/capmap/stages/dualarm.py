@@ -9,8 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from capmap.config.dualarm import load_dual_arm_file
 from capmap.config.scene_file import load_scene
+from capmap.dualarm.build import fit_settings, load_dual_arm_file, scan_settings, unknown_settings
 from capmap.dualarm.scene.cloud import depth, fit_envelope, uncovered
 from capmap.dualarm.scene.robot import DualArm, build_dual_arm, fit_capsules
 from capmap.dualarm.scene.solids import nearest_solid, scan
@@ -61,7 +61,7 @@ def stage_dualarm_scan(out: str, slice_json: str) -> None:
     sc = stage_config(slice_json)
     log = stage_logger(__name__, "dualarm scan")
     da = sc.run.dualarm
-    cloud_file, settings, seed = da.cloud_file, da.scan, da.scan_seed
+    cloud_file, settings, seed = da.cloud_file, scan_settings(da.scan), da.scan_seed
     if cloud_file is not None:
         pts, view = _read_cloud(cloud_file, len(settings.viewpoints))
         source = f"file {cloud_file}, {len(settings.viewpoints)} viewpoints"
@@ -78,7 +78,7 @@ def stage_dualarm_envelope(cloud: str, out: str, slice_json: str) -> None:
     sc = stage_config(slice_json)
     log = stage_logger(__name__, "dualarm envelope")
     pts = datasets.read(cloud)[XYZ].to_numpy()
-    fit, seed = sc.run.dualarm.fit, sc.run.dualarm.fit_seed
+    fit, seed = fit_settings(sc.run.dualarm.fit), sc.run.dualarm.fit_seed
     env = fit_envelope(pts, fit, np.random.default_rng(seed))
     left = uncovered(pts, env)
     if len(left):
@@ -104,9 +104,9 @@ def stage_dualarm_unknown(cloud: str, environment: str, out: str, slice_json: st
     df = datasets.read(cloud)
     pts, view = df[XYZ].to_numpy(), df["viewpoint"].to_numpy()
     env, _ = envelope_from(datasets.read(environment))
-    u = da.unknown
+    u = unknown_settings(da.unknown)
     grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
-    space = unknown_space(grid, pts, da.scan.viewpoints[view], stop_m=stop_distance(da),
+    space = unknown_space(grid, pts, scan_settings(da.scan).viewpoints[view], stop_m=stop_distance(da),
                           covered=lambda c, r: depth(c, env) <= -r)
     table = unknown_table(space)
     datasets.write(table, out, datasets.provenance("dualarm_unknown", sc.doc, voxels=int(np.prod(grid.shape)),

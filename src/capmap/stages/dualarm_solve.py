@@ -13,6 +13,7 @@ import pandas as pd
 
 from capmap.config.dualarm import DualArmConfig, Horizon
 from capmap.config.scene_file import load_scene
+from capmap.dualarm.build import al_settings, scan_settings, unknown_settings, weights
 from capmap.dualarm.ocp.assembly import assemble, warm_start
 from capmap.dualarm.ocp.evaluate import fine_grid, node_errors
 from capmap.dualarm.ocp.motion import motion_quantities, motion_tables, plan_assembly, torque_table
@@ -44,7 +45,7 @@ def _assembly(da: DualArmConfig, inputs: tuple, h: Horizon, boxes: np.ndarray | 
     environment."""
     robot, env, labels, scene = inputs
     if boxes is not None and len(boxes):
-        env, labels = with_boxes(env, labels, boxes, da.unknown.voxel_m)
+        env, labels = with_boxes(env, labels, boxes, unknown_settings(da.unknown).voxel_m)
     return assemble(robot, scene, env, labels, h.nodes, h.dt_s, h.pre_insertion_node)
 
 
@@ -60,7 +61,7 @@ def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, un
     of the warm start; after each solve the motion (finer grid) is checked against every unknown voxel
     and the boxes near it are added, up to three solves. Returns (robot, scene, assembly, motion, the
     check, boxes used, boxes in all)."""
-    u = da.unknown
+    u = unknown_settings(da.unknown)
     boxes = unknown_boxes(datasets.read(unknown))
     grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
     mask = unknown_mask(grid, boxes)
@@ -73,7 +74,7 @@ def _plan_outside_unknown(da: DualArmConfig, environment: str, capsules: str, un
     for attempt in range(3):
         log.info(f"unknown space: {int(use.sum())} of {len(boxes)} boxes near the motion go to the optimiser")
         asm = _assembly(da, inputs, da.horizon, boxes[use])
-        m = plan_assembly(asm, robot, da.weights, da.solver, da.fine_factor, log.info, warm=warm)
+        m = plan_assembly(asm, robot, weights(da.weights), al_settings(da.solver), da.fine_factor, log.info, warm=warm)
         balls, radii, names, slack = swept_balls(asm, robot, corners, fine_grid(m.sol.xs, m.sol.us, asm.task.dt,
                                                                                  da.fine_factor)[1])
         check = unobserved_check(balls, radii, names, grid, mask, slack=slack)
@@ -93,11 +94,11 @@ def _suggest(da: DualArmConfig, environment: str, unknown: str, msg: str) -> str
     x = [float(v) for v in re.search(r"unknown \[([-\d.]+) ([-\d.]+), ([-\d.]+) ([-\d.]+), ([-\d.]+) ([-\d.]+)\]",
                                      msg).groups()]
     region = np.array([[x[0], x[2], x[4]], [x[1], x[3], x[5]]])
-    u = da.unknown
+    u = unknown_settings(da.unknown)
     grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
     env, _ = envelope_from(datasets.read(environment))
     seen = viewpoints_that_see(region, grid, unknown_mask(grid, unknown_boxes(datasets.read(unknown))),
-                               lambda p: depth(p, env), da.scan.viewpoints.mean(axis=0))
+                               lambda p: depth(p, env), scan_settings(da.scan).viewpoints.mean(axis=0))
     if not len(seen):
         return "no point of the work volume in the open has a line of sight to it"
     return "a camera at " + " or ".join(str(np.round(v, 2).tolist()) for v in seen[:2]) + " m would see it"
@@ -140,7 +141,7 @@ def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_tr
     unknown_rows = [("unknown-space boxes given to the optimiser", f"{used} of {n_boxes}"),
                     ("min distance to unknown space, finer grid [m]", check.distance),
                     ("body nearest unknown space", check.body)]
-    write_quantities(motion_quantities(asm, robot, m, da.weights) + unknown_rows + torque_rows, out_csv, out_md)
+    write_quantities(motion_quantities(asm, robot, m, weights(da.weights)) + unknown_rows + torque_rows, out_csv, out_md)
     log.info(f"{'converged' if sol.converged else 'NOT converged: ' + sol.message}; {len(sol.stats)} outer / "
              f"{int(outer.inner_iterations.sum())} FDDP iterations in {m.solve_s:.1f} s; closed chain "
              f"{err.closed_chain_pos.max():.1e} m; path {err.path_pos.max():.1e} m; min distance "
@@ -166,7 +167,7 @@ def stage_dualarm_check(environment: str, capsules: str, out_csv: str, out_md: s
     robot, asm = setup(da, environment, capsules, check.horizon)
     dw = da.weights  # the equality-only problem has no safety constraints: no margin
     w = Weights(dw.control, dw.velocity, dw.panel, 0.0)
-    settings = replace(da.solver, tolerance=check.al_tolerance)
+    settings = replace(al_settings(da.solver), tolerance=check.al_tolerance)
     xs0, us0 = initial_guess(warm_start(asm), asm.task.dt)
     limits = (robot.q_lower, robot.q_upper, robot.v_max)
     t0 = time.perf_counter()
