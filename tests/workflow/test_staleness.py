@@ -50,7 +50,7 @@ def test_code_changes_rerun_their_stages_and_comments_do_not(run_dir, tmp_path):
     assert {"capacity", "voxels", "summary", "plan", "verify"} <= jobs
     assert not {"reconfig", "dualarm_scan", "dualarm_envelope", "dualarm_capsules", "dualarm_optimise"} & jobs
     # a change of the dual-arm numerics: the dual-arm rules that run it, nothing of the capacity map
-    dist = tmp_path / "src" / "capmap" / "dualarm" / "distance.py"
+    dist = tmp_path / "src" / "capmap" / "dualarm" / "geometry" / "distance.py"
     engine.write_text(engine.read_text().replace("\nEXTRA_MARGIN = 1.0\n", ""))
     dist.write_text(dist.read_text() + "\nEXTRA = 0\n")
     jobs = _dry(work, snakefile, cfg, env)
