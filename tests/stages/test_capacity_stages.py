@@ -196,7 +196,8 @@ def test_summary_3d_and_verify_figure_stages(run, planned):
 
     cfg, d, sl = run
     stage_summary(str(d / "voxels.parquet"), str(d / "configurations.parquet"), str(d / "cappoints.parquet"),
-                  [str(d / "wp.parquet")], str(d / "s.csv"), str(d / "s.md"), str(d / "map.png"), sl("view"))
+                  [str(d / "wp.parquet")], {"csv": str(d / "s.csv"), "md": str(d / "s.md"), "png": str(d / "map.png")},
+                  sl("view"))
     summary = pd.read_csv(d / "s.csv")
     vox = datasets.read(d / "voxels.parquet")
     reach = vox[vox.n_reachable > 0]
@@ -207,10 +208,10 @@ def test_summary_3d_and_verify_figure_stages(run, planned):
                       str(d / "map.html"), sl("view"))
     html = (d / "map.html").read_text()
     assert "Plotly" in html and "capmap-3d" in html
-    pngs = [str(d / f"{n}.png") for n in ("workspace", "torques", "force", "moment")]
-    stage_verify_plots(str(d / "voxels.parquet"), str(d / "configurations.parquet"), str(d / "ts.parquet"), *pngs,
+    pngs = {n: str(d / f"{n}.png") for n in ("workspace", "torques", "force", "moment")}
+    stage_verify_plots(str(d / "voxels.parquet"), str(d / "configurations.parquet"), str(d / "ts.parquet"), pngs,
                        sl("verify", planned))
-    assert all(Path(p).stat().st_size > 10_000 for p in pngs)
+    assert all(Path(p).stat().st_size > 10_000 for p in pngs.values())
 
 
 def test_gain_stage_on_the_tiny_map(run):
@@ -233,7 +234,8 @@ def test_baseline_map_and_figure_stages(run):
     if not (d / "healthy.parquet").exists():
         stage_baseline_shard(str(d / "voxels.parquet"), str(d / "healthy.parquet"), sl("baseline_shard"), 0, 1)
     stage_baseline_map([str(d / "healthy.parquet")], str(d / "voxels.parquet"), str(d / "configurations.parquet"),
-                       str(d / "b.parquet"), str(d / "conv.parquet"), str(d / "b.csv"), str(d / "b.md"), sl("baseline"))
+                       {"voxels": str(d / "b.parquet"), "convergence": str(d / "conv.parquet"), "csv": str(d / "b.csv"),
+                        "md": str(d / "b.md")}, sl("baseline"))
     b = datasets.read(d / "b.parquet")
     both = b.healthy_capacity_kg.notna()
     np.testing.assert_allclose(b.loss_kg[both], (b.healthy_capacity_kg - b.capacity_kg.fillna(0.0))[both])

@@ -2,5 +2,5 @@ from capmap.io.logs import call
 from capmap.stages.capacity_figures import stage_summary
 
 call(stage_summary, voxels=snakemake.input.voxels, configurations=snakemake.input.configurations,
-     points=snakemake.input.points, waypoints=list(snakemake.input.waypoints), out_csv=snakemake.output.csv,
-     out_md=snakemake.output.md, out_png=snakemake.output.png, slice_json=snakemake.params.slice, log=snakemake.log[0])
+     points=snakemake.input.points, waypoints=list(snakemake.input.waypoints), out=dict(snakemake.output.items()),
+     slice_json=snakemake.params.slice, log=snakemake.log[0])

@@ -16,7 +16,7 @@ from capmap.capacity.tables import configuration_voxels, grid_of
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
-from capmap.stages.common import stage_config
+from capmap.stages.common import Outputs, stage_config
 
 __all__ = ["stage_baseline_shard", "stage_baseline_map"]
 
@@ -40,10 +40,9 @@ def stage_baseline_shard(voxels: str, out: str, slice_json: str, shard: int, sha
              f"{int((~df.converged).sum()) if settings else len(df)} not converged, {meta['seconds']:.1f} s -> {out}")
 
 
-def stage_baseline_map(shards: list[str], voxels: str, configurations: str, out: str, out_convergence: str,
-                       out_csv: str, out_md: str, slice_json: str) -> None:
-    """The healthy map beside the failed one (``out``), the angle step's convergence at the worst points
-    of ``baseline.check_voxels`` voxels (``out_convergence``) and the summary (CSV + Markdown)."""
+def stage_baseline_map(shards: list[str], voxels: str, configurations: str, out: Outputs, slice_json: str) -> None:
+    """The healthy map beside the failed one (``out["voxels"]``), the angle step's convergence at the worst
+    points of ``baseline.check_voxels`` voxels (``out["convergence"]``) and the summary (``csv``, ``md``)."""
     cfg = stage_config(slice_json)
     run, bl = cfg.run, cfg.run.baseline
     log = stage_logger(__name__, "baseline map")
@@ -73,13 +72,14 @@ def stage_baseline_map(shards: list[str], voxels: str, configurations: str, out:
     problems = tuple(healthy_problem(run, bl.step_deg / div) for div in (1, 2, 4))
     conv = angle_convergence(problems, h, bl.check_voxels, np.random.default_rng(run.sampling.seed))
     cost_s += time.perf_counter() - t0
-    datasets.write(df[BASELINE_COLUMNS], out, datasets.provenance(
+    datasets.write(df[BASELINE_COLUMNS], out["voxels"], datasets.provenance(
         "baseline", cfg.doc, grid=failed.attrs["capmap"]["grid"], configuration=name, angles_deg=meta["angles_deg"],
         core_seconds=cost_s, points_evaluated=sum(p.attrs["capmap"]["points_evaluated"] for p in parts)))
-    datasets.write(conv, out_convergence, datasets.provenance("baseline", cfg.doc, step_deg=bl.step_deg))
-    write_quantities(_summary(run, df, conv, name, len(meta["angles_deg"]), cost_s, op is not None), out_csv, out_md)
+    datasets.write(conv, out["convergence"], datasets.provenance("baseline", cfg.doc, step_deg=bl.step_deg))
+    write_quantities(_summary(run, df, conv, name, len(meta["angles_deg"]), cost_s, op is not None), out["csv"],
+                     out["md"])
     log.info(f"{int(df.healthy_capacity_kg.notna().sum())} healthy voxels, {int(df.capacity_kg.notna().sum())} "
-             f"failed; median loss {df.loss_kg.median():.1f} kg; {cost_s:.0f} core-s -> {out}")
+             f"failed; median loss {df.loss_kg.median():.1f} kg; {cost_s:.0f} core-s -> {out['voxels']}")
 
 
 def _summary(run, df: pd.DataFrame, conv: pd.DataFrame, name: str, n_angles: int, cost_s: float,

@@ -17,7 +17,7 @@ from capmap.io.tables import write_quantities
 from capmap.plots.baseline import baseline_figure
 from capmap.plots.capacity import capacity_map
 from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
-from capmap.stages.common import stage_config
+from capmap.stages.common import Outputs, stage_config
 
 __all__ = ["stage_summary", "stage_capacity_3d", "stage_baseline_figure", "MapView"]
 
@@ -51,10 +51,10 @@ def _planned(waypoints: list[str]) -> tuple[list[tuple[float, float, np.ndarray]
     return paths, missing
 
 
-def stage_summary(voxels: str, configurations: str, points: str, waypoints: list[str], out_csv: str, out_md: str,
-                  out_png: str, slice_json: str) -> None:
-    """Capacity summary table (CSV + Markdown) and the map figure (the arm's configuration and the
-    bound for any, the planned paths drawn)."""
+def stage_summary(voxels: str, configurations: str, points: str, waypoints: list[str], out: Outputs,
+                  slice_json: str) -> None:
+    """Capacity summary table (``out["csv"]``, ``out["md"]``) and the map figure (``out["png"]``: the arm's
+    configuration and the bound for any, the planned paths drawn)."""
     vox, pts = datasets.read(voxels), datasets.read(points)
     view = MapView.from_slice(slice_json)
     op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
@@ -81,14 +81,14 @@ def stage_summary(voxels: str, configurations: str, points: str, waypoints: list
                  (f"voxels of 0 kg on {view.configuration} (a singular surface crosses them)",
                   int((r.capacity_kg == 0).sum())),
                  ("voxels of 0 kg for any configuration", int((reach_v.capacity_kg == 0).sum()))]
-    write_quantities(rows, out_csv, out_md)
+    write_quantities(rows, out["csv"], out["md"])
     planned, _ = _planned(waypoints)
     paths = [("direct line", np.stack([view.start_m, view.goal_m]), {"color": "tab:red", "ls": "--"})]
     paths += [(f"planned, {m:g} kg", p, {"color": c, "ls": "-"})
               for (m, _, p), c in zip(planned, ["black", "tab:pink", "tab:brown", "tab:gray"])]
-    capacity_map(vox, view, out_png, op, view.configuration, paths)
+    capacity_map(vox, view, out["png"], op, view.configuration, paths)
     stage_logger(__name__, "summary").info(f"{len(reach_v)} reachable voxels, median capacity {q.iloc[2]:.1f} kg "
-                                           f"-> {out_csv}, {out_png}")
+                                           f"-> {out['csv']}, {out['png']}")
 
 
 def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], out_html: str, slice_json: str,

@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from capmap.config.dualarm import SolverConfig
 from capmap.config.scene_file import load_scene
+from capmap.dualarm.build import al_settings
 from capmap.dualarm.tables import envelope_from
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
@@ -17,29 +19,27 @@ from capmap.plots.dualarm import (
     joints,
     torques,
 )
-from capmap.stages.common import stage_config
+from capmap.stages.common import Outputs, stage_config
 from capmap.stages.dualarm_solve import setup
 
 __all__ = ["stage_dualarm_plots", "stage_dualarm_animation"]
 
 
-def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: str, out_errors: str, out_distances: str,
-                        out_joints: str, out_velocities: str, out_torques: str, out_convergence: str) -> None:
+def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: str, out: Outputs) -> None:
     """Constraint errors, safety distances, joints and velocities vs their limits, torques vs the
-    effort limits, convergence."""
+    effort limits, convergence (``out``: errors, distances, joints, velocities, torques, convergence)."""
     traj, fine_df, outer_df = datasets.read(trajectory), datasets.read(fine), datasets.read(outer)
     tq = datasets.read(torques_file)
     meta = traj.attrs["capmap"]
-    constraint_errors(traj, out_errors)
-    distances(traj, fine_df, meta["margin_m"], meta["active"], out_distances)
-    joints(traj, meta, "q", out_joints)
-    joints(traj, meta, "qd", out_velocities)
+    constraint_errors(traj, out["errors"])
+    distances(traj, fine_df, meta["margin_m"], meta["active"], out["distances"])
+    joints(traj, meta, "q", out["joints"])
+    joints(traj, meta, "qd", out["velocities"])
     t_pre = float(traj.t_s[traj.phase == "pre_insertion"].iloc[0])
-    torques(tq, tq.attrs["capmap"], t_pre, out_torques)
+    torques(tq, tq.attrs["capmap"], t_pre, out["torques"])
     solver = outer_df.attrs["capmap"]["config"]["run"]["dualarm"]["solver"]  # the run's, in its provenance
-    convergence(outer_df, out_convergence, solver["tolerance"])
-    stage_logger(__name__, "dualarm plots").info(f"-> {out_errors}, {out_distances}, {out_joints}, {out_velocities}, "
-                                                 f"{out_torques}, {out_convergence}")
+    convergence(outer_df, out["convergence"], al_settings(SolverConfig(**solver)).tolerance)
+    stage_logger(__name__, "dualarm plots").info("-> " + ", ".join(out.values()))
 
 
 def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, out_html: str, slice_json: str) -> None:

@@ -16,7 +16,7 @@ from capmap.config.scene_file import load_scene
 from capmap.dualarm.build import al_settings, scan_settings, unknown_settings, weights
 from capmap.dualarm.ocp.assembly import assemble, warm_start
 from capmap.dualarm.ocp.evaluate import fine_grid, node_errors
-from capmap.dualarm.ocp.motion import motion_quantities, motion_tables, plan_assembly, torque_table
+from capmap.dualarm.ocp.motion import motion_lines, motion_quantities, motion_tables, plan_assembly, torque_table
 from capmap.dualarm.ocp.settings import Weights
 from capmap.dualarm.ocp.solver import equality_cost, initial_guess, solve, solve_csqp
 from capmap.dualarm.scene.cloud import depth
@@ -27,7 +27,7 @@ from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities, write_table
-from capmap.stages.common import stage_config
+from capmap.stages.common import Outputs, stage_config
 from capmap.stages.dualarm import robot_from
 
 __all__ = ["setup", "stage_dualarm_optimise", "stage_dualarm_check"]
@@ -104,12 +104,11 @@ def _suggest(da: DualArmConfig, environment: str, unknown: str, msg: str) -> str
     return "a camera at " + " or ".join(str(np.round(v, 2).tolist()) for v in seen[:2]) + " m would see it"
 
 
-def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_trajectory: str, out_fine: str,
-                           out_outer: str, out_torques: str, out_csv: str, out_md: str, slice_json: str) -> None:
+def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out: Outputs, slice_json: str) -> None:
     """The satellite-panel assembly by augmented-Lagrangian DDP, then checked on a finer grid
     (:func:`capmap.dualarm.ocp.motion.plan_assembly`) and by inverse dynamics with the held panel against
     the effort limits (:func:`capmap.dualarm.ocp.motion.torque_table`); the start within the joint limits
-    is checked before any job."""
+    is checked before any job. ``out``: trajectory, fine, outer, torques, csv, md."""
     sc = stage_config(slice_json)
     da = sc.run.dualarm
     log = stage_logger(__name__, "dualarm optimise")
@@ -126,36 +125,25 @@ def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out_tr
                         f"({check.body} near {np.round(check.voxel_centre, 2).tolist()} m) after three solves with the "
                         f"unknown boxes near it; add a viewpoint of dualarm.cloud.viewpoints_m that sees that region")
     traj, fine_df, outer = motion_tables(asm, robot, m)
-    sol, err = m.sol, m.errors
     torques, torque_rows = torque_table(asm, robot, scene, m)
-    prov = datasets.provenance("dualarm_optimise", sc.doc, converged=sol.converged, message=sol.message,
+    prov = datasets.provenance("dualarm_optimise", sc.doc, converged=m.sol.converged, message=m.sol.message,
                                joints=list(robot.joint_names), q_lower=robot.q_lower.tolist(),
                                q_upper=robot.q_upper.tolist(), v_max=robot.v_max.tolist(), margin_m=da.weights.margin_m,
                                active=[list(a) for a in m.active])
-    datasets.write(traj, out_trajectory, prov)
-    datasets.write(fine_df, out_fine, prov)
-    datasets.write(outer, out_outer, prov)
-    datasets.write(torques, out_torques, datasets.provenance(
+    datasets.write(traj, out["trajectory"], prov)
+    datasets.write(fine_df, out["fine"], prov)
+    datasets.write(outer, out["outer"], prov)
+    datasets.write(torques, out["torques"], datasets.provenance(
         "dualarm_optimise", sc.doc, joints=list(robot.joint_names), effort_nm=asm.model.effortLimit.tolist(),
         panel_kg=scene.panel.mass))
     unknown_rows = [("unknown-space boxes given to the optimiser", f"{used} of {n_boxes}"),
                     ("min distance to unknown space, finer grid [m]", check.distance),
                     ("body nearest unknown space", check.body)]
-    write_quantities(motion_quantities(asm, robot, m, weights(da.weights)) + unknown_rows + torque_rows, out_csv, out_md)
-    log.info(f"{'converged' if sol.converged else 'NOT converged: ' + sol.message}; {len(sol.stats)} outer / "
-             f"{int(outer.inner_iterations.sum())} FDDP iterations in {m.solve_s:.1f} s; closed chain "
-             f"{err.closed_chain_pos.max():.1e} m; path {err.path_pos.max():.1e} m; min distance "
-             f"{1e3 * m.fine.min_distance.min():.2f} mm on the finer grid; active: "
-             f"{', '.join(a[0] for a in m.active) or 'none'}")
-    peak = dict(torque_rows)
-    line = (f"joint torques with the {scene.panel.mass:g} kg panel: peak "
-            f"{peak['peak torque / effort limit, least-norm internal force [%]']:.0f} % of the effort limit "
-            f"({peak['joint at the peak (least-norm)']}), {peak['peak torque / effort limit, best internal force [%]']:.0f} % "
-            "with the best internal force")
-    if peak["within the effort limits (least-norm internal force)"]:
-        log.info(line)
-    else:
-        log.warning(line + ": the motion EXCEEDS the effort limits (torque limits are not in the optimisation)")
+    write_quantities(motion_quantities(asm, robot, m, weights(da.weights)) + unknown_rows + torque_rows, out["csv"],
+                     out["md"])
+    solved, held, within = motion_lines(m, outer, scene.panel.mass, torque_rows)
+    log.info(solved)
+    (log.info if within else log.warning)(held)
 
 
 def stage_dualarm_check(environment: str, capsules: str, out_csv: str, out_md: str, slice_json: str) -> None:

@@ -21,7 +21,7 @@ from capmap.dualarm.scene.solids import Scene
 from capmap.errors import CapmapError
 
 __all__ = ["ACTIVE_WITHIN_M", "AssemblyMotion", "key_poses", "plan_assembly", "motion_tables", "motion_quantities",
-           "torque_table"]
+           "torque_table", "motion_lines"]
 
 ACTIVE_WITHIN_M = 0.01  # a collision constraint is reported active within 1 cm
 
@@ -160,3 +160,23 @@ def torque_table(asm: Assembly, robot: DualArm, scene: Scene, m: AssemblyMotion)
         ("max grasp-map residual [N, N m]", float(ht.residual.max())),
     ]
     return df, rows
+
+
+def motion_lines(m, outer, panel_kg: float, torque_rows: list[tuple[str, object]]) -> tuple[str, str, bool]:
+    """The log lines of a planned assembly ``m`` (:func:`plan_assembly`; ``outer``: its outer iterations'
+    table): how the solve went, the held panel's peak torques (``torque_rows``: :func:`torque_table`'s),
+    and whether they are within the effort limits."""
+    sol, err = m.sol, m.errors
+    solved = (f"{'converged' if sol.converged else 'NOT converged: ' + sol.message}; {len(sol.stats)} outer / "
+              f"{int(outer.inner_iterations.sum())} FDDP iterations in {m.solve_s:.1f} s; closed chain "
+              f"{err.closed_chain_pos.max():.1e} m; path {err.path_pos.max():.1e} m; min distance "
+              f"{1e3 * m.fine.min_distance.min():.2f} mm on the finer grid; active: "
+              f"{', '.join(a[0] for a in m.active) or 'none'}")
+    peak = dict(torque_rows)
+    held = (f"joint torques with the {panel_kg:g} kg panel: peak "
+            f"{peak['peak torque / effort limit, least-norm internal force [%]']:.0f} % of the effort limit "
+            f"({peak['joint at the peak (least-norm)']}), {peak['peak torque / effort limit, best internal force [%]']:.0f} % "
+            "with the best internal force")
+    within = bool(peak["within the effort limits (least-norm internal force)"])
+    return solved, held if within else held + ": the motion EXCEEDS the effort limits (torque limits are not in the " \
+        "optimisation)", within
