@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config.robot_file import load
 from capmap.core.reduction import lock
+from capmap.robots import load
 from tests.scenario import SSRMS_YAML
 
 

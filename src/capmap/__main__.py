@@ -26,10 +26,10 @@ import sys
 from pathlib import Path
 
 from capmap.checks import check_run_config
-from capmap.config.robot_file import load, lock_classes
 from capmap.config.run import DEFAULT_CONFIG, run_document
 from capmap.errors import CapmapError
 from capmap.io.datasets import verify_catalogue
+from capmap.robots import load, lock_classes
 from capmap.stages.query import answer_line, answer_point
 
 __all__ = ["main"]

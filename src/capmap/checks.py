@@ -26,9 +26,8 @@ from capmap.config.following import FollowConfig
 from capmap.config.inputs import check_cloud_file
 from capmap.config.jobs import PlanTask
 from capmap.config.parse import parse_config
-from capmap.config.robot_file import load, referenced_files
+from capmap.config.robot_file import referenced_files
 from capmap.config.run import RunConfig
-from capmap.config.scene_file import load_scene
 from capmap.config.validation import per_item
 from capmap.core import ik
 from capmap.core.profiles import MIN_PHASE_INTERVALS
@@ -38,9 +37,11 @@ from capmap.core.tracking import nearest_branch
 from capmap.dualarm.build import load_dual_arm_file, unknown_settings
 from capmap.dualarm.scene.robot import build_dual_arm
 from capmap.dualarm.scene.solids import surface_points
+from capmap.dualarm.scene_file import load_scene
 from capmap.errors import CapmapError, ConfigError
 from capmap.io.fingerprint import code_fingerprint, file_sha256
 from capmap.reconfig.build import rate_limits, reconfig_problem
+from capmap.robots import load
 
 __all__ = ["check_run_config", "check_goal", "check_dt", "check_follow", "check_atlas", "check_on_grid", "check_motions",
            "check_dualarm", "dual_arm_limits"]

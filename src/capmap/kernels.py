@@ -26,13 +26,13 @@ from capmap.capacity import directions, engine
 from capmap.capacity.problem import CapacityProblem
 from capmap.checks import dual_arm_limits
 from capmap.config.parse import parse_config
-from capmap.config.robot_file import load
 from capmap.config.run import DEFAULT_CONFIG, run_document
-from capmap.config.scene_file import load_scene
 from capmap.core import ik
 from capmap.core.reduction import lock
+from capmap.dualarm.scene_file import load_scene
 from capmap.errors import CapmapError
 from capmap.io.kernel_marker import is_warm, record, run_key
+from capmap.robots import load
 
 __all__ = ["warm", "ensure_warm", "remember_dual_arm", "main"]
 

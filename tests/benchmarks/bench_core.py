@@ -33,10 +33,10 @@ import pinocchio as pin  # noqa: E402
 
 from capmap.capacity import directions, engine  # noqa: E402
 from capmap.capacity.problem import CapacityProblem, point_capacity  # noqa: E402
-from capmap.config.robot_file import load  # noqa: E402
 from capmap.core import ik  # noqa: E402
 from capmap.core.dynamics import ArmDynamics  # noqa: E402
 from capmap.core.reduction import lock  # noqa: E402
+from capmap.robots import load  # noqa: E402
 from tests.benchmarks.machine import machine  # noqa: E402
 
 ROBOT = Path(__file__).resolve().parents[2] / "config" / "robots" / "ssrms7.yaml"

@@ -30,7 +30,6 @@ sys.path.insert(0, ROOT)  # tests.reference: the coal shapes of the distance tes
 
 from capmap.checks import check_run_config  # noqa: E402
 from capmap.config.dualarm import cloud_source, fit_config, horizon, weights_config  # noqa: E402
-from capmap.config.scene_file import load_scene  # noqa: E402
 from capmap.dualarm.build import al_settings, fit_settings, load_dual_arm_file, scan_settings, weights  # noqa: E402
 from capmap.dualarm.geometry.distance import segment_segment, segment_triangle  # noqa: E402
 from capmap.dualarm.ocp.assembly import assemble, warm_start  # noqa: E402
@@ -39,6 +38,7 @@ from capmap.dualarm.ocp.solver import context, initial_guess, node_model, node_p
 from capmap.dualarm.scene.cloud import fit_envelope  # noqa: E402
 from capmap.dualarm.scene.robot import build_dual_arm, fit_capsules  # noqa: E402
 from capmap.dualarm.scene.solids import nearest_solid, scan  # noqa: E402
+from capmap.dualarm.scene_file import load_scene  # noqa: E402
 from tests.benchmarks.machine import machine  # noqa: E402
 from tests.reference.coal_shapes import capsule  # noqa: E402
 

@@ -16,7 +16,6 @@ from pathlib import Path
 
 import numpy as np
 
-from capmap.config.robot_file import load
 from capmap.core.kinematics import rotation_from_rpy
 from capmap.core.limits import AffineLimits
 from capmap.core.profiles import scurve
@@ -24,6 +23,7 @@ from capmap.core.reduction import free, lock
 from capmap.following.follower import follow
 from capmap.following.path import line_path
 from capmap.following.path_dynamics import path_dynamics, prepare
+from capmap.robots import load
 from tests.benchmarks.machine import machine
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -11,11 +11,11 @@ from capmap.capacity.baseline import HealthyProblem, SelfMotion, healthy_capacit
 from capmap.capacity.directions import Directions, paper_grid, sphere
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.problem import CapacityProblem, point_capacity
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
+from capmap.robots import load
 from tests.reference.posture_capacity import posture_capacity
 from tests.scenario import SSRMS_YAML, TASK_R, X_DES, X_INI
 

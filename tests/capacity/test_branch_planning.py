@@ -17,11 +17,11 @@ from capmap.capacity.engine import LoadLimits, Motion, state_capacity
 from capmap.capacity.plan_verify import branch_deviation_deg
 from capmap.capacity.verification import judge, verify_path
 from capmap.capacity.voxels import Grid
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.errors import NoPath
+from capmap.robots import load
 from tests.reference import branch_graph
 from tests.scenario import SSRMS_YAML, TASK_R, X_INI
 

@@ -14,11 +14,11 @@ from capmap.capacity.directions import grid_axes, sphere
 from capmap.capacity.engine import LoadLimits, Motion, capacity_over_directions, coefficients_pinocchio
 from capmap.capacity.evaluator import Evaluator, HealthyEvaluator, LockedEvaluator
 from capmap.capacity.problem import CapacityProblem
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
+from capmap.robots import load
 from tests.scenario import SSRMS_YAML, TASK_R, X_DES, X_INI
 
 MOTION = Motion(0.15, 0.03)

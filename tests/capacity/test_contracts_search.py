@@ -25,11 +25,11 @@ from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.planning import VoxelSearch
 from capmap.capacity.search import Outcome, PathPlan, Search, attempt
 from capmap.capacity.voxels import Grid
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError, NoPath
+from capmap.robots import load
 from tests.reference import branch_graph
 from tests.reference.dijkstra import dijkstra_cost
 from tests.scenario import SSRMS_YAML, TASK_R, X_INI

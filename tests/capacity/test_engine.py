@@ -10,12 +10,12 @@ from capmap.capacity.engine import (
     state_capacity,
 )
 from capmap.capacity.problem import CapacityProblem, point_capacity
-from capmap.config.robot_file import load
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.ik import solve
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
+from capmap.robots import load
 from tests.reference.lp import lp_capacity
 from tests.reference.newton_euler import newton_euler
 from tests.scenario import SSRMS_YAML, TASK_R, X_DES

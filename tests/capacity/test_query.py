@@ -11,10 +11,10 @@ from capmap.capacity.directions import sphere
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.query import line_query, point_query
-from capmap.config.robot_file import load
 from capmap.core.configuration import arm_configurations
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
+from capmap.robots import load
 from tests.reference.ik_oracle import DHArm, solve_all
 from tests.reference.posture_capacity import posture_capacity
 from tests.scenario import SSRMS_YAML, TASK_R, X_DES, X_INI

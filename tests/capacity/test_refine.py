@@ -11,11 +11,11 @@ from capmap.capacity.evaluator import LockedEvaluator
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
 from capmap.capacity.voxels import Grid
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
 from capmap.core.reduction import lock
 from capmap.errors import CapmapError
+from capmap.robots import load
 from tests.scenario import SSRMS_YAML, TASK_R
 
 EDGE = 0.75

@@ -12,9 +12,9 @@ from capmap.capacity.directions import paper_grid, sphere
 from capmap.capacity.engine import LoadLimits, Motion, coefficients, direction_features, direction_minimum
 from capmap.capacity.sphere import _eig3, _trs, min_over_sphere, start_directions
 from capmap.capacity.sweep import min_over_directions
-from capmap.config.robot_file import load
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
+from capmap.robots import load
 
 ROBOT = Path(__file__).resolve().parents[2] / "config" / "robots" / "ssrms7.yaml"
 MOTION = Motion(0.15, 0.03)

@@ -7,9 +7,9 @@ import pytest
 from capmap.capacity import directions
 from capmap.capacity.engine import LoadLimits, Motion, affine_over_directions, coefficients, direction_features
 from capmap.capacity.sweep import min_over_directions, min_per_pair
-from capmap.config.robot_file import load
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import lock
+from capmap.robots import load
 from tests.scenario import SSRMS_YAML
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config.robot_file import load
+from capmap.robots import load
 from tests.config.test_urdf_robots import _error  # one line naming the file: the robot files' check
 from tests.scenario import ROOT, SSRMS_YAML
 

@@ -3,8 +3,8 @@
 import pytest
 import yaml
 
-from capmap.config.robot_file import load, load_robot
 from capmap.errors import CapmapError, ConfigError
+from capmap.robots import load, load_robot
 from tests.scenario import SSRMS_YAML
 
 

@@ -17,10 +17,10 @@ from capmap.capacity.build import load_limits
 from capmap.checks import check_run_config
 from capmap.config import main_task
 from capmap.config.capacity import TORQUE_FROM_CONFIG, TORQUE_FROM_URDF, LimitsConfig
-from capmap.config.robot_file import load
 from capmap.config.slices import stage_slice
 from capmap.config.validation import load_yaml
 from capmap.errors import ConfigError
+from capmap.robots import load
 from tests.scenario import ROOT, SSRMS_YAML
 
 PANDA_YAML = ROOT / "config" / "robots" / "panda.yaml"

@@ -8,11 +8,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from capmap.config.robot_file import load
 from capmap.core.batch_dynamics import BatchDynamics
 from capmap.core.dynamics import ArmDynamics
 from capmap.core.reduction import free, lock
 from capmap.core.robot import Drive, build_robot
+from capmap.robots import load
 from tests.reference.newton_euler import newton_euler
 from tests.scenario import SSRMS_YAML, UR5_YAML
 

@@ -9,11 +9,11 @@ import pinocchio as pin
 import pytest
 
 import capmap.core.ik.closed as ik_closed
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.configuration import Aspects, ShoulderElbowWrist, arm_configurations
 from capmap.core.reduction import free, lock
 from capmap.core.tracking import track
+from capmap.robots import load
 
 SSRMS, UR5 = "config/robots/ssrms7.yaml", "config/robots/ur5.yaml"
 # (robot, locked joint (0: none), angle deg): every closed-form case of the SSRMS, the UR5 as shipped,

@@ -22,9 +22,9 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.reduction import free, lock
+from capmap.robots import load
 from tests.reference.ik_oracle import DHArm, solve_all
 from tests.scenario import SSRMS_YAML, UR5_YAML
 

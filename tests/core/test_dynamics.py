@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from capmap.config.robot_file import load
 from capmap.core.dynamics import ArmDynamics, output_names
 from capmap.core.reduction import lock
+from capmap.robots import load
 from tests.reference.newton_euler import newton_euler
 from tests.scenario import SSRMS_YAML
 

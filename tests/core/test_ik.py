@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config.robot_file import load
 from capmap.core.ik import RESIDUAL_TOL, MultiStartNewton, SemiAnalytic, method_for, solve, wrap_to_range
 from capmap.core.reduction import free, lock
+from capmap.robots import load
 from tests.scenario import Q_INI_DEG, SSRMS_YAML, TASK_R, X_DES, X_INI
 
 

@@ -9,11 +9,11 @@ import pytest
 
 import capmap.core.ik.general.elimination as ik_general
 import capmap.core.ik.general.select as ik_general_select
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.ik.polish import polish
 from capmap.core.kinematics import Chain, pose_error
 from capmap.core.reduction import free, lock
+from capmap.robots import load
 from tests.scenario import SSRMS_YAML
 
 UR5 = SSRMS_YAML.parent / "ur5.yaml"

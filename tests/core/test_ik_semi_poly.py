@@ -9,10 +9,10 @@ import pytest
 
 import capmap.core.ik.semi.resultant as ik_semi_poly
 import capmap.core.ik.semi.search as ik_semi
-from capmap.config.robot_file import load
 from capmap.core import ik
 from capmap.core.ik.finish import _finish
 from capmap.core.reduction import lock
+from capmap.robots import load
 from tests.core.test_ik_general import _missing
 from tests.scenario import SSRMS_YAML
 

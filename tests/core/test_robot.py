@@ -2,8 +2,8 @@ import numpy as np
 import pinocchio as pin
 import yaml
 
-from capmap.config.robot_file import load, parse_robot
 from capmap.core.robot import build_robot
+from capmap.robots import load, parse_robot
 from tests.reference.newton_euler import craig_fk, craig_step, spec_table
 from tests.scenario import Q_INI_DEG, SSRMS_YAML, X_INI, rpy_matrix
 

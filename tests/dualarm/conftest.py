@@ -8,7 +8,6 @@ import pytest
 import yaml
 
 from capmap.config.dualarm import cloud_source, fit_config
-from capmap.config.scene_file import load_scene
 from capmap.dualarm.build import fit_settings, load_dual_arm_file, scan_settings
 from capmap.dualarm.geometry.chain import pack
 from capmap.dualarm.ocp.assembly import assemble, warm_start
@@ -18,6 +17,7 @@ from capmap.dualarm.ocp.solver import initial_guess, node_pairs
 from capmap.dualarm.scene.cloud import fit_envelope
 from capmap.dualarm.scene.robot import build_dual_arm, fit_capsules
 from capmap.dualarm.scene.solids import nearest_solid, scan
+from capmap.dualarm.scene_file import load_scene
 from tests.scenario import ROOT
 
 SECTION = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["dualarm"]

@@ -11,7 +11,6 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from capmap.config.robot_file import load
 from capmap.core.dynamics import payload_models
 from capmap.core.limits import AffineLimits
 from capmap.core.profiles import scurve
@@ -20,6 +19,7 @@ from capmap.following.follower import FollowSettings, follow
 from capmap.following.path import JointPath, path_at
 from capmap.following.path_dynamics import path_dynamics, prepare
 from capmap.following.tables import follow_path
+from capmap.robots import load
 from tests.scenario import ROOT
 
 UR5_DRIVES = ROOT / "config" / "robots" / "ur5_drives.yaml"

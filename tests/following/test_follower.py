@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config.robot_file import load
 from capmap.core.limits import AffineLimits
 from capmap.core.profiles import scurve
 from capmap.core.reduction import free
@@ -17,6 +16,7 @@ from capmap.following.follower import FollowSettings, follow, follow_segment
 from capmap.following.path import JointPath, line_path
 from capmap.following.path_dynamics import PathDynamics, path_dynamics, prepare
 from capmap.following.toppra_reference import time_optimal
+from capmap.robots import load
 from tests.reference.newton_euler import newton_euler
 from tests.scenario import Q_INI_DEG, TASK_R, UR5_YAML, X_DES, X_INI
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from capmap.config.platform_file import load_platform
 from capmap.reconfig.law import QuinticLaw
 from capmap.reconfig.loop import close_capture
 from capmap.reconfig.multiarm import PlatformState
+from capmap.reconfig.platform_file import load_platform
 from capmap.reconfig.problem import build_problem
 from tests.scenario import ROOT
 

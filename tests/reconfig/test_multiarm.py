@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 import yaml
 
-from capmap.config.platform_file import load_platform
-from capmap.config.robot_file import load
 from capmap.errors import ConfigError
 from capmap.reconfig.multiarm import arm_elements, chain_of, platform_model
+from capmap.reconfig.platform_file import load_platform
+from capmap.robots import load
 from tests.reconfig.conftest import CAPTURE_DEG, RECONFIG_YAML, state_of
 from tests.reference.platform_fk import link_poses
 

@@ -12,11 +12,11 @@ import pytest
 from capmap.config import canonical, stage_slice
 from capmap.config.dualarm import DualArmConfig, cloud_source
 from capmap.config.run import RunConfig
-from capmap.config.scene_file import load_scene
 from capmap.config.typed import partial, to_doc
 from capmap.dualarm.build import scan_settings
 from capmap.dualarm.scene.cloud import uncovered
 from capmap.dualarm.scene.solids import scan
+from capmap.dualarm.scene_file import load_scene
 from capmap.dualarm.tables import envelope_from
 from capmap.errors import ConfigError
 from capmap.io import datasets

@@ -14,8 +14,8 @@ import yaml
 
 from capmap.capacity.build import locked_arm
 from capmap.checks import check_run_config
-from capmap.config.robot_file import load
 from capmap.config.run import run_document
+from capmap.robots import load
 from tests.scenario import ROOT
 from tests.workflow.runs import snakemake
 

@@ -24,7 +24,6 @@ from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine_data import RefineSettings
 from capmap.config.capacity import DirectionsConfig, LimitsConfig, LockConfig, RefineConfig, TaskConfig
 from capmap.config.failure import Failure
-from capmap.config.robot_file import load
 from capmap.config.run import RunConfig
 from capmap.config.validation import per_item
 from capmap.core import ik
@@ -35,6 +34,7 @@ from capmap.core.reduction import lock as lock_joint
 from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError, ConfigError
+from capmap.robots import load
 
 __all__ = ["task_rotation", "task_motion", "directions_of", "load_limits", "refine_settings",
            "locked_arm", "resolve_failure", "run_arm", "capacity_problem", "healthy_problem", "configuration_name"]

@@ -2,13 +2,11 @@
 that need the robot are :mod:`capmap.checks`; each family's ``build`` module turns its sections into numerics.
 
 - :mod:`~capmap.config.validation`  YAML loading and JSON-schema validation (``schemas/``)
-- :mod:`~capmap.config.robot_file`  robot files -> robot descriptions and models
+- :mod:`~capmap.config.robot_file`  the files a robot file names (URDF, meshes) and their checks
 - :mod:`~capmap.config.capacity`    sections of the capacity-map family (lock, task, limits, ...)
 - :mod:`~capmap.config.following`   the ``follow`` section
 - :mod:`~capmap.config.reconfig`    the ``reconfig`` section
 - :mod:`~capmap.config.dualarm`     the ``dualarm`` section and dual-arm robot files
-- :mod:`~capmap.config.scene_file`  scene files of the dual-arm family
-- :mod:`~capmap.config.platform_file` platform robot files (arms of revolute and passive joints)
 - :mod:`~capmap.config.run`         the whole run configuration (its type, its document)
 - :mod:`~capmap.config.parse`       the document validated into a RunConfig
 - :mod:`~capmap.config.jobs`        one plan/verify job (PlanTask)

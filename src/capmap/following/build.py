@@ -10,12 +10,12 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from capmap.config.robot_file import load
 from capmap.config.run import RunConfig
 from capmap.config.validation import per_item
 from capmap.core.kinematics import rotation_from_rpy
 from capmap.core.reduction import LockedArm, free, lock
 from capmap.following.follower import FollowSettings
+from capmap.robots import load
 
 __all__ = ["FollowCase", "follow_case"]
 

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from capmap.config.platform_file import load_platform
 from capmap.config.reconfig import ReconfigConfig
 from capmap.config.validation import per_item
 from capmap.errors import CapmapError, ConfigError
 from capmap.reconfig.law import QuinticLaw
 from capmap.reconfig.multiarm import PlatformDescription, PlatformState
 from capmap.reconfig.planner import PlannerSettings
+from capmap.reconfig.platform_file import load_platform
 from capmap.reconfig.problem import ReconfigProblem, build_problem
 
 __all__ = ["law_of", "platform_state", "reconfig_problem", "rate_limits", "planner_settings"]

@@ -9,12 +9,12 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from capmap.config.scene_file import load_scene
 from capmap.dualarm.build import fit_settings, load_dual_arm_file, scan_settings, unknown_settings
 from capmap.dualarm.scene.cloud import depth, fit_envelope, uncovered
 from capmap.dualarm.scene.robot import DualArm, build_dual_arm, fit_capsules
 from capmap.dualarm.scene.solids import nearest_solid, scan
 from capmap.dualarm.scene.unknown import Grid, unknown_space
+from capmap.dualarm.scene_file import load_scene
 from capmap.dualarm.tables import capsule_table, capsules_from, envelope_from, envelope_table, unknown_table
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets

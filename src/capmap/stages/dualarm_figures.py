@@ -6,8 +6,8 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.config.dualarm import SolverConfig
-from capmap.config.scene_file import load_scene
 from capmap.dualarm.build import al_settings
+from capmap.dualarm.scene_file import load_scene
 from capmap.dualarm.tables import envelope_from
 from capmap.io import datasets
 from capmap.io.logs import stage_logger

@@ -12,7 +12,6 @@ import numpy as np
 import pandas as pd
 
 from capmap.config.dualarm import DualArmConfig, Horizon
-from capmap.config.scene_file import load_scene
 from capmap.dualarm.build import al_settings, scan_settings, unknown_settings, weights
 from capmap.dualarm.ocp.assembly import assemble, warm_start
 from capmap.dualarm.ocp.evaluate import fine_grid, node_errors
@@ -22,6 +21,7 @@ from capmap.dualarm.ocp.solver import equality_cost, initial_guess, solve, solve
 from capmap.dualarm.scene.cloud import depth
 from capmap.dualarm.scene.unknown import Grid, near_boxes, with_boxes
 from capmap.dualarm.scene.unobserved import swept_balls, unknown_mask, unobserved_check, viewpoints_that_see
+from capmap.dualarm.scene_file import load_scene
 from capmap.dualarm.tables import envelope_from, unknown_boxes
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from capmap.config.robot_file import transform
 from capmap.config.validation import load_yaml, validate
 from capmap.errors import ConfigError
 from capmap.reconfig.multiarm import Capture, PlatformArm, PlatformDescription, PlatformJoint
+from capmap.robots import transform
 
 __all__ = ["parse_platform", "load_platform"]
 
