@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from capmap.capacity.build import directions_of, load_limits, locked_arm, refine_settings, resolve_failure, task_rotation
+from capmap.capacity.build import directions_of, load_limits, refine_settings, resolve_failure, task_rotation
 from capmap.capacity.sizing import estimate_map
 from capmap.capacity.voxels import Grid
 from capmap.config.atlas import AtlasConfig
@@ -68,8 +68,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     """Everything that can be checked before any job: schema, robot file, lock, limits, directions."""
     cfg = parse_config(doc, source)
     robot = load(cfg.robot)
-    failure = resolve_failure(robot, cfg.lock, cfg.task, source)
-    arm = locked_arm(robot, failure.joint, failure.angle_deg)
+    failure, arm = resolve_failure(robot, cfg.lock, cfg.task, source)
     try:
         limits_cfg = cfg.limits.for_robot(robot)  # the URDF's effort limits unless limits.joint_torque_nm
         limits = load_limits(limits_cfg, robot.n_joints).for_arm(arm)

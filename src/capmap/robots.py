@@ -17,13 +17,14 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.config.robot_file import check_urdf, package_file
+from capmap.config.run import RunConfig
 from capmap.config.validation import load_yaml, validate
 from capmap.core.ik import classify
-from capmap.core.reduction import free, lock
+from capmap.core.reduction import LockedArm, free, lock
 from capmap.core.robot import Drive, LinkInertia, Robot, RobotDescription, build_robot
-from capmap.errors import ConfigError
+from capmap.errors import CapmapError, ConfigError
 
-__all__ = ["lock_classes", "parse_robot", "load_robot", "load", "transform"]
+__all__ = ["lock_classes", "parse_robot", "load_robot", "load", "transform", "locked_arm", "run_arm"]
 
 
 def _inertia_matrix(values: list[float], where: str) -> np.ndarray:
@@ -184,3 +185,17 @@ def lock_classes(robot: Robot, angle_deg: float | None = None) -> list[str]:
         angle = (lo + hi) / 2 if angle_deg is None else float(np.clip(np.deg2rad(angle_deg), lo, hi))
         lines.append(f"joint {j} locked at {np.rad2deg(angle):g} deg: {classify(lock(robot, j, angle).chain).describe()}")
     return lines
+
+
+def locked_arm(robot: Robot, joint: int, angle_deg: float) -> LockedArm:
+    """``robot`` with ``joint`` (1-based) locked at ``angle_deg``: :func:`capmap.core.reduction.lock` with its
+    errors in config terms."""
+    try:
+        return lock(robot, joint, np.deg2rad(angle_deg))
+    except CapmapError as exc:
+        raise ConfigError(exc.in_terms(joint="lock.joint", angle="lock.angle_deg")) from None
+
+
+def run_arm(run: RunConfig) -> LockedArm:
+    """The run's robot locked as its resolved failure says (``arm.robot``: the robot)."""
+    return locked_arm(load(run.robot), run.failure.joint, run.failure.angle_deg)

@@ -22,7 +22,7 @@ def _resolve(ssrms, lock, **task):
     for k in [k for k, v in task.items() if v is None]:
         doc["task"].pop(k)
     cfg = parse_config(doc)
-    return resolve_failure(ssrms, cfg.lock, cfg.task)
+    return resolve_failure(ssrms, cfg.lock, cfg.task)[0]
 
 
 def _oracle_nearest(joint, angle_deg, start, q_ini_deg):

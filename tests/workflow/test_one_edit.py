@@ -12,10 +12,9 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from capmap.capacity.build import locked_arm
 from capmap.checks import check_run_config
 from capmap.config.run import run_document
-from capmap.robots import load
+from capmap.robots import load, locked_arm
 from tests.scenario import ROOT
 from tests.workflow.runs import snakemake
 

@@ -3,9 +3,9 @@
 
 - the task: :func:`task_rotation` (3, 3), :func:`task_motion`;
 - the sets and limits: :func:`directions_of`, :func:`load_limits`, :func:`refine_settings`;
-- the failure: :func:`locked_arm` (the lock, errors in config keys) and :func:`resolve_failure` (the
-  lock angle, the start and the start configuration: the IK branch at the start nearest q_ini);
-- the problem: :func:`run_arm`, :func:`capacity_problem` (the run's locked arm and task as a
+- the failure: :func:`resolve_failure` (the lock angle, the start and the start configuration: the IK
+  branch at the start nearest q_ini; the lock itself: :func:`capmap.robots.locked_arm`);
+- the problem: :func:`capacity_problem` (the run's locked arm and task as a
   :class:`CapacityProblem`), :func:`healthy_problem` (the healthy arm's), :func:`configuration_name`.
 
 The pre-run checks (:mod:`capmap.checks`), the stages and the command line call these; nothing else
@@ -30,14 +30,13 @@ from capmap.core import ik
 from capmap.core.configuration import arm_configurations
 from capmap.core.kinematics import rotation_from_rpy, rotation_log
 from capmap.core.reduction import LockedArm
-from capmap.core.reduction import lock as lock_joint
 from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError, ConfigError
-from capmap.robots import load
+from capmap.robots import load, locked_arm
 
 __all__ = ["task_rotation", "task_motion", "directions_of", "load_limits", "refine_settings",
-           "locked_arm", "resolve_failure", "run_arm", "capacity_problem", "healthy_problem", "configuration_name"]
+           "resolve_failure", "capacity_problem", "healthy_problem", "configuration_name"]
 
 
 def task_rotation(task: TaskConfig) -> np.ndarray:
@@ -81,16 +80,10 @@ def refine_settings(cfg: RefineConfig, payloads_kg) -> RefineSettings:
                           "near_min_points <= max_points") from None
 
 
-def locked_arm(robot: Robot, joint: int, angle_deg: float) -> LockedArm:
-    """:func:`capmap.core.reduction.lock` with its errors in config terms."""
-    try:
-        return lock_joint(robot, joint, np.deg2rad(angle_deg))
-    except CapmapError as exc:
-        raise ConfigError(exc.in_terms(joint="lock.joint", angle="lock.angle_deg")) from None
-
-
-def resolve_failure(robot: Robot, lock: LockConfig, task: TaskConfig, source: str = "config") -> Failure:
-    """Resolve the lock angle, the start position and the start configuration (one-line
+def resolve_failure(robot: Robot, lock: LockConfig, task: TaskConfig, source: str = "config"
+                    ) -> tuple[Failure, LockedArm]:
+    """Resolve the lock angle, the start position and the start configuration, and the arm locked as it
+    says (one-line
     :class:`ConfigError` naming the key for a wrong q_ini length, a lock angle outside the joint's
     range, or a start the locked arm cannot reach at the task orientation). See
     :mod:`capmap.config.failure` for what is resolved and why."""
@@ -127,12 +120,7 @@ def resolve_failure(robot: Robot, lock: LockConfig, task: TaskConfig, source: st
                    q_start_deg=tuple(float(v) for v in q_start), branch=k, n_branches=n,
                    offset_deg=float(np.rad2deg(off)), angle_given=angle_given, start_given=start_given,
                    ini_miss_m=float(np.linalg.norm(T_ini[:3, 3] - start)),
-                   ini_miss_deg=float(np.rad2deg(np.linalg.norm(rotation_log(rotation @ T_ini[:3, :3].T)))))
-
-
-def run_arm(run: RunConfig) -> LockedArm:
-    """The run's robot locked as its resolved failure says (``arm.robot``: the robot)."""
-    return locked_arm(load(run.robot), run.failure.joint, run.failure.angle_deg)
+                   ini_miss_deg=float(np.rad2deg(np.linalg.norm(rotation_log(rotation @ T_ini[:3, :3].T))))), arm
 
 
 def capacity_problem(run: RunConfig, joint: int | None = None, angle_deg: float | None = None,
@@ -150,11 +138,11 @@ def capacity_problem(run: RunConfig, joint: int | None = None, angle_deg: float 
                            arm_configurations(arm) if per_configuration else None)
 
 
-def healthy_problem(run: RunConfig, step_deg: float) -> HealthyProblem:
+def healthy_problem(run: RunConfig, step_deg: float, problem: CapacityProblem | None = None) -> HealthyProblem:
     """The run's healthy arm (``baseline``): its failed joint swept through the failed angle ``step_deg``
-    apart, the arm held at each angle, the run's problem and ``baseline.screen_directions`` of its
-    directions as the screening set."""
-    problem = capacity_problem(run)
+    apart, the arm held at each angle, the run's problem (``problem``: already built) and
+    ``baseline.screen_directions`` of its directions as the screening set."""
+    problem = capacity_problem(run) if problem is None else problem
     robot, j = problem.arm.robot, run.failure.joint
     lo, hi = np.rad2deg(robot.q_lower[j - 1]), np.rad2deg(robot.q_upper[j - 1])
     sm = SelfMotion.build(self_motion_angles(lo, hi, run.failure.angle_deg, step_deg),

@@ -66,15 +66,13 @@ class HealthyEvaluator:
     its swept joint's angles, the task's rotation, motion and directions, the screening set); ``n_voxels``
     the grid's voxel count (the owners' range). A voxel's points are evaluated
     together, ``chunk`` at a time; each voxel's least value exact, the others may stop at it, tried first
-    at the angle of the voxel's least value so far. No per-axis or per-configuration values.
-    ``angle_deg`` after a call: each point's angle of its value (NaN: unreachable)."""
+    at the angle of the voxel's least value so far. No per-axis or per-configuration values."""
 
     pointwise = False
 
     def __init__(self, hp: HealthyProblem, n_voxels: int, chunk: int = 1000):
         self.hp, self.chunk, self.n_evaluated = hp, int(chunk), 0
         self.hint_of = np.full(int(n_voxels), -1)  # per voxel: the angle (index) of its least value's posture
-        self.angle_deg = np.zeros(0)
 
     def evaluate(self, points: np.ndarray, ceiling: np.ndarray | None = None,
                  owner: np.ndarray | None = None) -> Evaluation:
@@ -93,5 +91,4 @@ class HealthyEvaluator:
             i = argmin_per_group(c, owner)
             new = np.isfinite(c[i]) & (c[i] < (np.inf if ceiling is None else ceiling[i]))
             self.hint_of[owner[i[new]]] = np.searchsorted(self.hp.sm.angles_deg, angle[i[new]])
-        self.angle_deg = angle
         return Evaluation(cap, np.zeros((N, 0)), binding, np.isfinite(cap).astype(int))

@@ -18,7 +18,7 @@ from capmap.capacity.tables import grid_of
 from capmap.capacity.voxels import Grid
 from capmap.core.reduction import free
 
-__all__ = ["HEALTHY_COLUMNS", "BASELINE_COLUMNS", "healthy_samples", "baseline_shard",
+__all__ = ["HEALTHY_COLUMNS", "BASELINE_COLUMNS", "healthy_samples", "baseline_shard", "loss_table",
            "angle_convergence"]
 
 HEALTHY_COLUMNS = ["x_m", "y_m", "z_m", "healthy_capacity_kg", "healthy_binding", "healthy_angle_deg", "n_points",
@@ -131,6 +131,29 @@ def _start(grid: Grid, vox_of: np.ndarray, flat: np.ndarray, pos: np.ndarray, ca
     return VoxelMinima(voxel=vox_of, capacity_kg=low, axis_capacity_kg=np.zeros((V, 0)), n_points=n_pts,
                        n_reachable=n_reach, last_change=np.zeros(V), converged=np.zeros(V, dtype=bool), worst_m=worst,
                        binding=wb, rounds=0, n_evaluated=0)
+
+
+def loss_table(h: pd.DataFrame, failed: pd.DataFrame, op: pd.DataFrame | None) -> pd.DataFrame:
+    """The healthy map ``h`` (the shards' rows) beside the failed one (``failed``: its voxel table; ``op``: its
+    voxels on the arm's configuration, None without configuration maps) on the failed map's grid, one row
+    per voxel either reaches, sorted by (i, j, k): the loss, healthy - failed (failed: 0 kg where it reaches
+    no point of the voxel), of all branches and of the arm's configuration."""
+    grid = grid_of(failed)
+    h = h.copy()
+    h[["i", "j", "k"]] = np.rint((h[["x_m", "y_m", "z_m"]].to_numpy() - grid.lower) / grid.edge_m - 0.5).astype(int)
+    f = failed.loc[failed.n_reachable > 0, ["i", "j", "k", "capacity_kg"]]
+    if op is not None:
+        f = f.merge(op.loc[op.n_reachable > 0, ["i", "j", "k", "capacity_kg"]].rename(
+            columns={"capacity_kg": "arm_configuration_capacity_kg"}), on=["i", "j", "k"], how="left")
+    else:
+        f["arm_configuration_capacity_kg"] = np.nan
+    df = h.drop(columns=["n_reachable", "last_change_rel"]).merge(f, on=["i", "j", "k"], how="outer")
+    idx = df[["i", "j", "k"]].to_numpy()
+    df[["x_m", "y_m", "z_m"]] = grid.lower + (idx + 0.5) * grid.edge_m
+    df["loss_kg"] = df.healthy_capacity_kg - df.capacity_kg.fillna(0.0)
+    df["arm_configuration_loss_kg"] = (df.healthy_capacity_kg - df.arm_configuration_capacity_kg.fillna(0.0)
+                                       if op is not None else np.nan)
+    return df.sort_values(["i", "j", "k"], ignore_index=True)
 
 
 def angle_convergence(problems: tuple[HealthyProblem, HealthyProblem, HealthyProblem], h: pd.DataFrame, n_voxels: int,

@@ -13,9 +13,9 @@ import pandas as pd
 from capmap.config.run import RunConfig
 from capmap.config.validation import per_item
 from capmap.core.kinematics import rotation_from_rpy
-from capmap.core.reduction import LockedArm, free, lock
+from capmap.core.reduction import LockedArm, free
 from capmap.following.follower import FollowSettings
-from capmap.robots import load
+from capmap.robots import load, run_arm
 
 __all__ = ["FollowCase", "follow_case"]
 
@@ -40,7 +40,7 @@ def follow_case(case: str, run: RunConfig, job=None, waypoints: pd.DataFrame | N
     fol = run.follow
     if case == "space":
         sp, task = fol.space, run.task
-        arm = lock(load(run.robot), run.failure.joint, np.deg2rad(run.failure.angle_deg))
+        arm = run_arm(run)
         if waypoints.attrs["capmap"]["status"] == "ok":
             pts, label = waypoints[["x_m", "y_m", "z_m"]].to_numpy(), "planned path"
         else:

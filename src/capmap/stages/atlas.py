@@ -40,7 +40,7 @@ def stage_atlas_map(out_voxels: str, out_summary: str, slice_json: str, joint: i
     log.info(f"IK method {ik.method_for(arm.chain)}; {len(problem.directions)} directions; edge {run.atlas.edge_m} m")
     start_note, q_start, offset = "", None, np.nan
     try:  # the start configuration on this lock, as for the main run
-        failure = resolve_failure(arm.robot, LockConfig(joint, angle_deg), replace(task, start_m=run.failure.start_m))
+        failure, _ = resolve_failure(arm.robot, LockConfig(joint, angle_deg), replace(task, start_m=run.failure.start_m))
         q_start = np.deg2rad(np.asarray(failure.q_start_deg))[arm.active]
         offset = failure.offset_deg
     except CapmapError as exc:

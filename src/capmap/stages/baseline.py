@@ -10,9 +10,9 @@ import time
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.build import configuration_name, healthy_problem, refine_settings, run_arm
-from capmap.capacity.healthy_map import BASELINE_COLUMNS, angle_convergence, baseline_shard, healthy_samples
-from capmap.capacity.tables import configuration_voxels, grid_of
+from capmap.capacity.build import capacity_problem, configuration_name, healthy_problem, refine_settings
+from capmap.capacity.healthy_map import BASELINE_COLUMNS, angle_convergence, baseline_shard, healthy_samples, loss_table
+from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
@@ -49,27 +49,14 @@ def stage_baseline_map(shards: list[str], voxels: str, configurations: str, out:
     parts = [datasets.read(p) for p in shards]
     h = pd.concat(parts, ignore_index=True)
     failed = datasets.read(voxels)
-    grid = grid_of(failed)
-    name = configuration_name(run_arm(run), run.failure.q_start_deg)
+    problem = capacity_problem(run)
+    name = configuration_name(problem.arm, run.failure.q_start_deg)
     op = configuration_voxels(failed, datasets.read(configurations), name)
-    h[["i", "j", "k"]] = np.rint((h[["x_m", "y_m", "z_m"]].to_numpy() - grid.lower) / grid.edge_m - 0.5).astype(int)
-    f = failed.loc[failed.n_reachable > 0, ["i", "j", "k", "capacity_kg"]]
-    if op is not None:
-        f = f.merge(op.loc[op.n_reachable > 0, ["i", "j", "k", "capacity_kg"]].rename(
-            columns={"capacity_kg": "arm_configuration_capacity_kg"}), on=["i", "j", "k"], how="left")
-    else:
-        f["arm_configuration_capacity_kg"] = np.nan
-    df = h.drop(columns=["n_reachable", "last_change_rel"]).merge(f, on=["i", "j", "k"], how="outer")
-    idx = df[["i", "j", "k"]].to_numpy()
-    df[["x_m", "y_m", "z_m"]] = grid.lower + (idx + 0.5) * grid.edge_m
-    df["loss_kg"] = df.healthy_capacity_kg - df.capacity_kg.fillna(0.0)
-    df["arm_configuration_loss_kg"] = (df.healthy_capacity_kg - df.arm_configuration_capacity_kg.fillna(0.0)
-                                       if op is not None else np.nan)
-    df = df.sort_values(["i", "j", "k"], ignore_index=True)
+    df = loss_table(h, failed, op)
     meta = parts[0].attrs["capmap"]
     cost_s = sum(p.attrs["capmap"]["seconds"] for p in parts)
     t0 = time.perf_counter()
-    problems = tuple(healthy_problem(run, bl.step_deg / div) for div in (1, 2, 4))
+    problems = tuple(healthy_problem(run, bl.step_deg / div, problem) for div in (1, 2, 4))
     conv = angle_convergence(problems, h, bl.check_voxels, np.random.default_rng(run.sampling.seed))
     cost_s += time.perf_counter() - t0
     datasets.write(df[BASELINE_COLUMNS], out["voxels"], datasets.provenance(

@@ -9,11 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.build import capacity_problem, run_arm
+from capmap.capacity.build import capacity_problem
 from capmap.capacity.tables import capacity_table, grid_meta, model_table, sample_table, voxel_table
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.robots import load
+from capmap.robots import load, run_arm
 from capmap.stages.common import stage_config
 
 __all__ = ["stage_model", "stage_sample", "stage_capacity", "stage_voxels"]

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.build import configuration_name, run_arm
+from capmap.capacity.build import configuration_name
 from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
@@ -17,6 +17,7 @@ from capmap.io.tables import write_quantities
 from capmap.plots.baseline import baseline_figure
 from capmap.plots.capacity import capacity_map
 from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
+from capmap.robots import run_arm
 from capmap.stages.common import Outputs, stage_config
 
 __all__ = ["stage_summary", "stage_capacity_3d", "stage_baseline_figure", "MapView"]

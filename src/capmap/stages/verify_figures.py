@@ -3,11 +3,12 @@ import matplotlib)."""
 
 from __future__ import annotations
 
-from capmap.capacity.build import configuration_name, run_arm
+from capmap.capacity.build import configuration_name
 from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.capacity import load_series, workspace_paths
+from capmap.robots import run_arm
 from capmap.stages.common import Outputs, stage_config
 
 __all__ = ["stage_verify_plots"]
