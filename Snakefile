@@ -8,16 +8,19 @@ min_version("8.0")
 
 
 # The run's config, read once by capmap's own loader (bounded, no YTE templates, no duplicate keys):
-# the --configfile(s), else config/config.yaml, then the --config overrides. A config file is complete
-# on its own (a deep merge over the default would leak keys such as directions.step_deg into other
-# kinds). Snakemake has already parsed a --configfile itself (and evaluated YTE in it: see README).
+# the config file named by `--config configfile=my.yaml` (what `capmap run my.yaml` passes: Snakemake
+# never opens it), else the --configfile(s), else config/config.yaml, then the other --config overrides.
+# A config file is complete on its own (a deep merge over the default would leak keys such as
+# directions.step_deg into other kinds). Snakemake parses a --configfile itself first (and evaluates
+# YTE in it): for a config one did not write, use `capmap run` (README).
 import sys
 
-from capmap.config.run import run_document
+from capmap.config.run import config_files, run_document
 from capmap.errors import CapmapError
 
 try:
-    _doc = run_document([str(f) for f in workflow.overwrite_configfiles], dict(workflow.config_settings.config))
+    CONFIG_FILES, _overrides = config_files(workflow.overwrite_configfiles, workflow.config_settings.config)
+    _doc = run_document(CONFIG_FILES, _overrides)
 except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
 config.clear()

@@ -143,13 +143,7 @@ MAX_PARAMETERS = 7  # a public non-kernel function's (self and cls not counted):
 # still over (each to be split or given a parameter object): the lists may only shrink
 LONG_LEFT: set[str] = set()
 STAGES_LEFT: set[str] = set()
-PARAMETERS_LEFT = {
-    "capmap.capacity.folds.ConfigBrackets.track",
-    "capmap.core.ik.semi.kernels.pack", "capmap.core.ik.polish.polish", "capmap.dualarm.ocp.assembly.arm_ik",
-    "capmap.dualarm.geometry.broadphase.static_balls", "capmap.dualarm.geometry.broadphase.pair_groups",
-    "capmap.dualarm.ocp.motion.plan_assembly", "capmap.dualarm.ocp.solver.solve", "capmap.dualarm.ocp.solver.solve_csqp",
-    "capmap.following.toppra_reference.time_optimal", "capmap.plots.baseline.baseline_figure",
-    "capmap.plots.dualarm.animation"}
+PARAMETERS_LEFT: set[str] = set()
 STAGE_LINES = 40  # a stage: read, call one family function, write
 
 

@@ -17,11 +17,19 @@
   [--payload M] [--configuration C]`` verifies that straight line on a configuration (default: the
   arm's own at the task start). Both read a run's config (``--configfile``, default
   ``config/config.yaml``), answer without running the pipeline, and print a table (or ``--json``).
+- ``capmap run [CONFIG] [TARGET ...] [--cores N] [-n]`` checks CONFIG (default ``config/config.yaml``) with
+  capmap's own loader, then runs the workflow on it (``snakemake --config configfile=CONFIG``: Snakemake
+  never opens the file itself, so a config one did not write cannot run code or hang the reader).
+
+Installed, the same commands are ``capmap ...``. A usage error is one ``capmap:`` line and exit status 1.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -35,9 +43,34 @@ from capmap.stages.query import answer_line, answer_point
 __all__ = ["main"]
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m capmap")
-    sub = ap.add_subparsers(dest="command", required=True)
+class _Parser(argparse.ArgumentParser):
+    """argparse with a usage error as one ``capmap:`` line and exit status 1 (not argparse's 2 and usage text)."""
+
+    def error(self, message: str):
+        print(f"capmap: {self.prog}: {message} (see {self.prog} --help)", file=sys.stderr)
+        sys.exit(1)
+
+
+def _finite(text: str) -> float:
+    """A command-line number: finite (nan and inf are refused as argparse refuses 'abc')."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def _parser() -> argparse.ArgumentParser:
+    ap = _Parser(prog="capmap", description="Load-carrying capacity maps of a manipulator with a locked joint, "
+                 "their plans and verification; torque-limited following; boom reconfiguration; dual-arm assembly.")
+    sub = ap.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    run = sub.add_parser("run", help="check a config with capmap's loader, then run the workflow on it")
+    run.add_argument("config", nargs="?", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
+    run.add_argument("targets", nargs="*", default=["all"], help="workflow targets (default: all)")
+    run.add_argument("--cores", default="2", help="cores for the jobs (default: 2)")
+    run.add_argument("-n", "--dry-run", action="store_true", help="show the jobs without running them")
     chk = sub.add_parser("check", help="verify the catalogued datasets (sha256, rows)")
     chk.add_argument("runs", nargs="*", help="run folders, results/<run> (default: every run under results/)")
     cfg = sub.add_parser("check-config", help="read and check config files as the workflow does, before any job")
@@ -48,15 +81,23 @@ def main(argv: list[str] | None = None) -> int:
     qry = sub.add_parser("query", help="the capacity at a point, or a straight line verified, without the pipeline")
     qsub = qry.add_subparsers(dest="what", required=True)
     qp = qsub.add_parser("point", help="every configuration's capacity at a position (task orientation)")
-    qp.add_argument("xyz", nargs=3, type=float, metavar=("X", "Y", "Z"), help="position, m (base frame)")
+    for name in ("x", "y", "z"):  # one positional each: argparse's --help cannot show a tuple metavar of nargs=3
+        qp.add_argument(name, type=_finite, help=f"position {name}, m (base frame)")
     ql = qsub.add_parser("line", help="verify the straight line A -> B on one configuration")
-    ql.add_argument("ab", nargs=6, type=float, metavar=("AX", "AY", "AZ", "BX", "BY", "BZ"), help="ends, m")
+    for name in ("ax", "ay", "az", "bx", "by", "bz"):
+        ql.add_argument(name, type=_finite, help=f"{'start' if name[0] == 'a' else 'end'} {name[1]}, m (base frame)")
     ql.add_argument("--configuration", default=None, help="e.g. S+E-W+ (default: the arm's own at the task start)")
     for q in (qp, ql):
-        q.add_argument("--payload", type=float, default=None, help="payload, kg")
+        q.add_argument("--payload", type=_finite, default=None, help="payload, kg")
         q.add_argument("--configfile", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
         q.add_argument("--json", action="store_true", help="answer as JSON")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    if args.command == "run":
+        return _run(args)
     if args.command == "query":
         return _query(args)
     if args.command == "check-config":
@@ -119,14 +160,41 @@ def _query(args) -> int:
         if args.payload is not None and not (args.payload >= 0 and args.payload < float("inf")):
             raise CapmapError(f"--payload {args.payload} must be a finite mass >= 0 kg")
         if args.what == "point":
-            text = answer_point(args.configfile, args.xyz, args.payload, args.json)
+            text = answer_point(args.configfile, [args.x, args.y, args.z], args.payload, args.json)
         else:
-            text = answer_line(args.configfile, args.ab[:3], args.ab[3:], args.payload, args.configuration, args.json)
+            text = answer_line(args.configfile, [args.ax, args.ay, args.az], [args.bx, args.by, args.bz], args.payload,
+                               args.configuration, args.json)
     except CapmapError as exc:
         print(f"capmap: {exc}", file=sys.stderr)
         return 1
     print(text)
     return 0
+
+
+def _run(args) -> int:
+    """Check the config as the workflow will, then hand over to Snakemake naming the file through
+    ``--config configfile=`` (Snakemake does not read it; capmap's loader does, bounded)."""
+    config = str(Path(args.config).absolute()) if args.config != DEFAULT_CONFIG else None
+    if _check_config([args.config]):
+        return 1
+    snakefile = Path("Snakefile")
+    if not snakefile.is_file():
+        snakefile = Path(__file__).resolve().parents[2] / "Snakefile"  # the checkout this package is installed from
+    exe = shutil.which("snakemake")
+    if exe is None or not snakefile.is_file():
+        print("capmap: run: needs snakemake and capmap's Snakefile (run it in the capmap checkout)", file=sys.stderr)
+        return 1
+    cmd = [exe, "-s", str(snakefile), "--cores", str(args.cores), *args.targets, *(["-n"] if args.dry_run else []),
+           *(["--config", f"configfile={config}"] if config else [])]
+    print(f"capmap: {' '.join(cmd)}", file=sys.stderr)
+    sys.stderr.flush()
+    os.execv(exe, cmd)
+    return 1  # not reached
+
+
+def entry() -> None:
+    """The ``capmap`` command (``[project.scripts]``)."""
+    sys.exit(main())
 
 
 def _run_folder(catalogue: Path) -> Path:

@@ -28,13 +28,13 @@ from capmap.config.jobs import PlanTask
 from capmap.config.parse import parse_config
 from capmap.config.robot_file import referenced_files
 from capmap.config.run import RunConfig
-from capmap.config.validation import per_item
+from capmap.config.typed import per_item
 from capmap.core import ik
 from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free
 from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
-from capmap.dualarm.build import load_dual_arm_file, unknown_settings
+from capmap.dualarm.build import cloud_span_m, load_dual_arm_file, unknown_settings
 from capmap.dualarm.scene.robot import build_dual_arm
 from capmap.dualarm.scene.solids import surface_points
 from capmap.dualarm.scene_file import load_scene
@@ -322,8 +322,10 @@ def _dualarm_sizes(da, scene) -> None:
                     "lower")
     check_steps(da.horizon.nodes * da.fine_factor, "dualarm.fine_factor",
                 f"the re-check on a {da.fine_factor}x finer grid of {da.horizon.nodes:,} nodes", "lower")
+    coarse = 0.05  # points scale with 1 / spacing^2: count them at a coarse spacing
+    surface = surface_points(scene, coarse)[0]
+    cloud_span_m(da, surface)  # the cloud's values, its noise and the fit's grid
     if da.cloud_file is None:
-        coarse = 0.05  # points scale with 1 / spacing^2: count them at a coarse spacing
-        n = len(surface_points(scene, coarse)[0]) * (coarse / min(da.scan.spacing_m, coarse)) ** 2
+        n = len(surface) * (coarse / min(da.scan.spacing_m, coarse)) ** 2
         check_steps(n, "dualarm.cloud.spacing_m", f"a synthetic scan at dualarm.cloud.spacing_m = {da.scan.spacing_m:g} m "
                     f"(~{n:.3g} surface points)")

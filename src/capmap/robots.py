@@ -62,7 +62,11 @@ def _drive(entry: dict, joint: int | str, where: str) -> Drive:
                           "gear ratio^2)")
     armature = entry.get("armature_kgm2")
     if "rotor_inertia_kgm2" in entry:
-        armature = float(entry["rotor_inertia_kgm2"]) * float(entry["gear_ratio"]) ** 2
+        with np.errstate(over="ignore"):
+            armature = float(np.float64(entry["rotor_inertia_kgm2"]) * np.float64(entry["gear_ratio"]) ** 2)
+        if not np.isfinite(armature):
+            raise ConfigError(f"{where}: rotor_inertia_kgm2 x gear_ratio^2 = {entry['rotor_inertia_kgm2']:g} x "
+                              f"{entry['gear_ratio']:g}^2 overflows a float64 (the reflected inertia must be finite)")
     friction = entry.get("friction", {})
     return Drive(joint, None if armature is None else float(armature),
                  None if "coulomb_nm" not in friction else float(friction["coulomb_nm"]),
@@ -189,7 +193,12 @@ def lock_classes(robot: Robot, angle_deg: float | None = None) -> list[str]:
 
 def locked_arm(robot: Robot, joint: int, angle_deg: float) -> LockedArm:
     """``robot`` with ``joint`` (1-based) locked at ``angle_deg``: :func:`capmap.core.reduction.lock` with its
-    errors in config terms."""
+    errors in config terms. The capacity map takes every IK branch of a pose: the locked arm must have
+    exactly 6 moving joints (a 7-joint arm with one locked); any other count is one line naming the file."""
+    if robot.n_joints != 7:
+        raise ConfigError(f"{robot.description.source}: {robot.name} has {robot.n_joints} moving joints, so "
+                          f"{robot.n_joints - 1} move with one locked; the capacity map needs 6 (every IK branch of a "
+                          "pose is finite only then): give a 7-joint arm (a URDF's joints/locked keys choose them)")
     try:
         return lock(robot, joint, np.deg2rad(angle_deg))
     except CapmapError as exc:

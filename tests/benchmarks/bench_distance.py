@@ -34,6 +34,7 @@ from capmap.dualarm.build import al_settings, fit_settings, load_dual_arm_file, 
 from capmap.dualarm.geometry.distance import segment_segment, segment_triangle  # noqa: E402
 from capmap.dualarm.ocp.assembly import assemble, warm_start  # noqa: E402
 from capmap.dualarm.ocp.motion import plan_assembly  # noqa: E402
+from capmap.dualarm.ocp.settings import SolveOptions, StopRule  # noqa: E402
 from capmap.dualarm.ocp.solver import context, initial_guess, node_model, node_pairs, solve_csqp  # noqa: E402
 from capmap.dualarm.scene.cloud import fit_envelope  # noqa: E402
 from capmap.dualarm.scene.robot import build_dual_arm, fit_capsules  # noqa: E402
@@ -135,7 +136,8 @@ def _solves(robot, parts, asm):
     limits = (robot.q_lower, robot.q_upper, robot.v_max)
     for compiled in (True, False):
         t0 = time.perf_counter()
-        m = plan_assembly(asm, robot, weights(da.weights), al_settings(da.solver), da.fine_factor, compiled=compiled)
+        m = plan_assembly(asm, robot, weights(da.weights), al_settings(da.solver), da.fine_factor,
+                          SolveOptions(compiled=compiled))
         t = time.perf_counter() - t0
         print(f"default dualarm_optimise ({'compiled' if compiled else 'Pinocchio'} node models): solve {m.solve_s:.2f} s"
               f" ({len(m.sol.stats)} outer / {sum(s.inner_iterations for s in m.sol.stats)} FDDP iterations), "
@@ -147,7 +149,8 @@ def _solves(robot, parts, asm):
     xs0, us0 = initial_guess(warm_start(casm), casm.task.dt)
     for compiled in (True, False):
         t0 = time.perf_counter()
-        r = solve_csqp(casm, weights(da.weights), limits, xs0, us0, ch.max_iterations, ch.tolerance, compiled=compiled)
+        r = solve_csqp(casm, weights(da.weights), limits, xs0, us0, StopRule(ch.max_iterations, ch.tolerance),
+                       compiled=compiled)
         print(f"CSQP check ({'compiled' if compiled else 'Pinocchio'} node models, N = {ch.horizon.nodes}): "
               f"{time.perf_counter() - t0:.2f} s, {r.iterations} iterations, converged {r.converged}")
 

@@ -5,8 +5,8 @@ import pandas as pd
 import pytest
 
 from capmap.config.inputs import check_cloud_file
+from capmap.dualarm.cloud_file import read_cloud
 from capmap.errors import ConfigError
-from capmap.stages.dualarm import _read_cloud
 
 
 def _write(tmp_path, name, data: bytes):
@@ -20,11 +20,11 @@ def test_what_the_check_accepts_the_job_reads(tmp_path):
                        ("crlf.csv", b"x_m,y_m,z_m\r\n0,0,1\r\n")):
         path = _write(tmp_path, name, data)
         check_cloud_file(path)
-        assert _read_cloud(path, 1)[0].tolist() == [[0.0, 0.0, 1.0]]
+        assert read_cloud(path, 1)[0].tolist() == [[0.0, 0.0, 1.0]]
     upper = str(tmp_path / "scan.PARQUET")
     pd.DataFrame({"x_m": [0.0], "y_m": [0.0], "z_m": [1.0]}).to_parquet(upper)
     check_cloud_file(upper)
-    assert _read_cloud(upper, 1)[0].tolist() == [[0.0, 0.0, 1.0]]
+    assert read_cloud(upper, 1)[0].tolist() == [[0.0, 0.0, 1.0]]
 
 
 def test_what_the_job_could_not_read_is_refused_by_the_check(tmp_path):
@@ -32,4 +32,4 @@ def test_what_the_job_could_not_read_is_refused_by_the_check(tmp_path):
     with pytest.raises(ConfigError, match="no column y_m"):
         check_cloud_file(path)
     with pytest.raises(ConfigError, match="no column y_m"):
-        _read_cloud(path, 1)
+        read_cloud(path, 1)

@@ -91,7 +91,7 @@ def test_polish_matches_numpy_newton():
     q = rng.uniform(-np.pi, np.pi, (200, 6))
     T = chain.fk(q)
     start = q + 1e-2 * rng.standard_normal(q.shape)
-    one, err = ik_polish.polish(chain.X, start, T, np.arange(200), 1, 0.0)
+    one, err = ik_polish.polish(chain.X, start, T, np.arange(200), ik_polish.PolishSettings(1, 0.0))
     ref = newton(chain, start, T, iters=1)
     # both solve J J^T (condition number kappa(J)^2) in different orders: forward error <= eps kappa^2 (1 + |step|)
     # (measured 2026-12-02: at most 0.05 of it; 2.4e-10 absolute at kappa = 5,478 on an Intel Xeon)
@@ -99,7 +99,7 @@ def test_polish_matches_numpy_newton():
     bound = np.finfo(float).eps * kappa**2 * (1 + np.abs(ref - start).max(axis=1))
     assert (np.abs(one - ref).max(axis=1) <= bound).all()
     assert np.abs(err - pose_error(chain.fk(ref), T)).max() < 1e-10
-    done, err = ik_polish.polish(chain.X, start, T, np.arange(200), 8, 1e-13)
+    done, err = ik_polish.polish(chain.X, start, T, np.arange(200), ik_polish.PolishSettings(8, 1e-13))
     ref = newton(chain, start, T, iters=8)
     conv = np.abs(pose_error(chain.fk(ref), T)).max(axis=1) < 1e-12
     assert conv.mean() > 0.9  # random chains, 1e-2 rad off: a few starts lie near a singularity
@@ -115,7 +115,8 @@ def test_damped_polish_matches_numpy_newton():
     q = rng.uniform(-np.pi, np.pi, (200, 6))
     T = chain.fk(q)
     start = q + 0.3 * rng.standard_normal(q.shape)
-    damped, _ = ik_polish.polish(chain.X, start, T, np.arange(200), 1, 0.0, give_up=np.inf, damping=0.1)
+    damped, _ = ik_polish.polish(chain.X, start, T, np.arange(200),
+                                  ik_polish.PolishSettings(1, 0.0, give_up=np.inf, damping=0.1))
     ref = newton(chain, start, T, iters=1, damping=0.1)
     # J J^T + 0.01 I has condition number <= (sigma_max^2 + 0.01) / 0.01: rounding's bound as above
     # (measured 2026-12-03 over 5 seeds: at most 0.2 of it)
@@ -137,7 +138,7 @@ def test_polish_rotation_error_near_pi(short):
     c, s_ = np.cos(np.pi - short), np.sin(np.pi - short)
     turn = np.array([[c, -s_, 0, 0], [s_, c, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1.0]])
     T_far = T @ turn
-    _, err = ik_polish.polish(chain.X, q, T_far, np.arange(50), 0, 0.0)
+    _, err = ik_polish.polish(chain.X, q, T_far, np.arange(50), ik_polish.PolishSettings(0, 0.0))
     ref = pose_error(chain.fk(q), T_far)
     assert np.abs(err[:, :3] - ref[:, :3]).max() < 1e-12
     assert np.abs(np.linalg.norm(err[:, 3:], axis=1) - (np.pi - short)).max() < 1e-6

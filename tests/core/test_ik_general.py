@@ -10,7 +10,7 @@ import pytest
 import capmap.core.ik.general.elimination as ik_general
 import capmap.core.ik.general.select as ik_general_select
 from capmap.core import ik
-from capmap.core.ik.polish import polish
+from capmap.core.ik.polish import PolishSettings, polish
 from capmap.core.kinematics import Chain, pose_error
 from capmap.core.reduction import free, lock
 from capmap.robots import load
@@ -147,7 +147,7 @@ def _valid(chain, T, theta, ok):
     N, K, _ = theta.shape
     flat = theta.reshape(-1, 6).copy()
     idx = np.flatnonzero(ok.reshape(-1))
-    flat[idx], err = polish(chain.X, flat[idx], T, idx // K, 8, 1e-13)
+    flat[idx], err = polish(chain.X, flat[idx], T, idx // K, PolishSettings(8, 1e-13))
     good = np.zeros(N * K, dtype=bool)
     good[idx] = np.abs(err).max(axis=1) <= 1e-9
     return flat.reshape(N, K, 6), good.reshape(N, K)

@@ -15,7 +15,7 @@ import crocoddyl
 import numpy as np
 import pytest
 
-from capmap.dualarm.geometry.broadphase import MIN_GROUP, group_bound, pair_groups
+from capmap.dualarm.geometry.broadphase import MIN_GROUP, BodyBalls, group_bound, pair_groups
 from capmap.dualarm.geometry.chain import fk, groups_of, joint_placements, levers, pair_table, place_primitives
 from capmap.dualarm.geometry.distance import segment_segment, segment_triangle
 from capmap.dualarm.geometry.proximity import batch_distances
@@ -168,7 +168,7 @@ def test_pair_groups_partition_the_pairs_by_moving_primitive_and_body():
     balls, seg_r, tri_r = rng.random((5, 4)), rng.random(S), rng.random(T)
     rows = np.column_stack([rng.integers(0, 2, P), rng.integers(0, S, P), np.zeros(P, int)])
     rows[:, 2] = np.where(rows[:, 0] == 0, rng.integers(0, S, P), rng.integers(0, T, P))
-    order, groups, spheres = pair_groups(rows, seg_j, seg_r, tri_j, tri_r, seg_g, tri_g, balls)
+    order, groups, spheres = pair_groups(rows, seg_j, seg_r, tri_j, tri_r, BodyBalls(seg_g, tri_g, balls))
     cover = np.zeros(P, int)
     for (s0, s1, col, is_tri), sphere in zip(groups, spheres):
         members = rows[order[s0:s1]]
@@ -252,7 +252,7 @@ def test_a_group_holds_one_kind_of_moving_primitive():
     seg_g, tri_g = np.array([0, 0, -1]), np.array([-1, -1, -1])
     balls = np.array([[0.0, 0.0, 0.0, 0.2]])
     rows = np.array([[0, 0, 2], [1, 1, 2], [0, 1, 2], [1, 0, 2]])  # static segments 0, 1 vs segment 2, triangle 2
-    order, groups, spheres = pair_groups(rows, seg_j, np.full(3, 0.01), tri_j, np.full(3, 0.01), seg_g, tri_g, balls)
+    order, groups, spheres = pair_groups(rows, seg_j, np.full(3, 0.01), tri_j, np.full(3, 0.01), BodyBalls(seg_g, tri_g, balls))
     for s0, s1, col, is_tri in groups:
         kinds = rows[order[s0:s1], 0]
         assert len(set(kinds)) == 1 and (not col or is_tri == (kinds[0] == 1))

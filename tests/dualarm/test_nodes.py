@@ -19,7 +19,7 @@ from capmap.dualarm.geometry.proximity import PairFilter, batch_distances
 from capmap.dualarm.ocp.compiled_nodes import CompiledNodeModel
 from capmap.dualarm.ocp.crocoddyl_nodes import NodeModel
 from capmap.dualarm.ocp.lie import jlog3, jlog6, log3, log6
-from capmap.dualarm.ocp.settings import ALSettings
+from capmap.dualarm.ocp.settings import ALSettings, SolveOptions, StopRule
 from capmap.dualarm.ocp.solver import solve, solve_csqp
 from tests.dualarm.conftest import W
 
@@ -284,10 +284,10 @@ def test_compiled_solve_equals_the_pinocchio_solve(small, robot):
     asm, _, xs, us, _ = small
     limits = (robot.q_lower, robot.q_upper, robot.v_max)
     st = ALSettings(mu_max=1e12, tolerance=5e-8)
-    fast, ref = (solve(asm, W, limits, st, xs, us, compiled=c) for c in (True, False))
+    fast, ref = (solve(asm, W, limits, st, xs, us, SolveOptions(compiled=c)) for c in (True, False))
     assert fast.converged and ref.converged
     assert [s.inner_iterations for s in fast.stats] == [s.inner_iterations for s in ref.stats]
     # the same arithmetic up to rounding, amplified by the solves (measured 2e-13 rad)
     assert np.abs(fast.xs - ref.xs).max() < 1e-8 and np.abs(fast.us - ref.us).max() < 1e-6
-    c_fast, c_ref = (solve_csqp(asm, W, limits, xs, us, 150, 1e-6, compiled=c) for c in (True, False))
+    c_fast, c_ref = (solve_csqp(asm, W, limits, xs, us, StopRule(150, 1e-6), compiled=c) for c in (True, False))
     assert c_fast.iterations == c_ref.iterations and np.abs(c_fast.xs - c_ref.xs).max() < 1e-8

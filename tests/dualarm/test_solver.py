@@ -9,7 +9,7 @@ import pytest
 
 from capmap.dualarm.ocp.assembly import warm_start
 from capmap.dualarm.ocp.evaluate import fine_grid, node_errors, safety
-from capmap.dualarm.ocp.settings import ALSettings, Weights
+from capmap.dualarm.ocp.settings import ALSettings, SolveOptions, StopRule, Weights
 from capmap.dualarm.ocp.solver import equality_cost, initial_guess, solve, solve_csqp
 
 W = Weights(control=np.full(14, 1.0), velocity=1.0, panel=0.01, margin_m=0.005)
@@ -42,9 +42,10 @@ def test_al_ddp_meets_every_constraint(coarse):
 
 def test_equality_only_optimum_equals_csqp(coarse):
     asm, limits, xs0, us0 = coarse
-    al = solve(asm, W, limits, ALSettings(mu_max=1e12, tolerance=1e-9, max_outer=40), xs0, us0, inequalities=False)
+    al = solve(asm, W, limits, ALSettings(mu_max=1e12, tolerance=1e-9, max_outer=40), xs0, us0,
+               SolveOptions(inequalities=False))
     assert al.converged, al.message
-    csqp = solve_csqp(asm, W, limits, xs0, us0, iterations=150, tolerance=1e-6)
+    csqp = solve_csqp(asm, W, limits, xs0, us0, StopRule(iterations=150, tolerance=1e-6))
     assert csqp.converged
     xc, uc = csqp.xs, csqp.us
     nq = asm.model.nq

@@ -15,7 +15,7 @@ from capmap.errors import CapmapError
 from capmap.following.follower import FollowSettings, follow, follow_segment
 from capmap.following.path import JointPath, line_path
 from capmap.following.path_dynamics import PathDynamics, path_dynamics, prepare
-from capmap.following.toppra_reference import time_optimal
+from capmap.following.toppra_reference import ToppraSettings, time_optimal
 from capmap.robots import load
 from tests.reference.newton_euler import newton_euler
 from tests.scenario import Q_INI_DEG, TASK_R, UR5_YAML, X_DES, X_INI
@@ -152,7 +152,7 @@ def test_limited_follower_touches_but_never_crosses_the_limit(ur5_line):
 def test_toppra_is_a_lower_bound_and_respects_the_limits(ur5_line):
     arm, p0, p1, R = ur5_line
     seg = follow_segment(arm, p0, p1, R, UR5_Q0, _settings(UR5_LIM))
-    top = time_optimal(arm, seg.table, 2.0, seg.prepared.limits, 1.0, 4.0)
+    top = time_optimal(arm, seg.table, 2.0, seg.prepared.limits, ToppraSettings(1.0, 4.0))
     assert top.duration_s < seg.result.duration_s < 1.5 * top.duration_s
     assert (np.abs(top.tau).max(axis=0) / UR5_LIM).max() < 1.01
     assert top.sd.max() <= 1.0 + 1e-6 and top.s[-1] == pytest.approx(0.5, abs=1e-6)

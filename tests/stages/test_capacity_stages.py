@@ -250,8 +250,9 @@ def test_atlas_tables_stage(run):
     cfg, d, sl = run
     if not (d / "atlas_sum.parquet").exists():
         stage_atlas_map(str(d / "atlas_vox.parquet"), str(d / "atlas_sum.parquet"), sl("atlas_map"), 4, 130.0)
-    stage_atlas([str(d / "atlas_sum.parquet")], [str(d / "atlas_vox.parquet")], str(d / "atlas.parquet"),
-                str(d / "curves.parquet"), str(d / "heat.png"), str(d / "curves.png"), sl("atlas"))
+    out = dict(atlas=str(d / "atlas.parquet"), curves=str(d / "curves.parquet"), heatmap=str(d / "heat.png"),
+               curves_png=str(d / "curves.png"))
+    stage_atlas([str(d / "atlas_sum.parquet")], [str(d / "atlas_vox.parquet")], out, sl("atlas"))
     curves = datasets.read(d / "curves.parquet")
     vox = datasets.read(d / "atlas_vox.parquet")
     reach = vox.capacity_kg[vox.n_reachable > 0].to_numpy()

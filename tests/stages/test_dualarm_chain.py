@@ -16,7 +16,7 @@ import pytest
 from capmap.checks import check_run_config
 from capmap.config import canonical, stage_slice
 from capmap.config.validation import load_yaml
-from capmap.dualarm.build import al_settings
+from capmap.dualarm.build import al_settings, job_setup
 from capmap.dualarm.scene.cloud import uncovered
 from capmap.dualarm.tables import envelope_from
 from capmap.io import datasets
@@ -27,7 +27,7 @@ from capmap.stages.dualarm import (
     stage_dualarm_unknown,
 )
 from capmap.stages.dualarm_figures import stage_dualarm_animation, stage_dualarm_plots
-from capmap.stages.dualarm_solve import setup, stage_dualarm_check, stage_dualarm_optimise
+from capmap.stages.dualarm_solve import stage_dualarm_check, stage_dualarm_optimise
 from tests.scenario import ROOT
 
 
@@ -68,7 +68,8 @@ def test_the_optimised_motion_against_pinocchio(chain):
     cfg, d, _ = chain
     traj = datasets.read(d / "traj.parquet")
     summary = pd.read_csv(d / "s.csv").set_index("quantity").value
-    robot, asm = setup(cfg.dualarm, str(d / "env.parquet"), str(d / "capsules.parquet"), cfg.dualarm.horizon)
+    robot, asm = job_setup(cfg.dualarm, datasets.read(d / "env.parquet"), datasets.read(d / "capsules.parquet"),
+                           cfg.dualarm.horizon)
     q = traj[[c for c in traj.columns if c.startswith("q_") and c.endswith("_rad")]].to_numpy()
     assert q.shape[1] == asm.model.nq
     model = robot.model

@@ -349,3 +349,44 @@ def test_a_bad_default_config_is_one_line(tmp_path, text):
                          capture_output=True, text=True, timeout=300)
     lines = [ln for ln in res.stderr.splitlines() if ln.startswith("capmap:")]
     assert res.returncode == 1 and len(lines) == 1 and "config/config.yaml" in lines[0], res.stderr[-1500:]
+
+
+# --- what a job used to meet first: drive terms, URDF limits, joint counts, foreign files, cloud values and sizes ---
+
+def _reliability_jobs(tmp_path: Path) -> list:
+    from tests.workflow.reliability_cases import RELIABILITY_CASES
+
+    assert len(RELIABILITY_CASES) >= 30
+    return [(make(tmp_path), expect, name, absent, label) for make, expect, name, absent, label in RELIABILITY_CASES]
+
+
+def _check_absent(res, absent: str | None) -> str | None:
+    if absent and absent in res.stderr:
+        return f"the line echoes what the file holds ({absent!r}): {res.stderr.strip()[:300]}"
+    return None
+
+
+def test_what_a_job_met_first_is_one_line_before_any_job(tmp_path):
+    """Each case through the checks the workflow runs before any job: one line naming the file or key,
+    nothing the file holds echoed."""
+    failures = [f"{label}: {err}" for cfg, expect, name, absent, label in _reliability_jobs(tmp_path)
+                if (err := _check(res := _in_process(cfg), expect, name) or _check_absent(res, absent))]
+    assert not failures, "\n".join(failures)
+
+
+@pytest.mark.slow  # on a finished tiny run: .ci/run runs it (-m slow)
+def test_what_a_job_met_first_costs_no_output_through_snakemake(run_dir, tmp_path):
+    """A case of each family (drive terms, URDF limits, joint count, foreign file, cloud values, fit size,
+    scan noise) through ``snakemake all`` over a finished run: status 1, one line, every output
+    byte-identical (before, each was met inside a job, after Snakemake had deleted that job's outputs)."""
+    work, _ = run_dir
+    before = _tree_digest(work / "results")
+    pick = ("overflows a float64", "joint elbow_joint's limits", "the capacity map needs 6", "not a capmap robot file",
+            "1 points are not finite", "dualarm.fit.cell_m = 1e-09 m", "dualarm.cloud.noise_m = 1e+06 m is larger")
+    jobs = _reliability_jobs(tmp_path)
+    chosen = [next(j for j in jobs if key in j[1]) for key in pick]
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        results = list(pool.map(lambda j: (j, _run(work, j[0])), chosen))
+    failures = [f"{j[4]}: {err}" for j, res in results if (err := _check(res, j[1], j[2]) or _check_absent(res, j[3]))]
+    assert not failures, "\n".join(failures)
+    assert _tree_digest(work / "results") == before

@@ -11,7 +11,7 @@ from capmap.config.slices import section_modules
 from capmap.errors import CapmapError
 from capmap.io.datasets import missing_catalogued, rebuild_hint_config
 from capmap.io.fingerprint import script_fingerprint
-from capmap.io.runs import stale_outputs
+from capmap.io.runs import check_writable, stale_outputs
 
 CONFIG_ARGS = "".join(f" --configfile {shlex.quote(str(f))}" for f in workflow.overwrite_configfiles) + (
     " --config " + " ".join(shlex.quote(a) for a in workflow.config_settings.config_args)
@@ -22,10 +22,14 @@ rebuild_hint_config(CONFIG_ARGS)  # the jobs' rebuild hints (capmap.io.datasets.
 
 # validate once, before any job: schema, robot file, locked joint, limits, task poses, follow cases
 try:
-    RUN = check_run_config(config, ", ".join(map(str, workflow.overwrite_configfiles)) or DEFAULT_CONFIG)
+    RUN = check_run_config(config, ", ".join(CONFIG_FILES) or DEFAULT_CONFIG)
 except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
 OUT = f"results/{RUN.name}"  # each run (config key `run`, else the config file's name) in its own folder
+try:
+    check_writable(OUT)
+except CapmapError as exc:
+    sys.exit(f"capmap: {exc}")
 
 
 def out(path):

@@ -25,7 +25,7 @@ from capmap.capacity.refine_data import RefineSettings
 from capmap.config.capacity import DirectionsConfig, LimitsConfig, LockConfig, RefineConfig, TaskConfig
 from capmap.config.failure import Failure
 from capmap.config.run import RunConfig
-from capmap.config.validation import per_item
+from capmap.config.typed import per_item
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
 from capmap.core.kinematics import rotation_from_rpy, rotation_log

@@ -9,7 +9,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FoldBrackets", "ConfigBrackets"]
+__all__ = ["FoldBrackets", "ConfigBrackets", "RoundPoints", "ConfigMidpoints"]
+
+
+@dataclass(frozen=True)
+class RoundPoints:
+    """A round's evaluated points (N,): the voxel owning each, owner (N,) int; where, pts (N, 3) m; its IK
+    branch count n_br (N,) int and its solutions per configuration cnt (N, C) int."""
+
+    owner: np.ndarray
+    pts: np.ndarray
+    n_br: np.ndarray
+    cnt: np.ndarray
+
+
+@dataclass(frozen=True)
+class ConfigMidpoints:
+    """The evaluated midpoints of configuration brackets (n,): bracket (v, c), voxel v (n,) int and
+    configuration c (n,) int; the midpoint pts (n, 3) m and configuration c's solution count there cnt (n,) int."""
+
+    v: np.ndarray
+    c: np.ndarray
+    pts: np.ndarray
+    cnt: np.ndarray
 
 
 @dataclass
@@ -34,11 +56,11 @@ class FoldBrackets:
                    np.zeros((V, C), dtype=int), np.zeros((V, C), dtype=int), np.full((V, 3), np.nan), np.full(V, -1),
                    np.zeros((V, C), dtype=int))
 
-    def track(self, owner, pts, n_br, cnt, n_first_local, bisect) -> None:
+    def track(self, points: RoundPoints, n_first_local: int, bisect: np.ndarray) -> None:
         """Update in place: a midpoint (the points ``n_first_local`` onwards of the local ones, one per
         voxel of ``bisect``) replaces the end whose branch count it shares; a voxel without a bracket
-        gets one from any point whose count differs from its first point's. ``cnt`` (N, C) the points'
-        solutions per configuration."""
+        gets one from any point whose count differs from its first point's."""
+        owner, pts, n_br, cnt = points.owner, points.pts, points.n_br, points.cnt
         mids = np.arange(n_first_local, n_first_local + len(bisect))
         for i, v in zip(mids, bisect):
             if n_br[i] == self.na[v]:
@@ -88,12 +110,12 @@ class ConfigBrackets:
         v, c = np.nonzero(self.open(tol_m))
         return v, c, 0.5 * (self.a[v, c] + self.b[v, c])
 
-    def track(self, v: np.ndarray, c: np.ndarray, mid_pts: np.ndarray, mid_cnt: np.ndarray, owner: np.ndarray,
-              pts: np.ndarray, cnt: np.ndarray, ref_pt: np.ndarray, ref_c: np.ndarray) -> None:
-        """Update in place: each evaluated midpoint mid_pts (n, 3) of bracket (v, c), with its count mid_cnt
-        (n,), replaces the end whose count it shares; a (voxel, configuration) without a bracket so far gets
-        one from the first point (owner (N,), pts (N, 3), counts cnt (N, C)) whose count differs from the
-        voxel's first point's (ref_pt (V, 3), ref_c (V, C))."""
+    def track(self, mids: ConfigMidpoints, points: RoundPoints, ref_pt: np.ndarray, ref_c: np.ndarray) -> None:
+        """Update in place: each evaluated midpoint of ``mids`` replaces its bracket's end whose count it
+        shares; a (voxel, configuration) without a bracket so far gets one from the first of ``points``
+        whose count differs from the voxel's first point's (ref_pt (V, 3) m, ref_c (V, C))."""
+        v, c, mid_pts, mid_cnt = mids.v, mids.c, mids.pts, mids.cnt
+        owner, pts, cnt = points.owner, points.pts, points.cnt
         same = mid_cnt == self.na[v, c]
         self.a[v[same], c[same]] = mid_pts[same]
         self.b[v[~same], c[~same]] = mid_pts[~same]

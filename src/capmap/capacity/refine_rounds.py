@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.capacity.folds import ConfigBrackets, FoldBrackets
+from capmap.capacity.folds import ConfigBrackets, ConfigMidpoints, FoldBrackets, RoundPoints
 from capmap.capacity.patterns import COMPASS, CORNERS, around, rows_in
 from capmap.capacity.refine_data import Evaluation, RefineSettings, VoxelMinima
 from capmap.capacity.voxels import Grid
@@ -240,9 +240,10 @@ class Rounds:
     def track(self, ev: Evaluation, owner: np.ndarray, pts: np.ndarray, p: RoundPlan, n_first: int) -> None:
         """The brackets follow the round's branch and solution counts."""
         cnt = ev.config_branches if self.C else np.zeros((len(pts), 0), dtype=int)
-        self.fs.track(owner, pts, ev.n_branches, cnt, n_first, p.bisect)
+        points = RoundPoints(owner, pts, ev.n_branches, cnt)
+        self.fs.track(points, n_first, p.bisect)
         mid = n_first + len(p.bisect) + np.arange(len(p.kv))
-        self.cb.track(p.kv, p.kc, pts[mid], cnt[mid, p.kc], owner, pts, cnt, self.fs.ref_pt, self.fs.ref_c)
+        self.cb.track(ConfigMidpoints(p.kv, p.kc, pts[mid], cnt[mid, p.kc]), points, self.fs.ref_pt, self.fs.ref_c)
 
     def settle(self, p: RoundPlan, new: np.ndarray, drop: np.ndarray, axis_drop: np.ndarray,
                s: RefineSettings) -> None:

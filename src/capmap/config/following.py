@@ -6,8 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from capmap.config.typed import FILE
-from capmap.config.validation import as_tuple
+from capmap.config.typed import FILE, as_tuple
 
 __all__ = ["SpaceFollowConfig", "GroundFollowConfig", "FollowConfig", "STORE_PERIOD_S"]
 

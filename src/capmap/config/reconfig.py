@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from capmap.config.typed import FILE
-from capmap.config.validation import as_tuple
+from capmap.config.typed import FILE, as_tuple
 
 __all__ = ["ReconfigConfig"]
 

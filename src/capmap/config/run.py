@@ -34,7 +34,7 @@ if TYPE_CHECKING:  # resolved lazily at run time through SECTION_TYPES
     from capmap.config.following import FollowConfig
     from capmap.config.reconfig import ReconfigConfig
 
-__all__ = ["RunConfig", "SECTION_TYPES", "run_name", "run_document", "DEFAULT_CONFIG"]
+__all__ = ["RunConfig", "SECTION_TYPES", "run_name", "run_document", "config_files", "NAMED_CONFIG", "DEFAULT_CONFIG"]
 
 DEFAULT_CONFIG = "config/config.yaml"  # the config when no --configfile is given
 SECTION_TYPES = {  # a section type's name -> the module defining it (imported when a slice holds it)
@@ -99,6 +99,26 @@ def _merged(base: dict, extra: dict) -> dict:
     for k, v in extra.items():
         out[k] = _merged(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
     return out
+
+
+NAMED_CONFIG = "configfile"  # `--config configfile=my.yaml`: a config file only capmap's loader reads
+
+
+def config_files(configfiles, overrides) -> tuple[list[str], dict]:
+    """The config files of a workflow call and its other ``--config`` overrides: the file named by
+    ``--config configfile=F`` (F only; with ``--configfile`` too, one line: two sources of one run), else
+    the ``--configfile`` files."""
+    overrides = dict(overrides or {})
+    named = overrides.pop(NAMED_CONFIG, None)
+    files = [str(f) for f in configfiles]
+    if named is None:
+        return files, overrides
+    if files:
+        raise ConfigError(f"--config {NAMED_CONFIG}={named} and --configfile {' '.join(files)}: give the run's config "
+                          "one way")
+    if not isinstance(named, str) or not named:
+        raise ConfigError(f"--config {NAMED_CONFIG}: give a config file's path")
+    return [named], overrides
 
 
 def run_document(configfiles: list[str], overrides: dict | None = None) -> dict:

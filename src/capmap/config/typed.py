@@ -27,9 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from capmap.errors import CapmapError
+from capmap.errors import CapmapError, ConfigError
 
-__all__ = ["FILE", "ROUND", "Undeclared", "to_doc", "rounded", "partial", "get_path", "field_meta", "file_paths"]
+__all__ = ["FILE", "ROUND", "Undeclared", "to_doc", "rounded", "partial", "get_path", "field_meta", "file_paths",
+           "as_tuple", "per_item"]
 
 FILE = {"file": True}
 ROUND = {"round": 9}
@@ -194,3 +195,18 @@ def file_paths(value: Any, meta: dict) -> list[str]:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return [p for f in dataclasses.fields(value) for p in file_paths(getattr(value, f.name), dict(f.metadata))]
     return []
+
+
+def as_tuple(value):
+    """Lists of a parsed document as tuples (hashable, immutable), anything else unchanged."""
+    return tuple(value) if isinstance(value, list) else value
+
+
+def per_item(value, n: int, key: str) -> np.ndarray:
+    """One value for all n items, or exactly n values (else a one-line error naming key)."""
+    v = np.atleast_1d(np.asarray(value, dtype=float))
+    if len(v) == 1:
+        return np.full(n, v[0])
+    if len(v) != n:
+        raise ConfigError(f"{key} has {len(v)} values; give one or {n}")
+    return v

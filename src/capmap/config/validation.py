@@ -22,12 +22,11 @@ from pathlib import Path
 from typing import Any
 
 import jsonschema
-import numpy as np
 import yaml
 
 from capmap.errors import ConfigError
 
-__all__ = ["schema", "key_path", "validate", "load_yaml", "as_tuple", "check_finite", "per_item", "normalise_integers",
+__all__ = ["schema", "key_path", "validate", "load_yaml", "check_finite", "normalise_integers",
            "shown", "read_regular_file", "file_kind", "too_big", "MAX_FILE_BYTES", "MAX_DEPTH", "MAX_NODES"]
 
 MAX_FILE_BYTES = 4 * 1024 * 1024  # 4 MiB: a config, robot or scene file is a few kB
@@ -122,6 +121,10 @@ def _key(k: Any) -> str:  # a mapping key in a message: YAML keys may be null, n
 def validate(doc: Any, schema_name: str, source: str) -> Any:
     """Validate ``doc`` against a packaged schema; raise one :class:`ConfigError` line on failure. Returns the
     document with integral floats at integer keys as ints (:func:`normalise_integers`; ``doc`` is not changed)."""
+    known = schema(schema_name).get("properties", {})
+    if isinstance(doc, dict) and doc and known and not any(k in known for k in doc):
+        raise ConfigError(f"{shown(source)}: not a capmap {schema_name} file: none of its keys is one of a "
+                          f"{schema_name} file's ({', '.join(sorted(known)[:6])}, ...)")
     check_finite(doc, source)
     error = jsonschema.exceptions.best_match(itertools.islice(_validator(schema_name).iter_errors(doc), 1000))
     if error is None:
@@ -212,6 +215,11 @@ def _normalised(value: Any, subs: list, validator, depth: int) -> Any:
     return value
 
 
+def _without_quotes(exc: Exception) -> str:
+    """An exception's text with what it quotes from the file left out (a file may not be what it claims)."""
+    return shown(re.sub(r"'[^']*'|\"[^\"]*\"", "...", str(exc).splitlines()[0] if str(exc) else type(exc).__name__))
+
+
 class _Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
     """The safe loader (libyaml when present). A scalar it cannot construct (``2020-02-30``, an int of 5000 digits,
     ``!!int x``) or a key repeated in one mapping is a YAML error with its line, not a traceback or a lost value."""
@@ -220,9 +228,10 @@ class _Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
         try:
             return super().construct_object(node, deep=deep)
         except (ValueError, TypeError, AttributeError, OverflowError) as exc:  # AttributeError: !!timestamp x
-            exc = f"not a valid {node.tag.rsplit(':', 1)[-1]}" if isinstance(exc, AttributeError) else exc
-            what = f"value {node.value[:40]!r}" if isinstance(node, yaml.ScalarNode) else f"{node.tag} node"
-            raise yaml.constructor.ConstructorError(None, None, f"cannot read the {what}: {shown(exc)}",
+            kind = node.tag.rsplit(":", 1)[-1]
+            why = "" if isinstance(exc, AttributeError) else f" ({_without_quotes(exc)})"
+            what = "value" if isinstance(node, yaml.ScalarNode) else f"{kind} node"
+            raise yaml.constructor.ConstructorError(None, None, f"cannot read the {what}: not a valid {kind}{why}",
                                                     node.start_mark) from None
 
     def construct_mapping(self, node, deep=False):
@@ -231,7 +240,7 @@ class _Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
             if isinstance(key_node, yaml.ScalarNode) and key_node.tag != "tag:yaml.org,2002:merge":
                 key = self.construct_object(key_node)
                 if key in seen:
-                    raise yaml.constructor.ConstructorError(None, None, f"key {_key(key)} is given twice in one mapping",
+                    raise yaml.constructor.ConstructorError(None, None, "a key is given twice in one mapping",
                                                             key_node.start_mark)
                 seen.add(key)
         return super().construct_mapping(node, deep=deep)
@@ -334,17 +343,3 @@ def load_yaml(path: str | Path) -> Any:
                           "config file); write the values out and remove __use_yte__")
     return doc
 
-
-def as_tuple(value):
-    """Lists of a parsed document as tuples (hashable, immutable), anything else unchanged."""
-    return tuple(value) if isinstance(value, list) else value
-
-
-def per_item(value, n: int, key: str) -> np.ndarray:
-    """One value for all n items, or exactly n values (else a one-line error naming key)."""
-    v = np.atleast_1d(np.asarray(value, dtype=float))
-    if len(v) == 1:
-        return np.full(n, v[0])
-    if len(v) != n:
-        raise ConfigError(f"{key} has {len(v)} values; give one or {n}")
-    return v

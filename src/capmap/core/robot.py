@@ -1,8 +1,7 @@
 """A robot description (SI, radians) -> Pinocchio model.
 
-A :class:`RobotDescription` holds either DH rows (modified/Craig or standard) with
-per-link mass, centre of mass and inertia, or the path of a URDF file; robot files
-(YAML, degrees) are parsed into it by :mod:`capmap.config.robot_file`.
+A :class:`RobotDescription` holds either DH rows (modified/Craig or standard) with per-link mass,
+centre of mass and inertia, or a URDF file's path; :mod:`capmap.robots` parses robot files into it.
 
 The model is built once (:func:`build_robot`) and treated as immutable; each worker makes
 its own ``pin.Data``. Frames: ``link<i>`` is DH frame i, ``ee`` is the end effector
@@ -11,8 +10,7 @@ its own ``pin.Data``. Frames: ``link<i>`` is DH frame i, ``ee`` is the end effec
 A URDF robot may hold joints fixed (``locked``: joint name -> value, rad or m; the model is
 reduced with ``pin.buildReducedModel``, e.g. a gripper's fingers, a head, a torso) and name the
 arm's joints (``joints``, root first); what remains must be a serial chain of 1-DOF revolute
-joints. Its joints' ``<limit effort>`` are kept (:attr:`Robot.effort_limit_nm`): the default joint
-torque limits of a run (:meth:`capmap.config.capacity.LimitsConfig.for_robot`).
+joints. Its joints' ``<limit effort>`` are kept (:attr:`Robot.effort_limit_nm`): a run's default torque limits.
 """
 
 from __future__ import annotations
@@ -296,6 +294,10 @@ def _build_urdf_model(desc: RobotDescription) -> tuple[pin.Model, np.ndarray]:
     model.addFrame(pin.Frame(EE_FRAME, src.parentJoint, model.getFrameId(desc.urdf_ee_frame),
                              src.placement * _se3(desc.tool), pin.FrameType.OP_FRAME))
     ranges = np.stack([model.lowerPositionLimit, model.upperPositionLimit], axis=1)
+    for name, (lo, hi) in zip(model.names[1:], ranges if desc.joint_range_rad is None else ()):
+        if not lo < hi:
+            raise ConfigError(f"{desc.source}: urdf.path = {str(desc.urdf_path)!r}: joint {name}'s limits are lower "
+                              f"{lo:g} rad, upper {hi:g} rad: lower must be < upper (fix the URDF or give joint_range_deg)")
     return model, ranges
 
 

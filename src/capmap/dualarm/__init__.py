@@ -16,6 +16,10 @@ panel assembly. Three sub-packages, one per concept, and the family's tables:
   a solution's errors and safety (``evaluate``), the motion and its tables (``motion``), the held panel's
   torques (``torques``)
 - :mod:`~capmap.dualarm.tables`    the collision-model tables (column schemas) and their readers
+- :mod:`~capmap.dualarm.job`       what a job plans with (its inputs, horizon and planning settings), and
+  :mod:`~capmap.dualarm.plan` its motion planned around the unknown space
+- :mod:`~capmap.dualarm.build`     the config's sections into the family's settings and robots; the family's
+  file loaders: ``scene_file`` (scene YAML), ``cloud_file`` (a user's point cloud)
 """
 
 __all__ = ["geometry", "scene", "ocp", "tables"]

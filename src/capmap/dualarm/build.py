@@ -1,27 +1,37 @@
 """The dual-arm family's one meeting of configuration and numerics: the ``dualarm`` section's data
 (:mod:`capmap.config.dualarm`) in, the family's settings out (the scan, the envelope fit, the cost weights,
-the augmented-Lagrangian loop, the unknown space), and the dual-arm robot files read into robot
-descriptions (one-line errors naming the file and key). The defaults of the optional keys live in the
-numerics' settings classes; a key given in the config overrides its default here."""
+the augmented-Lagrangian loop, the unknown space, a job's horizon, inputs and planning settings), and the
+dual-arm robot files read into robot descriptions and robots (one-line errors naming the file and key).
+The defaults of the optional keys live in the numerics' settings classes; a key given in the config
+overrides its default here."""
 
 from __future__ import annotations
 
-from dataclasses import fields
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
-from capmap.config.dualarm import FitConfig, ScanConfig, SolverConfig, UnknownConfig, WeightsConfig
+from capmap.config.dualarm import DualArmConfig, FitConfig, Horizon, ScanConfig, SolverConfig, UnknownConfig, WeightsConfig
 from capmap.config.robot_file import check_meshes, check_urdf, package_file, urdf_package_dir
 from capmap.config.validation import load_yaml
+from capmap.dualarm.cloud_file import read_cloud
+from capmap.dualarm.job import HorizonSteps, JobInputs, PlanSettings, assembly_on
+from capmap.dualarm.ocp.assembly import Assembly
 from capmap.dualarm.ocp.settings import ALSettings, Weights
 from capmap.dualarm.scene.cloud import FitSettings
-from capmap.dualarm.scene.robot import CapsuleGroup, DualArmDescription
+from capmap.dualarm.scene.robot import CapsuleGroup, DualArm, DualArmDescription, build_dual_arm
 from capmap.dualarm.scene.solids import ScanSettings
 from capmap.dualarm.scene.unknown import UnknownSettings
-from capmap.errors import ConfigError
+from capmap.dualarm.scene.unobserved import camera_suggestion
+from capmap.dualarm.scene_file import load_scene
+from capmap.dualarm.tables import capsules_from, envelope_from
+from capmap.errors import CapmapError, ConfigError
 
-__all__ = ["scan_settings", "fit_settings", "weights", "al_settings", "unknown_settings", "load_dual_arm_file"]
+__all__ = ["scan_settings", "fit_settings", "weights", "al_settings", "unknown_settings", "horizon_steps", "plan_settings",
+           "stop_distance", "load_dual_arm_file", "build_robot", "robot_from", "job_inputs", "job_setup",
+           "planning_error", "cloud_span_m", "MAX_FIT_CELLS"]
 
 _ROBOT_KEYS = {"name", "description", "urdf", "arms", "locked", "capsules", "self_gap", "body_skip", "hold", "cover"}
 _COVER = ("visual", "collision")
@@ -59,6 +69,24 @@ def unknown_settings(cfg: UnknownConfig) -> UnknownSettings:
                            **{k: v for k, v in _given(cfg).items() if k in ("voxel_m", "near_m")})
 
 
+def horizon_steps(h: Horizon) -> HorizonSteps:
+    """A horizon's nodes, step (s) and pre-insertion node."""
+    return HorizonSteps(h.nodes, h.dt_s, h.pre_insertion_node)
+
+
+def plan_settings(da: DualArmConfig) -> PlanSettings:
+    """How the job's motion is planned: the horizon, cost weights, augmented-Lagrangian loop, finer grid and
+    unknown space of the ``dualarm`` section."""
+    return PlanSettings(horizon_steps(da.horizon), weights(da.weights), al_settings(da.solver), da.fine_factor,
+                        unknown_settings(da.unknown))
+
+
+def stop_distance(da: DualArmConfig) -> float:
+    """How far short of each point a ray's free part stops (m): three noise sigmas (a user's cloud: its noise
+    unknown, taken as 1 cm)."""
+    return 3 * (da.scan.noise_m if da.cloud_file is None else 0.01)
+
+
 def load_dual_arm_file(path: str | Path) -> DualArmDescription:
     """Read a dual-arm robot file; one-line errors naming the file and key."""
     path = Path(path)
@@ -66,7 +94,10 @@ def load_dual_arm_file(path: str | Path) -> DualArmDescription:
     src = str(path)
     if not isinstance(doc, dict):
         raise ConfigError(f"{src}: a robot file must be a mapping of keys, got {type(doc).__name__}")
-    extra = sorted(set(doc) - _ROBOT_KEYS)
+    extra = sorted(set(doc) - _ROBOT_KEYS, key=str)
+    if doc and len(extra) == len(doc):  # nothing of a dual-arm robot file: its keys are not echoed
+        raise ConfigError(f"{src}: not a capmap dual-arm robot file: none of its keys is one of a dual-arm robot "
+                          f"file's ({', '.join(sorted(_ROBOT_KEYS)[:6])}, ...)")
     if extra:
         raise ConfigError(f"{src}: unknown key {extra[0]} (allowed: {', '.join(sorted(_ROBOT_KEYS))})")
     for key in ("name", "urdf", "arms", "capsules"):
@@ -120,3 +151,89 @@ def load_dual_arm_file(path: str | Path) -> DualArmDescription:
                               {s: arms[s]["gripper"] for s in arms}, {k: float(v) for k, v in doc.get("locked", {}).items()},
                               tuple(groups), int(doc.get("body_skip", 0)), int(doc.get("hold", 0)),
                               int(doc.get("self_gap", 2)), tuple(cover), fingers)
+
+
+def build_robot(robot_file: str, scene_file: str) -> DualArm:
+    """The robot of ``robot_file``, its fingers closed on the thickness of the panel of ``scene_file``."""
+    try:
+        return build_dual_arm(load_dual_arm_file(robot_file), float(load_scene(scene_file).panel.size[0]))
+    except ConfigError:
+        raise
+    except CapmapError as exc:
+        raise ConfigError(f"dualarm.robot = {robot_file!r}: {exc.in_terms(urdf='its URDF')}") from None
+
+
+def robot_from(robot_file: str, capsules: pd.DataFrame) -> DualArm:
+    """The robot with its capsules read back from their dataset, its locked joints (the fingers closed on
+    the scene's panel) as the capsules were fitted with (their provenance); the visual meshes not loaded."""
+    try:
+        desc = replace(load_dual_arm_file(robot_file), locked=capsules.attrs["capmap"]["locked"], fingers={})
+        robot = build_dual_arm(desc, visual=False)
+    except ConfigError:
+        raise
+    except CapmapError as exc:
+        raise ConfigError(f"dualarm.robot = {robot_file!r}: {exc.in_terms(urdf='its URDF')}") from None
+    caps = capsules_from(capsules)
+    return DualArm(robot.description, robot.model, robot.geometry, robot.gripper_frames, robot.q_lower, robot.q_upper,
+                   robot.v_max, caps, robot.visual)
+
+
+def job_inputs(da: DualArmConfig, environment: pd.DataFrame, capsules: pd.DataFrame) -> JobInputs:
+    """(robot, envelope, its labels, scene) of a dual-arm job from its environment and capsules datasets: ``da``
+    names the robot and scene files."""
+    robot = robot_from(da.robot, capsules)
+    env, labels = envelope_from(environment)
+    return JobInputs(robot, env, labels, load_scene(da.scene))
+
+
+def job_setup(da: DualArmConfig, environment: pd.DataFrame, capsules: pd.DataFrame, h: Horizon,
+              boxes: np.ndarray | None = None) -> tuple[DualArm, Assembly]:
+    """(robot, assembly) of a dual-arm job on horizon ``h`` (:func:`job_inputs`); ``boxes`` (B, 2, 3) m of
+    unknown space join the environment."""
+    inputs = job_inputs(da, environment, capsules)
+    voxel = unknown_settings(da.unknown).voxel_m if boxes is not None and len(boxes) else None
+    return inputs.robot, assembly_on(inputs, horizon_steps(h), boxes, voxel)
+
+
+def planning_error(da: DualArmConfig, exc: CapmapError, inputs: JobInputs | None, boxes: np.ndarray | None
+                   ) -> ConfigError:
+    """An error of planning the job's motion in the config's terms: a key pose in collision, the scene's, or the
+    cameras' (a box of unknown space: then where a camera would see it, from the job's ``inputs`` and unknown
+    ``boxes`` (B, 2, 3) m, both read when a box is named)."""
+    msg = exc.in_terms(scene=f"dualarm.scene = {da.scene!r}")
+    if "unknown [" in msg:
+        where = camera_suggestion(msg, unknown_settings(da.unknown), inputs.env, boxes,
+                                  scan_settings(da.scan).viewpoints.mean(axis=0))
+        msg += ("; that region (x, y, z ranges in m) was observed by no viewpoint of dualarm.cloud.viewpoints_m: "
+                f"{where}, or move the task away from it")
+    return ConfigError(msg)
+
+
+MIN_FIT_POINTS = 10  # capmap.dualarm.scene.cloud.fit_envelope's least
+MAX_FIT_CELLS = 2e8  # cells of the fit's patch grid (~5 bytes each: ~1 GB)
+
+
+def cloud_span_m(da: DualArmConfig, scene_points: np.ndarray) -> float:
+    """The largest extent (m) of the cloud the envelope job fits: a user's file read as the scan job reads
+    it (its values checked: finite, not empty, viewpoint indices), else the scene's surface with the
+    scan's noise (3 sigma each side). A synthetic scan noisier than its scene is one line naming
+    ``dualarm.cloud.noise_m``; the fit's grid too large for memory one naming ``dualarm.fit.cell_m``."""
+    if da.cloud_file is not None:
+        pts, _ = read_cloud(da.cloud_file, len(da.scan.viewpoints_m))
+        if len(pts) < MIN_FIT_POINTS:
+            raise ConfigError(f"dualarm.cloud.file = {da.cloud_file!r}: {len(pts)} points; the envelope fit needs at "
+                              f"least {MIN_FIT_POINTS}")
+        span = float(np.ptp(pts, axis=0).max())
+    else:
+        scene_span = float(np.ptp(scene_points, axis=0).max())
+        if not da.scan.noise_m <= scene_span:
+            raise ConfigError(f"dualarm.cloud.noise_m = {da.scan.noise_m:g} m is larger than the scene it scans "
+                              f"({scene_span:.3g} m across): a scan's noise is millimetres to centimetres")
+        span = scene_span + 6 * da.scan.noise_m
+    fit = fit_settings(da.fit)
+    cells = (span / fit.cell_m + 1) ** 2
+    if not cells <= MAX_FIT_CELLS:
+        cloud = f"dualarm.cloud.file = {da.cloud_file!r}" if da.cloud_file is not None else "the synthetic scan"
+        raise ConfigError(f"dualarm.fit.cell_m = {fit.cell_m:g} m: the fit's patch grid over {cloud}, {span:.3g} m across, "
+                          f"would have {cells:.3g} cells (at most {MAX_FIT_CELLS:.0e}, ~1 GB): raise dualarm.fit.cell_m")
+    return span

@@ -20,12 +20,14 @@ _EXPORTS = {
     'FollowSettings': 'follower',
     'follow': 'follower',
     'follow_segment': 'follower',
+    'ToppraSettings': 'toppra_reference',
     'time_optimal': 'toppra_reference',
 }
 
 __all__ = [
     "FollowComparison",
     "FollowSettings",
+    "ToppraSettings",
     "compare",
     "comparison",
     "follow",

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from capmap.config.run import RunConfig
-from capmap.config.validation import per_item
+from capmap.config.typed import per_item
 from capmap.core.kinematics import rotation_from_rpy
 from capmap.core.reduction import LockedArm, free
 from capmap.following.follower import FollowSettings

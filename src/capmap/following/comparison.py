@@ -11,7 +11,7 @@ from capmap.core.limits import AffineLimits
 from capmap.following.follower import SATURATED, FollowedSegment
 from capmap.following.toppra_reference import ToppraResult
 
-__all__ = ["FollowComparison", "compare"]
+__all__ = ["FollowComparison", "compare", "model_terms"]
 
 
 @dataclass(frozen=True)
@@ -62,6 +62,11 @@ def _terms(robot, active, viscous: bool = True) -> str:
         if np.any(values[active] > 0):
             out.append(name)
     return "+".join(out)
+
+
+def model_terms(arm) -> str:
+    """The torque terms of the locked arm's model, e.g. 'links+armature+coulomb+viscous'."""
+    return _terms(arm.robot, arm.active)
 
 
 def compare(followed: list[FollowedSegment], toppra: list[ToppraResult], limits: AffineLimits, arm,

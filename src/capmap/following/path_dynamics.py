@@ -36,7 +36,20 @@ from capmap.core.reduction import LockedArm
 from capmap.errors import LimitInfeasible
 from capmap.following.path import JointPath
 
-__all__ = ["PathDynamics", "path_dynamics", "PreparedPath", "prepare", "forward_friction"]
+__all__ = ["PathDynamics", "path_dynamics", "PreparedPath", "prepare", "forward_friction", "Shortfall"]
+
+
+@dataclass(frozen=True)
+class Shortfall:
+    """Where a path cannot be held or started under its torque limits: the output (e.g. ``tau_j1_nm``),
+    the torque it needs and its limit (N m), the path coordinate (m) and what was asked (holding at
+    rest, or starting forward from rest against friction)."""
+
+    output: str
+    needed_nm: float
+    limit_nm: float
+    s_m: float
+    what: str
 
 
 def forward_friction(dq: np.ndarray, sd, coulomb_nm: np.ndarray, viscous_nms: np.ndarray) -> np.ndarray:
@@ -138,8 +151,11 @@ def prepare(pdyn: PathDynamics, limits: AffineLimits, v_max_mps: float, brake_ma
         j = int(np.argmax(np.abs(creep) / limits.limit))
         hold = abs(pdyn.c[k, j]) > limits.limit[j]
         what = "holding the path at rest" if hold or not pdyn.has_friction else "starting forward from rest (friction)"
-        raise LimitInfeasible(f"{limits.names[j]}: {what} at s = {pdyn.s[k]:.4f} m needs "
-                              f"{abs(pdyn.c[k, j] if hold else creep[j]):.2f} N m, above its limit {limits.limit[j]:g} N m")
+        needed = float(abs(pdyn.c[k, j] if hold else creep[j]))
+        exc = LimitInfeasible(f"{limits.names[j]}: {what} at s = {pdyn.s[k]:.4f} m needs "
+                              f"{needed:.2f} N m, above its limit {limits.limit[j]:g} N m")
+        exc.shortfall = Shortfall(limits.names[j], needed, float(limits.limit[j]), float(pdyn.s[k]), what)
+        raise exc
     # velocity limit curve by bisection on sd in [0, v_max]
     lo_v, hi_v = np.zeros(G), np.full(G, float(v_max_mps))
     lo_m, hi_m = pdyn.sdd_interval(limits, hi_v)

@@ -32,9 +32,21 @@ from capmap.core.reduction import LockedArm
 from capmap.errors import SolverFailed
 from capmap.following.path import JointPath
 
-__all__ = ["ToppraResult", "time_optimal"]
+__all__ = ["ToppraResult", "ToppraSettings", "time_optimal"]
 
 _FREE = 1e9  # "no limit" for the real joints' velocity/acceleration and the virtual joint's torque
+
+
+@dataclass(frozen=True)
+class ToppraSettings:
+    """The task's path limits and TOPP-RA's grid: path speed |s'| <= v_max_mps m/s and acceleration
+    |s''| <= a_max_mps2 m/s^2; n_grid intervals of the path for TOPP-RA; the result's torques
+    re-evaluated every sample_dt_s s."""
+
+    v_max_mps: float
+    a_max_mps2: float
+    n_grid: int = 400
+    sample_dt_s: float = 1e-3
 
 
 @dataclass(frozen=True)
@@ -52,10 +64,12 @@ class ToppraResult:
     tau_modelled: np.ndarray
 
 
-def time_optimal(arm: LockedArm, path: JointPath, payload_kg: float, limits: AffineLimits, v_max_mps: float,
-                 a_max_mps2: float, n_grid: int = 400, sample_dt_s: float = 1e-3) -> ToppraResult:
-    """TOPP-RA on ``path`` under the joint-torque ``limits`` (n_active outputs) and the path speed
-    and acceleration limits (see the module docstring); torques are re-evaluated every sample_dt_s."""
+def time_optimal(arm: LockedArm, path: JointPath, payload_kg: float, limits: AffineLimits,
+                 settings: ToppraSettings) -> ToppraResult:
+    """TOPP-RA on ``path`` carrying payload_kg kg under the joint-torque ``limits`` (n_active outputs)
+    and the path speed and acceleration limits of ``settings`` (see the module docstring)."""
+    v_max_mps, a_max_mps2 = settings.v_max_mps, settings.a_max_mps2
+    n_grid, sample_dt_s = settings.n_grid, settings.sample_dt_s
     ta.setup_logging("WARNING")
     tau_max = limits.limit
     model, _ = payload_models(arm, payload_kg)

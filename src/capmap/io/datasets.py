@@ -70,8 +70,12 @@ def write(df: pd.DataFrame, path: str | Path, prov: dict) -> None:
     df = df.copy()
     df.attrs = {"capmap": prov}
     tmp = path.with_suffix(".tmp.parquet")
-    df.to_parquet(tmp, index=False)
-    tmp.replace(path)
+    try:
+        df.to_parquet(tmp, index=False)
+        tmp.replace(path)
+    except BaseException:  # a full disk, a read-only folder, an interrupt: no half-written file left behind
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 _CONFIG_ARGS_ENV = "CAPMAP_CONFIG_ARGS"  # set by the workflow, inherited by its jobs

@@ -8,6 +8,7 @@ into one ``capmap:`` line on stderr and in the log, and exit status 1.
 
 from __future__ import annotations
 
+import errno
 import logging
 import resource
 import sys
@@ -61,16 +62,36 @@ def logging_to(log_path: str | Path | None) -> Iterator[None]:
 
 @contextmanager
 def one_line_errors(log_path: str | Path | None = None) -> Iterator[None]:
-    """Turn a CapmapError into one ``capmap:`` line on stderr (and the log) and exit status 1."""
+    """Turn a CapmapError, and a fault of the machine (a full disk, a read-only or vanished folder, no
+    memory left), into one ``capmap:`` line on stderr (and the log, when it can still be written) and
+    exit status 1."""
     try:
         yield
     except CapmapError as exc:
-        msg = f"capmap: {exc}"
-        print(msg, file=sys.stderr)
-        if log_path:
+        _fail(f"capmap: {exc}", log_path)
+    except OSError as exc:
+        if exc.errno not in MACHINE_FAULTS:
+            raise
+        where = f"{exc.filename}: " if exc.filename else ""
+        _fail(f"capmap: cannot write {where}{exc.strerror or exc} (a fault of the machine: free space or "
+              "permissions, then run again; finished outputs are kept)", log_path)
+    except MemoryError:
+        _fail("capmap: out of memory (the pre-run estimate was exceeded: lower the cores or the map's size, then run "
+              "again)", log_path)
+
+
+MACHINE_FAULTS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.EIO}
+
+
+def _fail(msg: str, log_path) -> None:
+    print(msg, file=sys.stderr)
+    if log_path:
+        try:
             with open(log_path, "a") as f:
                 f.write(msg + "\n")
-        raise SystemExit(1) from None
+        except OSError:
+            pass  # the log's disk is the full one
+    raise SystemExit(1) from None
 
 
 def call(fn, log: str | None = None, **kwargs) -> None:

@@ -4,9 +4,12 @@ that it is never presented as current."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-__all__ = ["stale_outputs"]
+from capmap.errors import CapmapError
+
+__all__ = ["stale_outputs", "check_writable"]
 
 
 def stale_outputs(run_dir: str | Path, current: dict[str, list[str]]) -> list[str]:
@@ -23,3 +26,17 @@ def stale_outputs(run_dir: str | Path, current: dict[str, list[str]]) -> list[st
         keep = {str(run_dir / p) for p in paths}
         stale += [str(p) for p in run_dir.glob(pattern) if str(p) not in keep]
     return sorted(set(stale))
+
+
+def check_writable(run_dir: str | Path) -> None:
+    """The run's output folder exists or can be made, and takes a file: else one
+    line naming it (:class:`CapmapError`) (before any job: a read-only or full results folder is known before the first job)."""
+    run_dir = Path(run_dir)
+    probe = run_dir / f".capmap-write-check.{os.getpid()}"
+    try:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        probe.write_bytes(b"capmap")
+        probe.unlink()
+    except OSError as exc:
+        raise CapmapError(f"{run_dir}: the run's outputs cannot be written there ({exc.strerror or exc}): free space, "
+                          "fix its permissions, or run from a folder you can write") from None

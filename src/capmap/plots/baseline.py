@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -9,7 +10,22 @@ import pandas as pd
 
 from capmap.plots.common import plt, save
 
-__all__ = ["baseline_figure"]
+__all__ = ["BaselineContext", "baseline_figure"]
+
+
+@dataclass(frozen=True)
+class BaselineContext:
+    """What the baseline's figure tells of its run: the arm's configuration (its name); the failed
+    ``joint`` (1-based) locked at angle_deg deg; the healthy map's angle step step_deg deg; the voxel
+    edge edge_m m; the task start start_m (3,) m; the task's payloads_kg (kg each)."""
+
+    configuration: str
+    joint: int
+    angle_deg: float
+    step_deg: float
+    edge_m: float
+    start_m: np.ndarray
+    payloads_kg: tuple[float, ...]
 
 
 def _lower(df: pd.DataFrame, edge: float) -> np.ndarray:
@@ -30,11 +46,12 @@ def _layer(df: pd.DataFrame, column: str, k: int, edge: float) -> tuple[np.ndarr
     return img, [x0, x0 + nx * edge, y0, y0 + ny * edge]
 
 
-def baseline_figure(df: pd.DataFrame, conv: pd.DataFrame, start_m: np.ndarray, payloads_kg, configuration: str,
-                    joint: int, angle_deg: float, step_deg: float, edge_m: float, out_png: str | Path) -> None:
+def baseline_figure(df: pd.DataFrame, conv: pd.DataFrame, context: BaselineContext, out_png: str | Path) -> None:
     """Four panels: the volume carrying each payload, healthy and failed (the arm's configuration and
     any); the start's voxel layer of the healthy map and of the loss on the arm's configuration; the rise
     of the checked voxels' healthy values at half and a quarter of the angle step."""
+    configuration, joint, angle_deg, step_deg = context.configuration, context.joint, context.angle_deg, context.step_deg
+    edge_m, start_m, payloads_kg = context.edge_m, context.start_m, context.payloads_kg
     fig, ax = plt.subplots(2, 2, figsize=(13, 10.5))
     a = ax[0, 0]
     top = np.nanmax(df.healthy_capacity_kg.to_numpy(), initial=1.0)

@@ -4,6 +4,7 @@ solver's convergence, and the 3D animation."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import meshcat.animation as ma
@@ -13,7 +14,7 @@ import pandas as pd
 from capmap.plots.common import plt, save
 from capmap.plots.scene3d import cylinder, g, material, new_scene, write_html
 
-__all__ = ["constraint_errors", "distances", "joints", "torques", "convergence", "animation"]
+__all__ = ["constraint_errors", "distances", "joints", "torques", "convergence", "Surroundings", "animation"]
 
 REQUIRED_M = 7e-7  # the paper's reported maximum closed-chain / path error
 
@@ -152,12 +153,21 @@ def convergence(outer: pd.DataFrame, out_png: str | Path, tolerance: float | Non
     save(fig, out_png)
 
 
+@dataclass(frozen=True, eq=False)
+class Surroundings:
+    """The static environment the arms move in: swept triangles ``tri`` (T, 3, 3) m (their cores) and capsules
+    ``seg`` (a (3,) m, b (3,) m, radius m) each."""
+
+    tri: np.ndarray
+    seg: list[tuple[np.ndarray, np.ndarray, float]]
+
+
 def animation(capsules: list[tuple[str, int, np.ndarray, np.ndarray, float]], poses: np.ndarray, panel: tuple,
-              env_tri: np.ndarray, env_seg: list[tuple[np.ndarray, np.ndarray, float]], fps: float, title: str,
-              out_html: str | Path) -> None:
+              env: Surroundings, fps: float, title: str, out_html: str | Path) -> None:
     """MeshCat static HTML: capsules (name, body index, a, b in the body frame, r) moved by body poses
     (F, B, 4, 4); the panel (body index, pose in that body, size); the environment's swept
-    triangles (T, 3, 3) (their cores, translucent) and capsules (static)."""
+    triangles (their cores, translucent) and capsules (static)."""
+    env_tri, env_seg = env.tri, env.seg
     vis = new_scene(title)
     for name, body, a, b, r in capsules:
         geom, pose = cylinder(a, b, r)

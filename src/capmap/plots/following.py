@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -139,3 +140,30 @@ def follow_torque_split(ts: pd.DataFrame, limits: dict, case: str, terms: str, o
                          f"{case}: the follower's joint torques split by term along the path (model: "
                          f"{terms.replace('+', ' + ')})" + ("" if terms != "links" else "; the robot file states no drives"),
                          out_png)
+
+
+def follow_infeasible(reason: str, shortfall: dict | None, limits: dict, case: str, out_png: str | Path) -> None:
+    """A path the arm cannot follow: why (``reason``) and, when a torque cannot be met (``shortfall``:
+    the output, the torque needed and its limit, N m), each joint's limit against what the path needs,
+    in % of the limit on a log axis (a need many times the limit stays readable)."""
+    fig, ax = plt.subplots(figsize=(10, 4.8))
+    names = list(limits)
+    need = np.zeros(len(names))
+    if shortfall:
+        need[names.index(shortfall["output"])] = 100 * shortfall["needed_nm"] / shortfall["limit_nm"]
+    y = np.arange(len(names))
+    ax.barh(y, np.full(len(names), 100.0), color="0.85", label="limit (100 %)")
+    if shortfall:
+        k = names.index(shortfall["output"])
+        ax.barh([k], [need[k]], color="tab:red", height=0.5,
+                label=f"needed {shortfall['what']}: {shortfall['needed_nm']:.3g} N m")
+        ax.set_xscale("log")
+        ax.set_xlim(1.0, max(1e3, 3 * need[k]))
+        ax.legend(fontsize=8, loc="upper right")
+    ax.axvline(100.0, color="tab:red", ls=":", lw=1.2)
+    ax.set_yticks(y, [f"joint {n.split('_')[1][1:]} (±{limits[n]:g} N m)" for n in names])
+    ax.set(xlabel="torque [% of the joint's limit]",
+           title=f"{case}: the path cannot be followed under these torque limits")
+    wrapped = textwrap.fill(reason, 120)
+    fig.text(0.01, 0.01, wrapped, fontsize=8, va="bottom", ha="left", color="0.2")
+    save(fig, out_png, rect=(0, 0.12, 1, 1))

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from capmap.config.reconfig import ReconfigConfig
-from capmap.config.validation import per_item
+from capmap.config.typed import per_item
 from capmap.errors import CapmapError, ConfigError
 from capmap.reconfig.law import QuinticLaw
 from capmap.reconfig.multiarm import PlatformDescription, PlatformState

@@ -20,7 +20,7 @@ from capmap.errors import CapmapError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.atlas import atlas_curves_figure, atlas_heatmap
-from capmap.stages.common import stage_config
+from capmap.stages.common import Outputs, stage_config
 from capmap.stages.verify import PLAN_KEYS
 
 __all__ = ["stage_atlas_map", "stage_atlas", "CURVE_POINTS"]
@@ -55,8 +55,7 @@ def stage_atlas_map(out_voxels: str, out_summary: str, slice_json: str, joint: i
     datasets.write(pd.DataFrame(res.rows), out_summary, prov)
 
 
-def stage_atlas(summaries: list[str], voxels: list[str], out_atlas: str, out_curves: str, out_heatmap: str,
-                out_curves_png: str, slice_json: str) -> None:
+def stage_atlas(summaries: list[str], voxels: list[str], out: Outputs, slice_json: str) -> None:
     """The atlas table (one row per joint x angle x task payload), the capacity-volume curves on a
     common payload axis, a heat map and the curves' figure."""
     doc = stage_config(slice_json).doc
@@ -73,9 +72,9 @@ def stage_atlas(summaries: list[str], voxels: list[str], out_atlas: str, out_cur
                                     "volume_m3": capacity_volume(reach, meta["grid"]["edge_m"], payloads)}))
     curves = pd.concat(curves, ignore_index=True).sort_values(["joint", "angle_deg", "payload_kg"], ignore_index=True)
     prov = datasets.provenance("atlas", doc)
-    datasets.write(atlas, out_atlas, prov)
-    datasets.write(curves, out_curves, prov)
-    atlas_heatmap(atlas, out_heatmap)
-    atlas_curves_figure(curves, sorted(atlas.payload_kg.unique()), out_curves_png)
+    datasets.write(atlas, out["atlas"], prov)
+    datasets.write(curves, out["curves"], prov)
+    atlas_heatmap(atlas, out["heatmap"])
+    atlas_curves_figure(curves, sorted(atlas.payload_kg.unique()), out["curves_png"])
     stage_logger(__name__, "atlas").info(f"{atlas.joint.nunique()} joints x {atlas.angle_deg.nunique()} angles -> "
-                                         f"{out_atlas}, {out_curves}")
+                                         f"{out['atlas']}, {out['curves']}")

@@ -14,7 +14,7 @@ from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
-from capmap.plots.baseline import baseline_figure
+from capmap.plots.baseline import BaselineContext, baseline_figure
 from capmap.plots.capacity import capacity_map
 from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
 from capmap.robots import run_arm
@@ -129,6 +129,7 @@ def stage_baseline_figure(voxels: str, convergence: str, out_png: str, slice_jso
     view = MapView.from_slice(slice_json)
     run = stage_config(slice_json).run
     meta = df.attrs["capmap"]
-    baseline_figure(df, conv, view.start_m, view.payloads_kg, meta["configuration"], run.failure.joint,
-                    run.failure.angle_deg, conv.attrs["capmap"]["step_deg"], meta["grid"]["edge_m"], out_png)
+    context = BaselineContext(meta["configuration"], run.failure.joint, run.failure.angle_deg,
+                              conv.attrs["capmap"]["step_deg"], meta["grid"]["edge_m"], view.start_m, view.payloads_kg)
+    baseline_figure(df, conv, context, out_png)
     stage_logger(__name__, "baseline figure").info(f"-> {out_png}")

@@ -4,56 +4,23 @@ dualarm_capsules (the robot's capsules)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pandas as pd
 
-from capmap.dualarm.build import fit_settings, load_dual_arm_file, scan_settings, unknown_settings
-from capmap.dualarm.scene.cloud import depth, fit_envelope, uncovered
-from capmap.dualarm.scene.robot import DualArm, build_dual_arm, fit_capsules
+from capmap.dualarm.build import build_robot, fit_settings, scan_settings, stop_distance, unknown_settings
+from capmap.dualarm.cloud_file import XYZ, read_cloud
+from capmap.dualarm.scene.cloud import depth, fit_envelope, radius_span, uncovered
+from capmap.dualarm.scene.robot import fit_capsules
 from capmap.dualarm.scene.solids import nearest_solid, scan
 from capmap.dualarm.scene.unknown import Grid, unknown_space
 from capmap.dualarm.scene_file import load_scene
-from capmap.dualarm.tables import capsule_table, capsules_from, envelope_from, envelope_table, unknown_table
+from capmap.dualarm.tables import capsule_table, envelope_from, envelope_table, unknown_table
 from capmap.errors import CapmapError, ConfigError, DataError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.stages.common import stage_config
 
-__all__ = ["stage_dualarm_scan", "stage_dualarm_envelope", "stage_dualarm_unknown", "stage_dualarm_capsules",
-           "robot_from", "XYZ"]
-
-XYZ = ["x_m", "y_m", "z_m"]
-
-
-def _read_cloud(path: str, viewpoints: int) -> tuple[np.ndarray, np.ndarray]:
-    """A user's cloud file: CSV or Parquet with columns x_m, y_m, z_m (base frame) and, with several
-    viewpoints, the index of the one that saw each point (``viewpoint``): (points (P, 3), index (P,))."""
-    try:
-        df = pd.read_parquet(path) if str(path).lower().endswith(".parquet") else pd.read_csv(path)
-    except (OSError, ValueError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"dualarm.cloud.file = {path!r}: cannot be read ({str(exc).splitlines()[0]})") from None
-    missing = [c for c in XYZ if c not in df.columns]
-    if missing:
-        raise ConfigError(f"dualarm.cloud.file = {path!r}: no column {missing[0]} (need x_m, y_m, z_m)")
-    try:
-        pts = df[XYZ].to_numpy(dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(f"dualarm.cloud.file = {path!r}: columns x_m, y_m, z_m must hold numbers only") from None
-    if len(pts) == 0:
-        raise ConfigError(f"dualarm.cloud.file = {path!r}: no points")
-    if not np.isfinite(pts).all():
-        raise ConfigError(f"dualarm.cloud.file = {path!r}: {int((~np.isfinite(pts)).any(axis=1).sum())} points are "
-                          "not finite")
-    if "viewpoint" not in df.columns:
-        return pts, np.zeros(len(pts), dtype=int)  # one viewpoint (checked before the run)
-    view = pd.to_numeric(df["viewpoint"], errors="coerce").to_numpy()
-    bad = ~((view >= 0) & (view < viewpoints) & (view == np.round(view)))
-    if bad.any():
-        raise ConfigError(f"dualarm.cloud.file = {path!r}: column viewpoint must index dualarm.cloud.viewpoints_m "
-                          f"(0..{viewpoints - 1}); {int(bad.sum())} rows do not")
-    return pts, view.astype(int)
+__all__ = ["stage_dualarm_scan", "stage_dualarm_envelope", "stage_dualarm_unknown", "stage_dualarm_capsules", "XYZ"]
 
 
 def stage_dualarm_scan(out: str, slice_json: str) -> None:
@@ -63,7 +30,7 @@ def stage_dualarm_scan(out: str, slice_json: str) -> None:
     da = sc.run.dualarm
     cloud_file, settings, seed = da.cloud_file, scan_settings(da.scan), da.scan_seed
     if cloud_file is not None:
-        pts, view = _read_cloud(cloud_file, len(settings.viewpoints))
+        pts, view = read_cloud(cloud_file, len(settings.viewpoints))
         source = f"file {cloud_file}, {len(settings.viewpoints)} viewpoints"
     else:
         pts, view = scan(load_scene(da.scene), settings, np.random.default_rng(seed))
@@ -90,8 +57,8 @@ def stage_dualarm_envelope(cloud: str, out: str, slice_json: str) -> None:
     df = envelope_table(env, tri_label, seg_label)
     datasets.write(df, out, datasets.provenance("dualarm_envelope", sc.doc, seed=seed, cloud_points=len(pts),
                                                  uncovered_points=0))
-    log.info(f"{len(env.patch_points)} faces ({len(env.tri)} triangles, radius {_span(env.tri_radius)}), "
-             f"{len(env.seg)} capsules (radius {_span(env.seg_radius)}); all {len(pts)} points covered -> {out}")
+    log.info(f"{len(env.patch_points)} faces ({len(env.tri)} triangles, radius {radius_span(env.tri_radius)}), "
+             f"{len(env.seg)} capsules (radius {radius_span(env.seg_radius)}); all {len(pts)} points covered -> {out}")
 
 
 def stage_dualarm_unknown(cloud: str, environment: str, out: str, slice_json: str) -> None:
@@ -116,22 +83,12 @@ def stage_dualarm_unknown(cloud: str, environment: str, out: str, slice_json: st
              f"{int(space.unknown.sum()):,} unknown and not inside a fitted volume, as {len(table)} boxes -> {out}")
 
 
-def stop_distance(da) -> float:
-    """How far short of each point a ray's free part stops: three noise sigmas (a user's cloud: its noise
-    unknown, taken as 1 cm)."""
-    return 3 * (da.scan.noise_m if da.cloud_file is None else 0.01)
-
-
-def _span(r: np.ndarray) -> str:
-    return f"{1e3 * r.min():.0f}-{1e3 * r.max():.0f} mm" if len(r) else "-"
-
-
 def stage_dualarm_capsules(out: str, slice_json: str) -> None:
     """A minimum-volume capsule per group over the robot's visual and/or collision geometry (the robot
     file's ``cover``); coverage checked, the excess of a model left out reported."""
     sc = stage_config(slice_json)
     log = stage_logger(__name__, "dualarm capsules")
-    robot = _build(sc.run.dualarm.robot, sc.run.dualarm.scene)
+    robot = build_robot(sc.run.dualarm.robot, sc.run.dualarm.scene)
     try:
         robot, covered = fit_capsules(robot)
     except CapmapError as exc:
@@ -150,28 +107,3 @@ def stage_dualarm_capsules(out: str, slice_json: str) -> None:
         if kind not in cover and worst > 0:
             log.warning(f"the capsules leave the {kind} geometry uncovered by up to {1e3 * worst:.1f} mm "
                         f"({df.name[df[f'{kind}_excess_m'].idxmax()]}): cover: {list(cover)} in {sc.run.dualarm.robot}")
-
-
-def _build(robot_file: str, scene_file: str) -> DualArm:
-    """The robot of ``robot_file``, its fingers closed on the thickness of the panel of ``scene_file``."""
-    try:
-        return build_dual_arm(load_dual_arm_file(robot_file), float(load_scene(scene_file).panel.size[0]))
-    except ConfigError:
-        raise
-    except CapmapError as exc:
-        raise ConfigError(f"dualarm.robot = {robot_file!r}: {exc.in_terms(urdf='its URDF')}") from None
-
-
-def robot_from(robot_file: str, capsules: pd.DataFrame) -> DualArm:
-    """The robot with its capsules read back from their dataset, its locked joints (the fingers closed on
-    the scene's panel) as the capsules were fitted with (their provenance); the visual meshes not loaded."""
-    try:
-        desc = replace(load_dual_arm_file(robot_file), locked=capsules.attrs["capmap"]["locked"], fingers={})
-        robot = build_dual_arm(desc, visual=False)
-    except ConfigError:
-        raise
-    except CapmapError as exc:
-        raise ConfigError(f"dualarm.robot = {robot_file!r}: {exc.in_terms(urdf='its URDF')}") from None
-    caps = capsules_from(capsules)
-    return DualArm(robot.description, robot.model, robot.geometry, robot.gripper_frames, robot.q_lower, robot.q_upper,
-                   robot.v_max, caps, robot.visual)

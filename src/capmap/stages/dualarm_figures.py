@@ -6,12 +6,13 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.config.dualarm import SolverConfig
-from capmap.dualarm.build import al_settings
+from capmap.dualarm.build import al_settings, job_setup
 from capmap.dualarm.scene_file import load_scene
 from capmap.dualarm.tables import envelope_from
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.dualarm import (
+    Surroundings,
     animation,
     constraint_errors,
     convergence,
@@ -20,7 +21,6 @@ from capmap.plots.dualarm import (
     torques,
 )
 from capmap.stages.common import Outputs, stage_config
-from capmap.stages.dualarm_solve import setup
 
 __all__ = ["stage_dualarm_plots", "stage_dualarm_animation"]
 
@@ -45,7 +45,8 @@ def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: st
 def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, out_html: str, slice_json: str) -> None:
     """MeshCat static HTML of the motion (capsules, the panel, the fitted environment)."""
     da = stage_config(slice_json).run.dualarm
-    robot, asm = setup(da, environment, capsules, da.horizon)
+    caps, env_df = datasets.read(capsules), datasets.read(environment)
+    robot, asm = job_setup(da, env_df, caps, da.horizon)
     traj = datasets.read(trajectory)
     q = traj[[f"q_{j}_rad" for j in robot.joint_names]].to_numpy()
     step = max(1, int(round(1.0 / (da.animation_fps * asm.task.dt))))
@@ -56,11 +57,12 @@ def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, ou
         pin.forwardKinematics(model, data, qk)
         frames.append([M.homogeneous for M in data.oMi])
     jid = {name: model.getJointId(name) for name in robot.joint_names}
-    caps = [(c.name, jid.get(c.joint, 0), c.a, c.b, c.r) for c in robot.capsules]
+    capsules_at = [(c.name, jid.get(c.joint, 0), c.a, c.b, c.r) for c in robot.capsules]
     fp = model.frames[asm.task.panel]
-    env, _ = envelope_from(datasets.read(environment))
+    env, _ = envelope_from(env_df)
     scene = load_scene(da.scene)
     panel = (fp.parentJoint, fp.placement.homogeneous, scene.panel.size)
-    animation(caps, np.array(frames), panel, env.tri, [(a, b, r) for (a, b), r in zip(env.seg, env.seg_radius)],
+    animation(capsules_at, np.array(frames), panel,
+              Surroundings(env.tri, [(a, b, r) for (a, b), r in zip(env.seg, env.seg_radius)]),
               1.0 / (step * asm.task.dt), f"{robot.description.name}: {scene.name}", out_html)
     stage_logger(__name__, "dualarm animation").info(f"{len(frames)} frames -> {out_html}")

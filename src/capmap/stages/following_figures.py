@@ -5,16 +5,23 @@ from __future__ import annotations
 
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.plots.following import follow_progress, follow_torque_split, follow_torques
+from capmap.plots.following import follow_infeasible, follow_progress, follow_torque_split, follow_torques
+from capmap.stages.common import Outputs
 
 __all__ = ["stage_follow_plots"]
 
 
-def stage_follow_plots(timeseries: str, toppra: str, out_s: str, out_torques: str, out_split: str,
-                       slice_json: str) -> None:
+def stage_follow_plots(timeseries: str, toppra: str, out: Outputs, slice_json: str) -> None:
+    """The path coordinate against TOPP-RA (``out["s"]``), the torques before and after limiting
+    (``out["torques"]``) and their split into drive terms (``out["split"]``)."""
     ts, tp = datasets.read(timeseries), datasets.read(toppra)
     meta = ts.attrs["capmap"]
-    follow_progress(ts, tp, meta["case"], out_s)
-    follow_torques(ts, meta["torque_limits_nm"], meta["case"], out_torques)
-    follow_torque_split(ts, meta["torque_limits_nm"], meta["case"], meta["terms"], out_split)
-    stage_logger(__name__, f"follow plots {meta['case']}").info(f"-> {out_s}, {out_torques}, {out_split}")
+    if not meta.get("feasible", True):  # each figure says why the path cannot be followed
+        for png in out.values():
+            follow_infeasible(meta["reason"], meta["shortfall"], meta["torque_limits_nm"], meta["case"], png)
+        stage_logger(__name__, f"follow plots {meta['case']}").info(f"infeasible -> {', '.join(out.values())}")
+        return
+    follow_progress(ts, tp, meta["case"], out["s"])
+    follow_torques(ts, meta["torque_limits_nm"], meta["case"], out["torques"])
+    follow_torque_split(ts, meta["torque_limits_nm"], meta["case"], meta["terms"], out["split"])
+    stage_logger(__name__, f"follow plots {meta['case']}").info(f"-> {', '.join(out.values())}")

@@ -16,6 +16,7 @@ from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.query import line_query, point_query
 from capmap.capacity.tables import grid_of
 from capmap.checks import check_run_config
+from capmap.config.estimate import check_duration, check_steps, line_duration_s
 from capmap.config.run import RunConfig, run_document
 from capmap.config.slices import stage_slice
 from capmap.errors import CapmapError
@@ -94,6 +95,11 @@ def answer_line(configfile: str, a, b, payload_kg: float | None, configuration: 
     """The text (or JSON) answer to ``query line`` (default payload: the config's largest task payload;
     default configuration: the arm's own at the task start)."""
     run, q = load_question(configfile)
+    length = float(np.linalg.norm(np.subtract(b, a)))  # the pipeline's bounds on a verified line
+    t_s = line_duration_s(length, run.task.v_max_mps, run.task.a_max_mps2)
+    check_duration(t_s, "task.v_max_mps", "task.a_max_mps2", f"the queried line ({length:.3g} m)")
+    check_steps(t_s / run.verification.dt_s, "verification.dt_s",
+                f"verifying the queried line ({length:.3g} m) at verification.dt_s = {run.verification.dt_s:g} s")
     arm = q.dyn.arm
     payload = max(run.task.payload_kg) if payload_kg is None else float(payload_kg)
     q_ref = np.deg2rad(np.asarray(run.failure.q_start_deg, dtype=float))[arm.active]

@@ -11,18 +11,18 @@ from capmap.plots.reconfig import animation, joint_rates, manipulability, passiv
 from capmap.reconfig.build import reconfig_problem
 from capmap.reconfig.multiarm import link_segments, platform_model
 from capmap.reconfig.tables import column
-from capmap.stages.common import stage_config
+from capmap.stages.common import Outputs, stage_config
 
 __all__ = ["stage_reconfig_plots", "stage_reconfig_animation"]
 
 
-def stage_reconfig_plots(tables: list[str], out_manipulability: str, out_rates: str, out_passive: str) -> None:
+def stage_reconfig_plots(tables: list[str], out: Outputs) -> None:
     """m(t), the smallest singular value and dm/dt of both methods; joint rates; the passive joint."""
     runs = {df.attrs["capmap"]["method"]: df for df in map(datasets.read, tables)}
-    manipulability(runs, out_manipulability)
-    joint_rates(runs, out_rates)
-    passive_joint(runs, out_passive)
-    stage_logger(__name__, "reconfig plots").info(f"-> {out_manipulability}, {out_rates}, {out_passive}")
+    manipulability(runs, out["manipulability"])
+    joint_rates(runs, out["rates"])
+    passive_joint(runs, out["passive"])
+    stage_logger(__name__, "reconfig plots").info(f"-> {', '.join(out.values())}")
 
 
 def stage_reconfig_animation(tables: list[str], out_html: str, slice_json: str) -> None:

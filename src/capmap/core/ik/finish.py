@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from capmap.core.ik.polish import distinct, polish
+from capmap.core.ik.polish import PolishSettings, distinct, polish
 from capmap.core.kinematics import Chain
 
 __all__ = ["IKSolutions", "wrap_to_range", "RESIDUAL_TOL", "POLISHED", "DUPLICATE_TOL"]
@@ -51,7 +51,7 @@ def _finish(chain: Chain, theta: np.ndarray, ok: np.ndarray, T_target: np.ndarra
     flat = np.where(ok[..., None], theta, 0.0).reshape(-1, n)
     # Newton steps (``polish``, compiled) for the candidates not already at rounding level, their residuals
     idx = np.flatnonzero(ok.reshape(-1) & np.all(np.isfinite(flat), axis=1))
-    flat[idx], err = polish(chain.X, flat[idx], T_target, idx // K, polish_steps, POLISHED)
+    flat[idx], err = polish(chain.X, flat[idx], T_target, idx // K, PolishSettings(polish_steps, POLISHED))
     wrapped, inside = wrap_to_range(flat[idx], lower, upper)
     good = np.zeros(N * K, dtype=bool)
     good[idx] = ((np.linalg.norm(err[:, :3], axis=1) <= tol) & (np.linalg.norm(err[:, 3:], axis=1) <= tol)

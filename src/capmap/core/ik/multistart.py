@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from capmap.core.ik.finish import POLISHED
-from capmap.core.ik.polish import polish
+from capmap.core.ik.polish import PolishSettings, polish
 from capmap.core.kinematics import Chain, pose_error
 
 __all__ = ["newton", "multi_start"]
@@ -53,6 +53,6 @@ def multi_start(chain: Chain, T_target: np.ndarray, lower: np.ndarray, upper: np
     theta = np.broadcast_to(starts, (N, n_starts, n)).reshape(-1, n).copy()
     which = np.repeat(np.arange(N), n_starts)
     targets = np.ascontiguousarray(T_target, dtype=float)
-    theta, _ = polish(chain.X, theta, targets, which, 40, POLISHED, give_up=np.inf, damping=1e-2)
-    theta, _ = polish(chain.X, theta, targets, which, 5, POLISHED, give_up=np.inf)
+    theta, _ = polish(chain.X, theta, targets, which, PolishSettings(40, POLISHED, give_up=np.inf, damping=1e-2))
+    theta, _ = polish(chain.X, theta, targets, which, PolishSettings(5, POLISHED, give_up=np.inf))
     return theta.reshape(N, n_starts, n), np.ones((N, n_starts), dtype=bool)

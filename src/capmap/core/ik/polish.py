@@ -8,11 +8,25 @@ Newton steps dq = J^T (J J^T + damping^2 I)^-1 e (damping 0 unless asked; each j
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-__all__ = ["polish", "distinct"]
+__all__ = ["PolishSettings", "polish", "distinct"]
+
+
+@dataclass(frozen=True)
+class PolishSettings:
+    """How :func:`polish` steps: up to ``steps`` Newton steps per candidate, stopping once max |error|
+    <= done_tol (m, rad); after two steps going on only while max |error| < give_up (m, rad: what has
+    not come close by then is another branch's start or no solution); ``damping`` (m, rad): the steps
+    solve J J^T + damping^2 I."""
+
+    steps: int
+    done_tol: float
+    give_up: float = 0.1
+    damping: float = 0.0
 
 
 @numba.njit(cache=True)
@@ -140,20 +154,18 @@ def _polish(X, theta, targets, which, steps, done_tol, give_up, damping2, err_ou
         err_out[m] = err
 
 
-def polish(X: np.ndarray, theta: np.ndarray, targets: np.ndarray, which: np.ndarray, steps: int,
-           done_tol: float, give_up: float = 0.1, damping: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def polish(X: np.ndarray, theta: np.ndarray, targets: np.ndarray, which: np.ndarray,
+           settings: PolishSettings) -> tuple[np.ndarray, np.ndarray]:
     """Newton-polished candidates theta (M, n) rad of the chain X (n+1, 4, 4) toward the poses
-    targets[which] ((P, 4, 4), which (M,) int) and their final errors (M, 6) [m; rad].
-
-    Each candidate takes up to ``steps`` steps, stopping once max |error| <= done_tol; after two
-    steps it goes on only while max |error| < give_up (what has not come close by then is another
-    branch's start or no solution). ``damping`` (m, rad): the steps solve J J^T + damping^2 I."""
+    targets[which] ((P, 4, 4), which (M,) int) and their final errors (M, 6) [m; rad], stepped as
+    ``settings`` says."""
+    s = settings
     theta = np.ascontiguousarray(theta, dtype=float).copy()
     err = np.empty((len(theta), 6))
     if len(theta):
         _polish(np.ascontiguousarray(X, dtype=float), theta, np.ascontiguousarray(targets, dtype=float),
-                np.ascontiguousarray(which, dtype=np.int64), int(steps), float(done_tol), float(give_up),
-                float(damping) ** 2, err)
+                np.ascontiguousarray(which, dtype=np.int64), int(s.steps), float(s.done_tol), float(s.give_up),
+                float(s.damping) ** 2, err)
     return theta, err
 
 

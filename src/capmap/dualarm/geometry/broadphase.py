@@ -11,20 +11,55 @@ Tested against every pair's exact distance in tests/dualarm/test_fddp.py.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numba
 import numpy as np
 
 from capmap.dualarm.geometry.distance import _pointtri_uv, segpoint
 
-__all__ = ["MIN_GROUP", "static_balls", "pair_groups", "group_bound"]
+__all__ = ["MIN_GROUP", "SegmentPrims", "TrianglePrims", "BodyBalls", "static_balls", "pair_groups", "group_bound"]
 
 MIN_GROUP = 2  # a single pair is tested on its own (a group's test would only add one)
 
 
-def static_balls(seg_f: np.ndarray, seg_j: np.ndarray, seg_r: np.ndarray, seg_body: np.ndarray, tri_f: np.ndarray,
-                 tri_j: np.ndarray, tri_r: np.ndarray, tri_body: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(seg_g (S,), tri_g (T,): each static primitive's body ball, -1 for a moving one; balls (G, 4): centre m
-    and reach m, over the body's static segments (S, 6 ends), triangles (T, 9 vertices) and their radii)."""
+@dataclass(frozen=True, eq=False)
+class SegmentPrims:
+    """S segments (capsule cores): f (S, 6) the ends a, b m (in their joint's frame; the world for joint 0),
+    j (S,) int their joint (0: static), r (S,) their radii m, body (S,) the named body each belongs to."""
+
+    f: np.ndarray
+    j: np.ndarray
+    r: np.ndarray
+    body: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class TrianglePrims:
+    """T swept triangles: f (T, 9) the vertices m (in their joint's frame; the world for joint 0), j (T,) int
+    their joint (0: static), r (T,) their radii m, body (T,) the named body each belongs to."""
+
+    f: np.ndarray
+    j: np.ndarray
+    r: np.ndarray
+    body: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class BodyBalls:
+    """The static bodies' balls: seg_g (S,), tri_g (T,) int: each static primitive's body ball, -1 for a moving
+    one; balls (G, 4): centre m and reach m of each body."""
+
+    seg_g: np.ndarray
+    tri_g: np.ndarray
+    balls: np.ndarray
+
+
+def static_balls(seg: SegmentPrims, tri: TrianglePrims) -> BodyBalls:
+    """Each static body's ball (centre m and reach m) over its static segments (S, 6 ends), triangles (T, 9
+    vertices) and their radii, and which ball each static primitive belongs to."""
+    seg_f, seg_j, seg_r, seg_body = seg.f, seg.j, seg.r, seg.body
+    tri_f, tri_j, tri_r, tri_body = tri.f, tri.j, tri.r, tri.body
     seg_g, tri_g = np.full(len(seg_f), -1, np.int64), np.full(len(tri_f), -1, np.int64)
     names = sorted({str(b) for b in seg_body[seg_j == 0]} | {str(b) for b in tri_body[tri_j == 0]})
     balls = np.zeros((len(names), 4))
@@ -37,17 +72,18 @@ def static_balls(seg_f: np.ndarray, seg_j: np.ndarray, seg_r: np.ndarray, seg_bo
         far_s = np.linalg.norm(seg_f[s].reshape(-1, 2, 3) - c, axis=2).max(axis=1) + seg_r[s]
         far_t = np.linalg.norm(tri_f[t].reshape(-1, 3, 3) - c, axis=2).max(axis=1) + tri_r[t]
         balls[g, :3], balls[g, 3] = c, np.concatenate([far_s, far_t]).max()
-    return seg_g, tri_g, balls
+    return BodyBalls(seg_g, tri_g, balls)
 
 
 def pair_groups(rows: np.ndarray, seg_j: np.ndarray, seg_r: np.ndarray, tri_j: np.ndarray, tri_r: np.ndarray,
-                seg_g: np.ndarray, tri_g: np.ndarray, balls: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                bodies: BodyBalls) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(order (P,): the pair rows (kind, first, second) grouped; groups (G, 4) int: start and end in
     ``order``, the column of ``rows`` naming the moving primitive (0: test each pair on its own) and 1
     when that primitive is a triangle; spheres (G, 4): the body's centre m and its reach plus the moving
-    primitive's radius m)."""
-    return _pair_groups(np.ascontiguousarray(rows, dtype=np.int64), seg_j, seg_r, tri_j, tri_r, seg_g, tri_g, balls,
-                        MIN_GROUP)
+    primitive's radius m). seg_j (S,), tri_j (T,): the primitives' joints (0: static); seg_r (S,), tri_r (T,):
+    their radii m; ``bodies``: :func:`static_balls`'."""
+    return _pair_groups(np.ascontiguousarray(rows, dtype=np.int64), seg_j, seg_r, tri_j, tri_r, bodies.seg_g,
+                        bodies.tri_g, bodies.balls, MIN_GROUP)
 
 
 @numba.njit(cache=True)

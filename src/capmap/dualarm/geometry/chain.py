@@ -18,7 +18,7 @@ import numba
 import numpy as np
 import pinocchio as pin
 
-from capmap.dualarm.geometry.broadphase import pair_groups, static_balls
+from capmap.dualarm.geometry.broadphase import BodyBalls, SegmentPrims, TrianglePrims, pair_groups, static_balls
 from capmap.dualarm.geometry.collision import Pairs, Primitives
 from capmap.dualarm.geometry.distance import segpoint, segseg, segtri
 
@@ -94,7 +94,7 @@ def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> P
            prims.seg_joint.astype(np.int64), prims.seg_r.astype(float))
     tri = (np.ascontiguousarray(prims.tri_v.reshape(-1, 9), dtype=float), prims.tri_joint.astype(np.int64),
            prims.tri_r.astype(float))
-    groups = static_balls(*seg, prims.seg_body, *tri, prims.tri_body)
+    groups = static_balls(SegmentPrims(*seg, prims.seg_body), TrianglePrims(*tri, prims.tri_body))
     v = tri[0].reshape(-1, 3, 3)
     ctr = v.mean(axis=1)
     tri_reach = np.linalg.norm(v - ctr[:, None], axis=2).max(axis=1, initial=0.0)
@@ -110,7 +110,7 @@ def pack(model: pin.Model, frames: tuple[int, int, int], prims: Primitives) -> P
             reach[j, chain_i[l, 1]] = length
             length += np.linalg.norm(chain_f[l, 9:12])
             l = chain_i[l, 0]
-    return Packed(chain_f, chain_i, moves, frame_f, frame_j, *seg, *tri, *groups, reach,
+    return Packed(chain_f, chain_i, moves, frame_f, frame_j, *seg, *tri, groups.seg_g, groups.tri_g, groups.balls, reach,
                   _lever_table(seg[0], seg[1], tri[0], tri[1], moves, reach))
 
 
@@ -144,7 +144,7 @@ def _lever_table(seg_f: np.ndarray, seg_j: np.ndarray, tri_f: np.ndarray, tri_j:
 def groups_of(packed: Packed, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The pair rows' groups (order, groups, spheres) of :func:`capmap.dualarm.geometry.broadphase.pair_groups`."""
     pk = packed
-    return pair_groups(rows, pk.seg_j, pk.seg_r, pk.tri_j, pk.tri_r, pk.seg_g, pk.tri_g, pk.balls)
+    return pair_groups(rows, pk.seg_j, pk.seg_r, pk.tri_j, pk.tri_r, BodyBalls(pk.seg_g, pk.tri_g, pk.balls))
 
 
 @_jit

@@ -21,14 +21,16 @@ import numpy as np
 import pinocchio as pin
 
 from capmap.dualarm.geometry.collision import CollisionModel, Pairs, Primitives
+from capmap.dualarm.ocp.settings import StopRule
 from capmap.dualarm.ocp.task import AssemblyTask
 from capmap.dualarm.scene.cloud import Envelope
 from capmap.dualarm.scene.robot import DualArm
 from capmap.dualarm.scene.solids import Scene
 
-__all__ = ["Assembly", "assemble", "candidate_pairs", "reference_path", "arm_ik", "warm_start", "clearance_at"]
+__all__ = ["Assembly", "assemble", "candidate_pairs", "reference_path", "IK_STOP", "arm_ik", "warm_start", "clearance_at"]
 
 OBJ = object
+IK_STOP = StopRule(60, 1e-10)  # arm_ik: Newton steps at most, and the pose error norm (m and rad) that ends them
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,10 +153,11 @@ def candidate_pairs(robot: DualArm, scene: Scene, env: Envelope, n_panel_edges: 
 
 
 def arm_ik(model: pin.Model, data: pin.Data, frame: int, target: pin.SE3, q: np.ndarray, cols: slice,
-           iters: int = 60, tol: float = 1e-10) -> tuple[np.ndarray, float]:
-    """Damped least-squares Newton on one arm's joints (``cols``) to put ``frame`` at ``target``:
-    the smallest joint change (no null-space motion), so a path stays continuous; returns
-    (q, final pose error norm)."""
+           stop: StopRule = IK_STOP) -> tuple[np.ndarray, float]:
+    """Damped least-squares Newton on one arm's joints (``cols`` of q (nq,) rad) to put ``frame`` at ``target``:
+    the smallest joint change (no null-space motion), so a path stays continuous; at most ``stop.iterations``
+    steps, ended once the pose error norm is below ``stop.tolerance``; returns (q, final pose error norm)."""
+    iters, tol = stop.iterations, stop.tolerance
     q = q.copy()
     for _ in range(iters):
         pin.framesForwardKinematics(model, data, q)

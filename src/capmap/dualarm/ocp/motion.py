@@ -13,7 +13,7 @@ import pandas as pd
 
 from capmap.dualarm.ocp.assembly import Assembly, clearance_at, warm_start
 from capmap.dualarm.ocp.evaluate import active_pairs, fine_grid, node_errors, safety
-from capmap.dualarm.ocp.settings import ALSettings, Weights
+from capmap.dualarm.ocp.settings import ALSettings, SolveOptions, Weights
 from capmap.dualarm.ocp.solver import initial_guess, solve
 from capmap.dualarm.ocp.torques import HeldPart, held_torques
 from capmap.dualarm.scene.robot import DualArm
@@ -24,6 +24,10 @@ __all__ = ["ACTIVE_WITHIN_M", "AssemblyMotion", "key_poses", "plan_assembly", "m
            "torque_table", "motion_lines"]
 
 ACTIVE_WITHIN_M = 0.01  # a collision constraint is reported active within 1 cm
+
+
+def _quiet(_: str) -> None:
+    """No progress lines."""
 
 
 def key_poses(asm: Assembly, qs: np.ndarray, progress: Callable[[str], None] = lambda _: None
@@ -62,18 +66,18 @@ class AssemblyMotion:
 
 
 def plan_assembly(asm: Assembly, robot: DualArm, weights: Weights, solver: ALSettings, fine_factor: int,
-                  progress: Callable[[str], None] = lambda _: None, compiled: bool = True,
-                  warm: np.ndarray | None = None) -> AssemblyMotion:
+                  options: SolveOptions = SolveOptions(), warm: np.ndarray | None = None) -> AssemblyMotion:
     """Key poses, warm start (``warm`` (N + 1, nq) rad: :func:`capmap.dualarm.ocp.assembly.warm_start`'s, when
     already computed), solve within the joint limits, evaluation on the nodes and on a grid ``fine_factor``
-    times finer; ``compiled=False``: Pinocchio's node models (the reference)."""
+    times finer; ``options`` (:func:`capmap.dualarm.ocp.solver.solve`'s): ``log`` the progress lines,
+    ``compiled=False``: Pinocchio's node models (the reference)."""
+    progress = options.log or _quiet
     t0 = time.perf_counter()
     qs = warm_start(asm) if warm is None else warm
     clear = key_poses(asm, qs, progress)
     xs0, us0 = initial_guess(qs, asm.task.dt)
     t1 = time.perf_counter()
-    sol = solve(asm, weights, (robot.q_lower, robot.q_upper, robot.v_max), solver, xs0, us0, log=progress,
-                compiled=compiled)
+    sol = solve(asm, weights, (robot.q_lower, robot.q_upper, robot.v_max), solver, xs0, us0, options)
     solve_s = time.perf_counter() - t1
     nq = asm.model.nq
     err = node_errors(asm, sol.xs)

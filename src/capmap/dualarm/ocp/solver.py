@@ -29,7 +29,7 @@ from capmap.dualarm.ocp.assembly import Assembly
 from capmap.dualarm.ocp.compiled_nodes import CompiledNodeModel
 from capmap.dualarm.ocp.crocoddyl_nodes import Context, NodeModel
 from capmap.dualarm.ocp.fddp import ALPHAS, C_VALUES, EQ_AT, G_VALUES, IN_AT, LAM_EQ, LAM_IN, evaluate_nodes, fddp, pack_nodes
-from capmap.dualarm.ocp.settings import ALSettings, Weights
+from capmap.dualarm.ocp.settings import ALSettings, SolveOptions, StopRule, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
            "all_distances", "context", "node_model", "inner_stop"]
@@ -237,12 +237,11 @@ class _CompiledInner:
 
 
 def solve(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], settings: ALSettings,
-          xs0: np.ndarray, us0: np.ndarray, log=None, inequalities: bool = True, compiled: bool = True) -> Solution:
-    """The augmented-Lagrangian loop (module docstring) from the initial guess xs0, us0;
-    ``inequalities=False``: the equality-only problem (no collision pairs, no limits);
-    ``compiled=False``: Pinocchio's node models and Crocoddyl's FDDP (the reference) instead of the
-    compiled ones and the compiled FDDP."""
-    st = settings
+          xs0: np.ndarray, us0: np.ndarray, options: SolveOptions = SolveOptions()) -> Solution:
+    """The augmented-Lagrangian loop (module docstring) from the initial guess xs0 (N + 1, 2 nq), us0 (N, nq) within
+    ``limits`` (q lower, q upper rad, v max rad/s, each (nq,)); ``options``: its log, the equality-only problem
+    (``inequalities=False``), Pinocchio's node models and Crocoddyl's FDDP (``compiled=False``: the reference)."""
+    st, log, inequalities, compiled = settings, options.log, options.inequalities, options.compiled
     ctx = context(asm, weights, limits, compiled, log, mu=float(st.mu0), with_limits=inequalities)
     if not inequalities:
         asm = replace(asm, pairs=NO_PAIRS)
@@ -323,17 +322,18 @@ class CSQPResult:
 
 
 def solve_csqp(asm: Assembly, weights: Weights, limits: tuple[np.ndarray, np.ndarray, np.ndarray], xs0: np.ndarray,
-               us0: np.ndarray, iterations: int, tolerance: float, compiled: bool = True) -> CSQPResult:
-    """The equality-only problem (the same costs; the task constraints as the nodes' constraint rows,
-    bounds 0; no collisions or limits) by mim-solvers' CSQP from xs0, us0."""
+               us0: np.ndarray, stop: StopRule, compiled: bool = True) -> CSQPResult:
+    """The equality-only problem (the same costs; the task constraints as the nodes' constraint rows, bounds 0;
+    no collisions or limits) by mim-solvers' CSQP from xs0 (N + 1, 2 nq), us0 (N, nq); ``stop``: SQP iterations
+    at most, and the KKT residual that ends them."""
     ctx = context(asm, weights, limits, compiled, with_limits=False)
     models = [node_model(ctx, k, NO_PAIRS, mode="constrained") for k in range(asm.task.N + 1)]
     problem = crocoddyl.ShootingProblem(xs0[0].copy(), models[:-1], models[-1])
     csqp = mim_solvers.SolverCSQP(problem)
     csqp.max_qp_iters, csqp.eps_abs, csqp.eps_rel = 1000, 1e-9, 0.0
     csqp.reset_rho = True  # without it the ADMM penalty carried over stalls the KKT residual near 3e-4
-    csqp.termination_tolerance = tolerance
-    converged = csqp.solve(list(xs0), list(us0), iterations, False)
+    csqp.termination_tolerance = stop.tolerance
+    converged = csqp.solve(list(xs0), list(us0), stop.iterations, False)
     return CSQPResult(np.array(csqp.xs), np.array(csqp.us), int(csqp.iter), bool(converged))
 
 

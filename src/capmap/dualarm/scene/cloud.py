@@ -26,7 +26,7 @@ from capmap.dualarm.geometry.distance import segment_segment, segment_triangle
 from capmap.errors import CapmapError
 
 __all__ = ["FitSettings", "Envelope", "fit_envelope", "grow_to_cover", "normals", "min_area_rectangle", "uncovered",
-           "depth"]
+           "depth", "radius_span"]
 
 
 @dataclass(frozen=True)
@@ -276,3 +276,8 @@ def depth(points: np.ndarray, env: Envelope) -> np.ndarray:
         d = segment_segment(points, points, s[:, 0], s[:, 1]).distance - env.seg_radius[k]
         np.minimum(margin, d, out=margin)
     return margin
+
+
+def radius_span(r: np.ndarray) -> str:
+    """The range of radii r (n,) m for a log line, in mm ('12-40 mm'; '-' when there are none)."""
+    return f"{1e3 * r.min():.0f}-{1e3 * r.max():.0f} mm" if len(r) else "-"

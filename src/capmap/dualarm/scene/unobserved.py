@@ -9,6 +9,7 @@ that the check subtracts: its distances are lower bounds for the whole volumes, 
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numba
@@ -18,10 +19,12 @@ from scipy.ndimage import distance_transform_edt
 
 from capmap.dualarm.geometry.chain import joint_placements, pack
 from capmap.dualarm.ocp.assembly import Assembly
+from capmap.dualarm.scene.cloud import Envelope, depth
 from capmap.dualarm.scene.robot import DualArm
-from capmap.dualarm.scene.unknown import Grid
+from capmap.dualarm.scene.unknown import Grid, UnknownSettings
 
-__all__ = ["swept_balls", "UnobservedCheck", "unobserved_check", "unknown_mask", "viewpoints_that_see"]
+__all__ = ["swept_balls", "UnobservedCheck", "unobserved_check", "unknown_mask", "viewpoints_that_see",
+           "camera_suggestion"]
 
 
 def swept_balls(asm: Assembly, robot: DualArm, panel_corners: np.ndarray, qs: np.ndarray,
@@ -192,3 +195,17 @@ def viewpoints_that_see(region: np.ndarray, grid: Grid, mask: np.ndarray, depth_
         ok.append(c)
     ok = np.array(ok).reshape(-1, 3)
     return ok[np.argsort(np.linalg.norm(ok - around, axis=1))]
+
+
+def camera_suggestion(msg: str, u: UnknownSettings, env: Envelope, boxes: np.ndarray, around: np.ndarray) -> str:
+    """Where a camera would see the unknown region named in ``msg`` ('unknown [x0 x1, y0 y1, z0 z1]', m): the
+    candidates of :func:`viewpoints_that_see` nearest ``around`` (3,) m (the configured viewpoints' mean), in the
+    work volume of ``u`` with the unknown boxes (B, 2, 3) m and the fitted envelope ``env`` in the way."""
+    x = [float(v) for v in re.search(r"unknown \[([-\d.]+) ([-\d.]+), ([-\d.]+) ([-\d.]+), ([-\d.]+) ([-\d.]+)\]",
+                                     msg).groups()]
+    region = np.array([[x[0], x[2], x[4]], [x[1], x[3], x[5]]])
+    grid = Grid.over(u.work_lower, u.work_upper, u.voxel_m)
+    seen = viewpoints_that_see(region, grid, unknown_mask(grid, boxes), lambda p: depth(p, env), around)
+    if not len(seen):
+        return "no point of the work volume in the open has a line of sight to it"
+    return "a camera at " + " or ".join(str(np.round(v, 2).tolist()) for v in seen[:2]) + " m would see it"

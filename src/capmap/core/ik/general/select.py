@@ -55,7 +55,7 @@ from capmap.core.ik.general.elimination import (
     solve_formulation,
     structural_roots,
 )
-from capmap.core.ik.polish import _fk, distinct, polish
+from capmap.core.ik.polish import PolishSettings, _fk, distinct, polish
 from capmap.core.kinematics import Chain, inverse_transform
 
 __all__ = ["GeneralSolver", "prepare", "candidates", "four_parallel", "UNION"]
@@ -65,6 +65,7 @@ FOUR_PARALLEL = np.deg2rad(5.0)  # rad: see four_parallel (the solutions lost la
 NEARBY = np.deg2rad(10.0)  # rad: solutions this close to four parallel axes seed _restarts_nearby
 NEARBY_STEPS = np.array([0.15, 0.4, 0.8, 1.6])  # rad: the seeds' distances from a solution, both ways
 RESCUE_STEPS = 40  # Newton steps (each joint's clipped to 0.5 rad) from a candidate that did not converge
+_RESCUE = PolishSettings(RESCUE_STEPS, POLISHED, give_up=np.inf)  # those steps, never given up
 UNION = 2  # formulations (eliminating different joints where the chain allows) that solve every pose
 
 
@@ -118,7 +119,7 @@ def _polished(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, st
     N, K = ok.shape
     flat = theta.reshape(-1, 6)
     idx = np.flatnonzero(ok.reshape(-1))
-    flat[idx], err = polish(chain.X, flat[idx], T, idx // K, steps, POLISHED)
+    flat[idx], err = polish(chain.X, flat[idx], T, idx // K, PolishSettings(steps, POLISHED))
     valid = np.zeros(N * K, dtype=bool)
     valid[idx] = _converged(err, tol)
     return valid.reshape(N, K)
@@ -171,7 +172,7 @@ def _rescued(chain: Chain, theta: np.ndarray, ok: np.ndarray, T: np.ndarray, ste
     rows, cols = np.nonzero(ok & ~valid)
     if not len(rows):
         return np.zeros((N, 0, 6)), np.zeros((N, 0), dtype=bool), np.zeros(N, dtype=bool), valid
-    start, err = polish(chain.X, theta[rows, cols], T, rows, RESCUE_STEPS, POLISHED, give_up=np.inf)
+    start, err = polish(chain.X, theta[rows, cols], T, rows, _RESCUE)
     conv = _converged(err, tol)
     extra, extra_ok = _per_pose(rows, start, conv, N)
     wrap = np.mod(np.concatenate([theta, extra], axis=1) + np.pi, 2 * np.pi) - np.pi
@@ -204,7 +205,7 @@ def _restarts_nearby(chain: Chain, q: np.ndarray, rows: np.ndarray, T: np.ndarra
     step = np.concatenate([NEARBY_STEPS, -NEARBY_STEPS])
     seeds = (q[:, None, None] + step[None, None, :, None] * V[:, :, None]).reshape(-1, 6)
     which = np.repeat(rows, 6 * len(step))
-    reached, err = polish(chain.X, seeds, T, which, RESCUE_STEPS, POLISHED, give_up=np.inf)
+    reached, err = polish(chain.X, seeds, T, which, _RESCUE)
     conv = _converged(err, tol)
     return _per_pose(which[conv], reached[conv], conv[conv], len(T))  # only what converged: 48 seeds per solution
 

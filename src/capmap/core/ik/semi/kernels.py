@@ -5,8 +5,8 @@ a joint-0 angle, the four branches of joints 1-5 in closed form and the residual
 compiled with numba, and carries angles as cosines and sines (about 0.3 us per evaluation
 against 13 us for the same steps in numpy).
 
-Chain constants are packed by :func:`pack` into one float array ``c`` so the kernel takes
-plain arrays:
+Chain constants (:class:`SemiConstants`) are packed by :func:`pack` into one float array ``c`` so
+the kernel takes plain arrays:
     c[0:112]    X (7, 4, 4), the chain's fixed transforms
     c[112:115]  u: the wrist point in the tip frame (X[6]^-1 (0, 0, s*))
     c[115:118]  wc: the wrist point in the link of joint 3
@@ -18,19 +18,52 @@ plain arrays:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-__all__ = ["pack", "evaluate", "evaluate_grid", "evaluate_branch", "residuals", "branch_angles"]
+from capmap.core.kinematics import inverse_transform
+
+__all__ = ["SemiConstants", "pack", "evaluate", "evaluate_grid", "evaluate_branch", "residuals", "branch_angles"]
 
 _jit = numba.njit(cache=True)
 _inline = numba.njit(cache=True, inline="always")
 
 
-def pack(X: np.ndarray, u, wc, n1, t1, a, h: float, sigma: float, reach: float) -> np.ndarray:
-    """The kernel's constant array (130,) from the chain transforms X (7, 4, 4) and its constants."""
-    return np.concatenate([np.asarray(X, dtype=float).ravel(), u, wc, n1, t1, a, [h, sigma, reach]])
+@dataclass(frozen=True)
+class SemiConstants:
+    """Fixed quantities of a ``semi_analytic_shape`` chain (all but s* packed into the kernel's array)."""
+
+    s_star: float  # axis 5 meets axis 4 at (0, 0, s*) in frame 5
+    wc: np.ndarray  # (3,) that point in the link of joint 3
+    h: float  # its coordinate along the parallel axes (frame 2)
+    n1: np.ndarray  # (3,) axis of joint 2 in frame 1
+    t1: np.ndarray  # (3,) origin of frame 2 in frame 1
+    sigma: float  # +-1: axis 3 along or against axis 2
+    a: np.ndarray  # (3,) the parallel axis in frame 4 coordinates
+    reach: float  # m, in-plane distance from axis 2 to axis 3
+
+    def packed(self, X: np.ndarray) -> np.ndarray:
+        """The kernel's constant array (130,) of the chain with fixed transforms X (7, 4, 4) (:func:`pack`)."""
+        u = (inverse_transform(X[6]) @ np.array([0, 0, self.s_star, 1.0]))[:3]
+        return pack(X, u, self)
+
+    @classmethod
+    def of(cls, X: np.ndarray) -> "SemiConstants":
+        """From the chain's fixed transforms X (7, 4, 4)."""
+        p5, d5 = X[5][:3, 3], X[5][:3, 2]
+        s_star = -(p5[:2] @ d5[:2]) / (d5[:2] @ d5[:2])
+        wc = (X[4] @ np.array([0, 0, p5[2] + s_star * d5[2], 1.0]))[:3]
+        return cls(s_star=float(s_star), wc=wc, h=float((X[3] @ np.append(wc, 1.0))[2]), n1=X[2][:3, 2],
+                   t1=X[2][:3, 3], sigma=float(X[3][2, 2]), a=X[4][2, :3], reach=float(np.hypot(*X[3][:2, 3])))
+
+
+def pack(X: np.ndarray, u: np.ndarray, semi: SemiConstants) -> np.ndarray:
+    """The kernel's constant array (130,) from the chain transforms X (7, 4, 4), the wrist point u (3,) m
+    in the tip frame and the chain's constants ``semi``."""
+    return np.concatenate([np.asarray(X, dtype=float).ravel(), u, semi.wc, semi.n1, semi.t1, semi.a,
+                           [semi.h, semi.sigma, semi.reach]])
 
 
 @_inline

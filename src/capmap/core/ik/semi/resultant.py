@@ -81,7 +81,7 @@ class SemiPolynomial:
     reversed: bool = False
 
 
-def _constants(chain: Chain, semi: "ik_semi._SemiConstants") -> tuple[np.ndarray, float]:
+def _constants(chain: Chain, semi: ik_kernels.SemiConstants) -> tuple[np.ndarray, float]:
     X = chain.X
     u = (np.linalg.inv(X[6]) @ np.array([0.0, 0.0, semi.s_star, 1.0]))[:3]
     S = np.diag([1.0, semi.sigma, semi.sigma])  # Rz(q2) R3 Rz(q3) = Rz(phi) S
@@ -194,7 +194,7 @@ def _prepare(chain: Chain, seed: int, reversed: bool = False) -> SemiPolynomial:
     """The chain's constants, its degree D (the highest harmonic of P above 1e-9 of the largest over
     ``_PREP_POSES`` seeded poses, sampled at 25 angles) and a seeded phase."""
     rng = np.random.default_rng(seed)
-    semi = ik_semi._SemiConstants.of(chain)
+    semi = ik_kernels.SemiConstants.of(chain.X)
     k, length = _constants(chain, semi)
     phase = float(rng.uniform(-np.pi, np.pi))
     T = chain.fk(rng.uniform(-np.pi, np.pi, (_PREP_POSES, 6)))
@@ -204,7 +204,7 @@ def _prepare(chain: Chain, seed: int, reversed: bool = False) -> SemiPolynomial:
     coef = np.abs(vals @ dft.T)
     harmonic = np.abs(np.arange(len(theta)) - (len(theta) - 1) // 2)
     degree = max(1, max(int(harmonic[row > 1e-9 * row.max()].max()) for row in coef if row.max() > 0))
-    return SemiPolynomial(chain, k, semi.packed(chain), degree, phase, length, reversed)
+    return SemiPolynomial(chain, k, semi.packed(chain.X), degree, phase, length, reversed)
 
 
 class Roots(NamedTuple):

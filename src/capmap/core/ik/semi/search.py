@@ -12,40 +12,12 @@ import numpy as np
 
 import capmap.core.ik.semi.kernels as ik_kernels
 from capmap.core.ik.multistart import newton
-from capmap.core.kinematics import Chain, inverse_transform
+from capmap.core.kinematics import Chain
 
 __all__ = ["search", "search_windows", "candidates", "SEARCH_STEPS"]
 
 SEARCH_STEPS = 720  # grid of the 1-D search over joint 0 (0.5 deg)
 _CHUNK_EVALS = 400_000  # (target, grid point) pairs per batch of the search: bounds memory (~0.1 GB)
-
-
-@dataclass(frozen=True)
-class _SemiConstants:
-    """Fixed quantities of a ``semi_analytic_shape`` chain (used by :mod:`capmap.core.ik.semi.kernels`)."""
-
-    s_star: float  # axis 5 meets axis 4 at (0, 0, s*) in frame 5
-    wc: np.ndarray  # (3,) that point in the link of joint 3
-    h: float  # its coordinate along the parallel axes (frame 2)
-    n1: np.ndarray  # (3,) axis of joint 2 in frame 1
-    t1: np.ndarray  # (3,) origin of frame 2 in frame 1
-    sigma: float  # +-1: axis 3 along or against axis 2
-    a: np.ndarray  # (3,) the parallel axis in frame 4 coordinates
-    reach: float  # m, in-plane distance from axis 2 to axis 3
-
-    def packed(self, chain: Chain) -> np.ndarray:
-        """The kernel's constant array (:func:`capmap.core.ik.semi.kernels.pack`)."""
-        u = (inverse_transform(chain.X[6]) @ np.array([0, 0, self.s_star, 1.0]))[:3]
-        return ik_kernels.pack(chain.X, u, self.wc, self.n1, self.t1, self.a, self.h, self.sigma, self.reach)
-
-    @classmethod
-    def of(cls, chain: Chain) -> "_SemiConstants":
-        X = chain.X
-        p5, d5 = X[5][:3, 3], X[5][:3, 2]
-        s_star = -(p5[:2] @ d5[:2]) / (d5[:2] @ d5[:2])
-        wc = (X[4] @ np.array([0, 0, p5[2] + s_star * d5[2], 1.0]))[:3]
-        return cls(s_star=float(s_star), wc=wc, h=float((X[3] @ np.append(wc, 1.0))[2]), n1=X[2][:3, 2],
-                   t1=X[2][:3, 3], sigma=float(X[3][2, 2]), a=X[4][2, :3], reach=float(np.hypot(*X[3][:2, 3])))
 
 
 def _residual(c: np.ndarray, T: np.ndarray, target: np.ndarray, q0: np.ndarray, branch: np.ndarray):
@@ -68,7 +40,7 @@ def _semi_curve(c: np.ndarray, T: np.ndarray, q0: np.ndarray, curve: np.ndarray)
 def search(chain: Chain, T: np.ndarray, steps: int = SEARCH_STEPS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Candidate solutions (N, K, 6) rad for targets T (N, 4, 4), their validity (N, K), and which
     of them are starts at a (near-)double root that still need Newton steps (N, K)."""
-    c = _SemiConstants.of(chain).packed(chain)
+    c = ik_kernels.SemiConstants.of(chain.X).packed(chain.X)
     T = np.ascontiguousarray(T)
     N = len(T)
     step = 2 * np.pi / steps
@@ -84,7 +56,7 @@ def search_windows(chain: Chain, T: np.ndarray, target: np.ndarray, lo: np.ndarr
                    points: int = 16) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """As :func:`search`, on the intervals [lo, hi] (W,) rad of joint 0 of targets T[target] (W,):
     ``points`` + 1 samples per interval on each branch, then the same refinement."""
-    c = _SemiConstants.of(chain).packed(chain)
+    c = ik_kernels.SemiConstants.of(chain.X).packed(chain.X)
     T = np.ascontiguousarray(T)
     W = len(target)
     x = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, points + 1)  # (W, P)
