@@ -390,3 +390,45 @@ def test_what_a_job_met_first_costs_no_output_through_snakemake(run_dir, tmp_pat
     failures = [f"{j[4]}: {err}" for j, res in results if (err := _check(res, j[1], j[2]) or _check_absent(res, j[3]))]
     assert not failures, "\n".join(failures)
     assert _tree_digest(work / "results") == before
+
+
+@pytest.mark.slow  # on a copy of a finished tiny run: .ci/run runs it (-m slow)
+def test_a_path_the_arm_cannot_follow_is_a_result_and_the_run_succeeds(run_dir, tmp_path):
+    """The ground robot's shoulder pan with 10^6 N m of Coulomb friction (a finite drive term; its limit is
+    14 N m): the arm cannot start forward. ``snakemake all`` succeeds; the follow case's summary says why,
+    its figures show it; every output that does not depend on the ground case is byte-identical."""
+    import shutil
+
+    from tests.workflow.reliability_cases import _drives
+
+    work = tmp_path / "run"
+    shutil.copytree(run_dir[0], work, symlinks=True)
+    before = _tree_digest(work / "results")
+    cfg = _drives(tmp_path, "stuck.yaml", friction={"coulomb_nm": 1e6, "viscous_nms": 1.5})
+    res = _run(work, cfg)
+    assert res.returncode == 0, res.stderr[-3000:]
+    after = _tree_digest(work / "results")
+    run = next(p for p in (work / "results").iterdir() if p.is_dir())
+    import pandas as pd
+
+    row = pd.read_csv(run / "follow" / "ground" / "summary.csv").iloc[0]
+    assert not row.feasible and "needs 1000000.00 N m, above its limit 14 N m" in row.reason
+    changed = {k for k in before if after.get(k) != before[k]}
+    allowed = ("/follow/ground/", "/follow/summary.", "/report/", "/catalogue.parquet", "/logs/")  # and the logs of those jobs
+    assert changed, "nothing reran"
+    unexpected = sorted(k for k in changed if not any(a in "/" + k for a in allowed))
+    assert not unexpected, unexpected
+
+
+@pytest.mark.slow
+def test_capmap_run_refuses_a_template_over_a_finished_run(run_dir, tmp_path):
+    """`capmap run` with a YTE config over a finished run: one line, nothing run, every output byte-identical."""
+    work, cfg = run_dir
+    before = _tree_digest(work / "results")
+    yte = tmp_path / "yte.yaml"
+    yte.write_text("__use_yte__: true\n" + cfg.read_text().replace("run: tiny", f"run: ?__import__('os').system("
+                                                                                f"'touch {tmp_path}/pwned')"))
+    res = subprocess.run(["capmap", "run", str(yte)], capture_output=True, text=True, timeout=300, cwd=work)
+    assert _check(res, "capmap does not evaluate YTE templates", "yte.yaml") is None, res.stderr
+    assert not (tmp_path / "pwned").exists()
+    assert _tree_digest(work / "results") == before
