@@ -19,7 +19,7 @@ from capmap.dualarm.scene.solids import Scene
 from capmap.dualarm.scene.unknown import Grid, near_boxes
 from capmap.dualarm.scene.unobserved import UnobservedCheck, swept_balls, unknown_mask, unobserved_check
 
-__all__ = ["SOLVES", "plan_outside_unknown"]
+__all__ = ["SOLVES", "plan_outside_unknown", "unobserved_reason"]
 
 SOLVES = 3  # solves at most, each with the unknown boxes near the motion before it
 
@@ -53,3 +53,13 @@ def plan_outside_unknown(inputs: JobInputs, boxes: np.ndarray, ps: PlanSettings,
             break
         use |= more
     return robot, inputs.scene, asm, m, check, int(use.sum()), len(boxes)
+
+
+def unobserved_reason(check: UnobservedCheck) -> str:
+    """Why a planned motion is not a result to execute, when it reaches into space no camera observed after
+    the :data:`SOLVES` solves ("" when it stays outside)."""
+    if check.distance >= 0:
+        return ""
+    return (f"the optimised motion reaches {1e3 * -check.distance:.1f} mm into space no camera observed "
+            f"({check.body} near {np.round(check.voxel_centre, 2).tolist()} m) after {SOLVES} solves with the unknown "
+            "boxes near it; add a viewpoint of dualarm.cloud.viewpoints_m that sees that region")

@@ -10,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["plt", "save"]
+__all__ = ["plt", "save", "not_done_figure"]
 
 
 def save(fig, out_png: str | Path, rect: tuple[float, float, float, float] | None = None) -> None:
@@ -21,3 +21,15 @@ def save(fig, out_png: str | Path, rect: tuple[float, float, float, float] | Non
     Path(out_png).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out_png, dpi=110)
     plt.close(fig)
+
+
+def not_done_figure(title: str, reason: str, out_png: str | Path) -> None:
+    """A figure for a result that is "cannot be done": its title and why, in words (no axes to read)."""
+    import textwrap
+
+    fig, ax = plt.subplots(figsize=(10, 3.6))
+    ax.set_axis_off()
+    ax.set_title(title, fontsize=13)
+    ax.text(0.5, 0.5, textwrap.fill(reason, 100), ha="center", va="center", fontsize=9.5, wrap=True,
+            transform=ax.transAxes, bbox={"boxstyle": "round", "facecolor": "#fdecea", "edgecolor": "tab:red"})
+    save(fig, out_png)

@@ -13,12 +13,12 @@ import pandas as pd
 from capmap.dualarm.build import al_settings, job_inputs, job_setup, plan_settings, planning_error
 from capmap.dualarm.ocp.assembly import warm_start
 from capmap.dualarm.ocp.evaluate import node_errors
-from capmap.dualarm.ocp.motion import motion_lines, motion_quantities, motion_tables, torque_table
+from capmap.dualarm.ocp.motion import motion_lines, motion_quantities, motion_tables, no_motion_tables, torque_table
 from capmap.dualarm.ocp.settings import SolveOptions, StopRule, Weights
 from capmap.dualarm.ocp.solver import equality_cost, initial_guess, solve, solve_csqp
-from capmap.dualarm.plan import plan_outside_unknown
+from capmap.dualarm.plan import plan_outside_unknown, unobserved_reason
 from capmap.dualarm.tables import unknown_boxes
-from capmap.errors import CapmapError, DataError
+from capmap.errors import CapmapError
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities, write_table
@@ -27,45 +27,52 @@ from capmap.stages.common import Outputs, stage_config
 __all__ = ["stage_dualarm_optimise", "stage_dualarm_check"]
 
 
+def _no_motion(reason: str, joints, doc: dict, out: Outputs, log) -> None:
+    """A motion that cannot be planned, written as such: the tables' columns, no rows; the summary says why."""
+    log.warning(f"infeasible: {reason}")
+    prov = datasets.provenance("dualarm_optimise", doc, feasible=False, reason=reason)
+    for name, table in zip(("trajectory", "fine", "outer", "torques"), no_motion_tables(joints)):
+        datasets.write(table, out[name], prov)
+    write_quantities([("feasible", False), ("reason", reason)], out["csv"], out["md"])
+
+
 def stage_dualarm_optimise(environment: str, unknown: str, capsules: str, out: Outputs, slice_json: str) -> None:
     """The satellite-panel assembly by augmented-Lagrangian DDP, then checked on a finer grid
     (:func:`capmap.dualarm.ocp.motion.plan_assembly`) and by inverse dynamics with the held panel against
-    the effort limits (:func:`capmap.dualarm.ocp.motion.torque_table`); the start within the joint limits
-    is checked before any job. ``out``: trajectory, fine, outer, torques, csv, md."""
+    the effort limits (:func:`capmap.dualarm.ocp.motion.torque_table`). A motion that cannot be planned (a
+    key pose with no collision-free self-motion) or that stays in unobserved space is a result: the summary's
+    ``feasible`` and ``reason`` say so (the job succeeds). ``out``: trajectory, fine, outer, torques, csv, md."""
     sc = stage_config(slice_json)
     da = sc.run.dualarm
     log = stage_logger(__name__, "dualarm optimise")
-    inputs = boxes = None  # read within the try: any error of planning is said in the config's terms
+    boxes, caps = unknown_boxes(datasets.read(unknown)), datasets.read(capsules)
+    inputs, ps = job_inputs(da, datasets.read(environment), caps), plan_settings(da)
     try:
-        boxes, caps = unknown_boxes(datasets.read(unknown)), datasets.read(capsules)
-        inputs, ps = job_inputs(da, datasets.read(environment), caps), plan_settings(da)
         robot, scene, asm, m, check, used, n_boxes = plan_outside_unknown(inputs, boxes, ps, log.info)
     except CapmapError as exc:  # a key pose in collision: the scene's, or the cameras' (unknown space)
-        raise planning_error(da, exc, inputs, boxes) from None
-    if check.distance < 0:
-        raise DataError(f"the optimised motion reaches {1e3 * -check.distance:.1f} mm into space no camera observed "
-                        f"({check.body} near {np.round(check.voxel_centre, 2).tolist()} m) after three solves with the "
-                        f"unknown boxes near it; add a viewpoint of dualarm.cloud.viewpoints_m that sees that region")
+        return _no_motion(str(planning_error(da, exc, inputs, boxes)), inputs.robot.joint_names, sc.doc, out, log)
+    reason = unobserved_reason(check)
     traj, fine_df, outer = motion_tables(asm, robot, m)
     torques, torque_rows = torque_table(asm, robot, scene, m)
     prov = datasets.provenance("dualarm_optimise", sc.doc, converged=m.sol.converged, message=m.sol.message,
                                joints=list(robot.joint_names), q_lower=robot.q_lower.tolist(),
                                q_upper=robot.q_upper.tolist(), v_max=robot.v_max.tolist(), margin_m=da.weights.margin_m,
-                               active=[list(a) for a in m.active])
-    datasets.write(traj, out["trajectory"], prov)
-    datasets.write(fine_df, out["fine"], prov)
-    datasets.write(outer, out["outer"], prov)
+                               active=[list(a) for a in m.active], feasible=not reason, reason=reason)
+    for name, table in (("trajectory", traj), ("fine", fine_df), ("outer", outer)):
+        datasets.write(table, out[name], prov)
     datasets.write(torques, out["torques"], datasets.provenance(
         "dualarm_optimise", sc.doc, joints=list(robot.joint_names), effort_nm=asm.model.effortLimit.tolist(),
         panel_kg=scene.panel.mass))
     unknown_rows = [("unknown-space boxes given to the optimiser", f"{used} of {n_boxes}"),
                     ("min distance to unknown space, finer grid [m]", check.distance),
                     ("body nearest unknown space", check.body)]
-    write_quantities(motion_quantities(asm, robot, m, ps.weights) + unknown_rows + torque_rows, out["csv"],
-                     out["md"])
+    write_quantities([("feasible", not reason), ("reason", reason or "-")] + motion_quantities(asm, robot, m, ps.weights)
+                     + unknown_rows + torque_rows, out["csv"], out["md"])
     solved, held, within = motion_lines(m, outer, scene.panel.mass, torque_rows)
     log.info(solved)
     (log.info if within else log.warning)(held)
+    if reason:
+        log.warning(f"infeasible: {reason}")
 
 
 def stage_dualarm_check(environment: str, capsules: str, out_csv: str, out_md: str, slice_json: str) -> None:

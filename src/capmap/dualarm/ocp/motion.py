@@ -14,14 +14,14 @@ import pandas as pd
 from capmap.dualarm.ocp.assembly import Assembly, clearance_at, warm_start
 from capmap.dualarm.ocp.evaluate import active_pairs, fine_grid, node_errors, safety
 from capmap.dualarm.ocp.settings import ALSettings, SolveOptions, Weights
-from capmap.dualarm.ocp.solver import initial_guess, solve
+from capmap.dualarm.ocp.solver import OuterStats, initial_guess, solve
 from capmap.dualarm.ocp.torques import HeldPart, held_torques
 from capmap.dualarm.scene.robot import DualArm
 from capmap.dualarm.scene.solids import Scene
 from capmap.errors import CapmapError
 
 __all__ = ["ACTIVE_WITHIN_M", "AssemblyMotion", "key_poses", "plan_assembly", "motion_tables", "motion_quantities",
-           "torque_table", "motion_lines"]
+           "torque_table", "motion_lines", "no_motion_tables"]
 
 ACTIVE_WITHIN_M = 0.01  # a collision constraint is reported active within 1 cm
 
@@ -184,3 +184,23 @@ def motion_lines(m, outer, panel_kg: float, torque_rows: list[tuple[str, object]
     within = bool(peak["within the effort limits (least-norm internal force)"])
     return solved, held if within else held + ": the motion EXCEEDS the effort limits (torque limits are not in the " \
         "optimisation)", within
+
+
+def no_motion_tables(joints) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, pd.DataFrame]:
+    """The tables of :func:`motion_tables` and :func:`torque_table` with their columns and no rows, for a
+    job whose motion cannot be planned (a key pose with no collision-free self-motion): the result says so."""
+    traj = pd.DataFrame({"t_s": [], "node": [], "phase": pd.Categorical([])})
+    for prefix, unit in (("q", "rad"), ("qd", "rad_s"), ("u", "rad_s2")):
+        for j in joints:
+            traj[f"{prefix}_{j}_{unit}"] = np.zeros(0)
+    for c in ("closed_chain_pos_err_m", "closed_chain_rot_err_rad", "path_err_m", "path_err_rad", "min_distance_m"):
+        traj[c] = np.zeros(0)
+    traj["min_distance_pair"] = pd.Series(dtype=str)
+    fine = pd.DataFrame({"t_s": np.zeros(0), "node": np.zeros(0, dtype=int), "min_distance_m": np.zeros(0),
+                         "min_distance_pair": pd.Series(dtype=str)})
+    outer = pd.DataFrame({f: pd.Series(dtype=float) for f in OuterStats.__dataclass_fields__})
+    torques = pd.DataFrame({"t_s": np.zeros(0), "node": np.zeros(0, dtype=int),
+                            **{f"tau_{j}_nm": np.zeros(0) for j in joints},
+                            **{f"tau_best_{j}_nm": np.zeros(0) for j in joints}, "panel_force_n": np.zeros(0)})
+    return traj, fine, outer, torques
+
