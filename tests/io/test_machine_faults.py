@@ -72,3 +72,52 @@ def test_snakemake_refuses_an_unwritable_results_folder_before_any_job(tmp_path)
     lines = [ln for ln in res.stderr.splitlines() if ln.startswith("capmap:")]
     assert res.returncode == 1 and any("cannot be written there" in ln for ln in lines), res.stderr[-2000:]
     assert "Traceback" not in res.stderr
+
+
+_ORPHAN = """
+import os, sys, time, subprocess
+child = subprocess.Popen([sys.executable, "-c", '''
+import time, pathlib
+from capmap.io.logs import call
+def job(out):
+    pathlib.Path(out).write_text("started")
+    try:
+        while True:
+            time.sleep(0.05)
+    finally:
+        pathlib.Path(out + ".cleaned").write_text("yes")
+call(job, out=r"{out}")
+'''])
+print(child.pid, flush=True)
+time.sleep(60)
+"""
+
+
+def test_a_job_ends_when_the_workflow_that_started_it_is_killed(tmp_path):
+    """Snakemake killed outright (SIGKILL: no chance to end its jobs): the job notices its parent is gone, ends
+    within seconds, and runs its clean-up (``finally``) on the way out."""
+    import signal
+    import sys
+    import time
+
+    out = tmp_path / "job.txt"
+    parent = subprocess.Popen([sys.executable, "-c", _ORPHAN.replace("{out}", str(out))], stdout=subprocess.PIPE,
+                              text=True)
+    child = int(parent.stdout.readline())
+    for _ in range(200):  # the job is running
+        if out.exists():
+            break
+        time.sleep(0.05)
+    assert out.read_text() == "started"
+    parent.kill()
+    parent.wait()
+    for _ in range(100):  # gone within 5 s (the watcher polls each second)
+        try:
+            os.kill(child, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(child, signal.SIGKILL)
+        pytest.fail("the job ran on after its workflow was killed")
+    assert (tmp_path / "job.txt.cleaned").read_text() == "yes"

@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import errno
 import logging
+import os
 import resource
+import signal
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -94,11 +97,37 @@ def _fail(msg: str, log_path) -> None:
     raise SystemExit(1) from None
 
 
+class JobEnded(SystemExit):
+    """The job was ended from outside (SIGTERM, or Snakemake gone): it stops, its temp files removed."""
+
+
+def _ended(signum, frame) -> None:
+    raise JobEnded(1)
+
+
+def _end_with_the_workflow(poll_s: float = 1.0) -> None:
+    """A job ends with the workflow that started it: SIGTERM becomes an exception (so ``finally`` blocks remove
+    temp files), and a watcher ends the job when its parent process (Snakemake) is gone, however it ended
+    (even killed): no job runs on, unseen, after the workflow has stopped."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+    signal.signal(signal.SIGTERM, _ended)
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(poll_s)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    threading.Thread(target=watch, name="capmap-parent-watch", daemon=True).start()
+
+
 def call(fn, log: str | None = None, **kwargs) -> None:
     """Entry for the thin Snakemake scripts: ``fn(**kwargs)`` with logging to ``log`` and one-line
     errors; the job's wall time and peak memory (resident set) are logged at the end (the sizes
     the cluster profile's per-rule resources are set from)."""
     t0 = time.perf_counter()
+    _end_with_the_workflow()
     with one_line_errors(log), logging_to(log):
         fn(**kwargs)
         peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # Linux: kB
