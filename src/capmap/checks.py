@@ -20,7 +20,7 @@ from capmap.capacity.sizing import estimate_map
 from capmap.capacity.voxels import Grid
 from capmap.config.atlas import AtlasConfig
 from capmap.config.capacity import DirectionsConfig, TaskConfig
-from capmap.config.estimate import check_duration, check_steps, line_duration_s
+from capmap.config.estimate import MapJobs, check_duration, check_steps, line_duration_s
 from capmap.config.failure import Failure
 from capmap.config.following import FollowConfig
 from capmap.config.inputs import check_cloud_file
@@ -85,7 +85,8 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
             raise ConfigError(f"{source}: {exc}") from None
     keys = _map_keys("", "voxels.edge_m", cfg.directions)
     try:
-        estimate, grid = estimate_map(arm, cfg.sampling, cfg.voxel_edge_m, len(dirs), len(limits.names), cfg.shards, keys)
+        estimate, grid = estimate_map(arm, cfg.sampling, cfg.voxel_edge_m, len(dirs), len(limits.names),
+                                      MapJobs(cfg.shards, cfg.refine is not None), keys)
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
     check_on_grid(cfg, failure, grid, source)
@@ -102,7 +103,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
         keys = _map_keys("atlas.", "atlas.edge_m", cfg.atlas.directions)
         try:
             estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(directions_of(cfg.atlas.directions)),
-                         len(limits.names), 1, keys)
+                         len(limits.names), MapJobs(1, False), keys)
         except ConfigError as exc:
             raise ConfigError(f"{source}: {exc}") from None
     if cfg.dualarm is not None:

@@ -124,6 +124,24 @@ def test_refine_stages_never_raise_a_value_and_each_is_attained(run):
     np.testing.assert_allclose(refined.set_index(["i", "j", "k"]).capacity_kg.loc[least.index], least, atol=1e-9)
 
 
+def test_refine_in_batches_keeps_every_voxel_and_its_guarantees(run, monkeypatch):
+    """A shard refined in batches of 5 voxels (a job's memory bounded by the batch): the same voxels, each
+    value never above its sampled one and attained at its worst point (Pinocchio's per-configuration path)."""
+    import capmap.capacity.refine_map as refine_map
+
+    cfg, d, sl = run
+    monkeypatch.setattr(refine_map, "BATCH_VOXELS", 5)
+    stage_refine(str(d / "sampled.parquet"), str(d / "refb.parquet"), str(d / "confb.parquet"), sl("refine"), 0, SHARDS)
+    batched, whole = datasets.read(d / "refb.parquet"), datasets.read(d / "ref0.parquet")
+    assert len(whole) > 10 and whole[["i", "j", "k"]].equals(batched[["i", "j", "k"]])
+    sampled = datasets.read(d / "sampled.parquet").set_index(["i", "j", "k"]).capacity_kg
+    assert np.all(batched.capacity_kg.to_numpy() <= sampled.loc[list(zip(batched.i, batched.j, batched.k))].to_numpy()
+                  + 1e-9)
+    rows = batched[batched.capacity_kg.notna()].sample(8, random_state=3)
+    ref = _reference(capacity_problem(cfg), rows[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy())
+    np.testing.assert_allclose(rows.capacity_kg, ref, rtol=1e-8, atol=1e-6)
+
+
 def test_plan_and_verify_stages(run):
     from capmap.stages.verify import stage_plan, stage_verify
 

@@ -4,6 +4,7 @@ import shlex
 import sys
 from pathlib import Path
 
+from capmap.capacity.sizing import check_parallel_memory
 from capmap.checks import check_run_config
 from capmap.config import canonical, main_task, payload_label, stage_slice
 from capmap.config.run import DEFAULT_CONFIG
@@ -26,8 +27,19 @@ try:
 except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
 OUT = f"results/{RUN.name}"  # each run (config key `run`, else the config file's name) in its own folder
+
+
+def _cores():
+    try:
+        return int(workflow.cores)
+    except Exception:  # a dry run without --cores: one job at a time
+        return 1
+
+
 try:
     check_writable(OUT)
+    if workflow.local_exec:  # the jobs share this machine (a cluster's jobs each have a node's memory)
+        check_parallel_memory(RUN.estimate, _cores(), RUN.shards)
 except CapmapError as exc:
     sys.exit(f"capmap: {exc}")
 

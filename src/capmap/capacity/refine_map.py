@@ -26,31 +26,61 @@ CONFIGURATION_COLUMNS = ["i", "j", "k", "x_m", "y_m", "z_m", "configuration", "c
                          "converged", "worst_x_m", "worst_y_m", "worst_z_m", *AXIS_COLUMNS]
 
 
+BATCH_VOXELS = 4096  # voxels refined together: a refine job's memory is bounded by this, not by its shard's size
+
+
 @dataclass(frozen=True)
 class RefinedShard:
     """A refined shard: ``voxels`` (one row per voxel: i, j, k and :data:`REFINED_COLUMNS`),
-    ``configurations`` (:data:`CONFIGURATION_COLUMNS`), the result ``res`` and the start's values
-    ``start_kg`` (V,) (for the log: how far the refinement lowered them)."""
+    ``configurations`` (:data:`CONFIGURATION_COLUMNS`), the refinement's rounds (the most of any batch) and
+    points evaluated, and the start's values ``start_kg`` (V,) (for the log: how far the refinement
+    lowered them)."""
 
     voxels: pd.DataFrame
     configurations: pd.DataFrame
-    res: VoxelMinima
+    rounds: int
+    n_evaluated: int
     start_kg: np.ndarray
+
+    @property
+    def capacity_kg(self) -> np.ndarray:
+        return self.voxels.capacity_kg.to_numpy()
+
+    @property
+    def converged(self) -> np.ndarray:
+        return self.voxels.converged.to_numpy()
 
 
 def refine_shard(vox: pd.DataFrame, problem: CapacityProblem, settings: RefineSettings, shard: int, shards: int,
                  rng: np.random.Generator, log) -> RefinedShard:
     """Refine shard ``shard`` of the reachable voxels of the sampled map ``vox`` (in flat-index order,
     ``shards`` slabs of equal count: a slab's voxels share their corners and faces), all branches and
-    each configuration of ``problem`` (it must carry its ``labels``); progress to ``log`` per round."""
-    labels = problem.labels
-    names = list(problem.limits.names) + [SINGULAR]
-    index = {n: i for i, n in enumerate(names)}
+    each configuration of ``problem`` (it must carry its ``labels``); progress to ``log`` per round. The
+    slab is refined in batches of :data:`BATCH_VOXELS` consecutive voxels, one after the other from the same
+    ``rng`` (each voxel's value needs only its own points: a point two batches share is evaluated by
+    each), so that a job's memory does not grow with its slab."""
     grid = grid_of(vox)
     mine = vox[vox.n_reachable > 0]
     mine = mine.iloc[np.argsort(grid.flat(mine[["i", "j", "k"]].to_numpy()), kind="stable")]
     cut = np.linspace(0, len(mine), shards + 1).round().astype(int)  # slabs: neighbours share their corners
     mine = mine.iloc[cut[shard]:cut[shard + 1]]
+    parts = [_refine_batch(mine.iloc[b:b + BATCH_VOXELS], grid, problem, settings, rng, log, (b, len(mine)))
+             for b in range(0, len(mine), BATCH_VOXELS)]
+    if not parts:
+        parts = [_refine_batch(mine, grid, problem, settings, rng, log, (0, 0))]
+    return RefinedShard(pd.concat([p.voxels for p in parts], ignore_index=True),
+                        pd.concat([p.configurations for p in parts], ignore_index=True),
+                        max(p.rounds for p in parts), sum(p.n_evaluated for p in parts),
+                        np.concatenate([p.start_kg for p in parts]))
+
+
+def _refine_batch(mine: pd.DataFrame, grid: Grid, problem: CapacityProblem, settings: RefineSettings,
+                  rng: np.random.Generator, log, where: tuple[int, int]) -> RefinedShard:
+    """One batch of a shard's voxels (``mine``: rows of the sampled table) refined; ``where``: (its first
+    voxel, the shard's voxels), for the progress lines."""
+    labels = problem.labels
+    names = list(problem.limits.names) + [SINGULAR]
+    index = {n: i for i, n in enumerate(names)}
     start = VoxelMinima.with_configurations(len(labels.names),
         voxel=grid.flat(mine[["i", "j", "k"]].to_numpy()), capacity_kg=mine.capacity_kg.to_numpy(),
         axis_capacity_kg=mine[AXIS_COLUMNS].to_numpy(), n_points=mine.n_points.to_numpy(),
@@ -58,9 +88,10 @@ def refine_shard(vox: pd.DataFrame, problem: CapacityProblem, settings: RefineSe
         converged=np.zeros(len(mine), dtype=bool), worst_m=mine[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy(),
         binding=mine.binding.astype(str).map(index).fillna(-1).astype(int).to_numpy(), rounds=0, n_evaluated=0)
     t0 = time.perf_counter()
+    batch = f"voxels {where[0] + 1}-{where[0] + len(mine)} of {where[1]}: " if len(mine) < where[1] else ""
 
     def progress(rnd: int, active: int, points: int) -> None:
-        log.info(f"round {rnd}: {active} of {len(mine)} voxels not converged, {points} new points "
+        log.info(f"{batch}round {rnd}: {active} of {len(mine)} voxels not converged, {points} new points "
                  f"({time.perf_counter() - t0:.1f} s so far)")
 
     res = refine(grid, start, LockedEvaluator(problem), settings, rng, progress)
@@ -71,7 +102,8 @@ def refine_shard(vox: pd.DataFrame, problem: CapacityProblem, settings: RefineSe
                        "worst_x_m": res.worst_m[:, 0], "worst_y_m": res.worst_m[:, 1], "worst_z_m": res.worst_m[:, 2]})
     for c, col in enumerate(AXIS_COLUMNS):
         df[col] = res.axis_capacity_kg[:, c]
-    return RefinedShard(df, _configuration_table(res, grid, list(labels.names), names), res, start.capacity_kg)
+    return RefinedShard(df, _configuration_table(res, grid, list(labels.names), names), res.rounds, res.n_evaluated,
+                        start.capacity_kg)
 
 
 def _configuration_table(res: VoxelMinima, grid: Grid, configurations: list[str], limit_names: list[str]) -> pd.DataFrame:

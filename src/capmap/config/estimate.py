@@ -2,10 +2,12 @@
 a run asks for, so that what cannot fit on this machine is refused with one line naming the
 key (before a stage deletes a good output and dies in numpy), and what will run is announced.
 
-The memory model is per job and deliberately simple (measured on the default run: a Python
-process with Pinocchio imported holds ~350 MB; a capacity shard holds one chunk of 500 points x
-IK branches x directions x limit outputs in a few float64 arrays; the voxels stage holds every
-point of the map in a table of ~40 columns). The estimate itself draws the seeded joint samples:
+The memory model is per kind of job, its constants measured (``tests/benchmarks/bench_memory.py`` prints
+each estimate beside the measured peak at three voxel edges): a Python process with Pinocchio and numba
+imported holds ~400 MB; a capacity shard holds one chunk of 500 points x IK branches x directions x limit
+outputs in a few float64 arrays; the voxels stage holds every point of the map in a table of ~40 columns;
+a refine job holds one batch of voxels (:data:`capmap.capacity.refine_map.BATCH_VOXELS`) and their points;
+the jobs that read the whole map hold a few KB per voxel. The estimate itself draws the seeded joint samples:
 :func:`capmap.capacity.sizing.estimate_map`; this module holds its result and the step guards."""
 
 from __future__ import annotations
@@ -17,10 +19,15 @@ import numpy as np
 
 from capmap.errors import ConfigError
 
-__all__ = ["Estimate", "available_memory_mb", "BASE_MB", "CHUNK", "MAX_BRANCHES", "POINT_BYTES", "MAX_SAMPLES",
+__all__ = ["Estimate", "MapJobs", "REFINE_VOXEL_MB", "MAP_VOXEL_KB",
+           "available_memory_mb", "BASE_MB", "CHUNK", "MAX_BRANCHES", "POINT_BYTES", "MAX_SAMPLES",
            "MAX_STEPS", "MAX_MOTION_S", "check_steps", "check_duration", "line_duration_s"]
 
-BASE_MB = 350.0  # a job's Python with numpy, pandas and Pinocchio imported
+BASE_MB = 400.0  # a job's Python with numpy, pandas, numba and Pinocchio imported (measured: 396 MB)
+# a refine job's memory per voxel of its batch: 0.12, 0.15, 0.21 MB measured at 0.75, 0.375, 0.25 m
+REFINE_VOXEL_MB = 0.17
+# a job reading the whole map (merge, summary, 3D page, plans, verification), per grid voxel: 3.2 KB measured
+MAP_VOXEL_KB = 3.3
 CHUNK = 500  # points per capacity chunk (capmap.capacity.tables.capacity_table)
 MAX_BRANCHES = 16
 POINT_BYTES = 700  # one point in the voxels stage's tables, with pandas' overhead
@@ -53,15 +60,29 @@ def check_steps(steps: float, key: str, what: str, fix: str = "raise") -> None:
 
 
 @dataclass(frozen=True)
+class MapJobs:
+    """How a map's work is cut into jobs: ``shards`` capacity (and refine) jobs, ``refine`` whether the
+    refinement runs."""
+
+    shards: int
+    refine: bool
+
+
+@dataclass(frozen=True)
 class Estimate:
     """A capacity map's size: grid shape, voxels, points, motion states (upper bound: every point
-    reachable with 8 branches), peak memory of its largest job (MB)."""
+    reachable with 8 branches), the peak memory of each kind of job (MB, by stage: ``jobs_mb``) and of
+    the largest."""
 
     grid_shape: tuple[int, int, int]
     voxels: int
     points: int
     states: float
-    peak_mb: float
+    jobs_mb: dict
+
+    @property
+    def peak_mb(self) -> float:
+        return max(self.jobs_mb.values())
 
     def describe(self, edge_m: float) -> str:
         g = "x".join(map(str, self.grid_shape))

@@ -24,14 +24,14 @@ def stage_refine(voxels: str, out: str, out_configurations: str, slice_json: str
     problem = capacity_problem(run, per_configuration=True)
     rs = refine_shard(datasets.read(voxels), problem, refine_settings(run.refine, run.task.payload_kg), shard, shards,
                       np.random.default_rng([run.refine.seed, shard, shards]), log)
-    res, labels = rs.res, problem.labels
+    labels = problem.labels
     datasets.write(rs.configurations, out_configurations, datasets.provenance(
         "refine", cfg.doc, shard=shard, shards=shards, configurations=list(labels.names), labels=labels.description))
     datasets.write(rs.voxels, out, datasets.provenance("refine", cfg.doc, shard=shard, shards=shards,
-                                                        rounds=res.rounds, points_evaluated=res.n_evaluated))
-    drop = (rs.start_kg - res.capacity_kg) / np.where(rs.start_kg > 0, rs.start_kg, 1.0)
-    log.info(f"done: {len(rs.voxels)} voxels in {res.rounds} rounds, {res.n_evaluated} points evaluated "
-             f"({res.n_evaluated / max(len(rs.voxels), 1):.1f} per voxel), {int((~res.converged).sum())} not converged; "
+                                                        rounds=rs.rounds, points_evaluated=rs.n_evaluated))
+    drop = (rs.start_kg - rs.capacity_kg) / np.where(rs.start_kg > 0, rs.start_kg, 1.0)
+    log.info(f"done: {len(rs.voxels)} voxels in {rs.rounds} rounds, {rs.n_evaluated} points evaluated "
+             f"({rs.n_evaluated / max(len(rs.voxels), 1):.1f} per voxel), {int((~rs.converged).sum())} not converged; "
              f"values lowered by up to {100 * np.max(drop, initial=0):.1f} % (median "
              f"{100 * np.median(drop) if len(drop) else 0:.2f} %) -> {out}")
 
