@@ -25,8 +25,8 @@ from tests.benchmarks.machine import machine
 
 ROOT = Path(__file__).resolve().parents[2]
 STAGE_OF_JOB = {"stage_capacity": "capacity", "stage_voxels": "voxels", "stage_refine": "refine",
-                **{s: "maps" for s in ("stage_voxel_map", "stage_plan", "stage_verify", "stage_summary",
-                                       "stage_capacity_3d", "stage_verify_plots")}}
+                "stage_plan": "plan", "stage_verify": "verify",
+                **{s: "maps" for s in ("stage_voxel_map", "stage_summary", "stage_capacity_3d", "stage_verify_plots")}}
 
 
 def measured_peaks(run_dir: Path) -> dict[str, float]:

@@ -16,6 +16,7 @@ from capmap.config.estimate import (
     MAP_VOXEL_KB,
     MAX_BRANCHES,
     MAX_SAMPLES,
+    PLAN_VOXEL_KB,
     POINT_BYTES,
     REFINE_VOXEL_MB,
     Estimate,
@@ -52,7 +53,8 @@ def estimate_map(arm: LockedArm, sampling: SamplingConfig, edge_m: float, n_dire
     shard_mb = points / max(jobs.shards, 1) * POINT_BYTES / 2**20
     voxel_mb = points * POINT_BYTES / 2**20 + voxels * 200 / 2**20
     jobs_mb = {"capacity": BASE_MB + chunk_mb + shard_mb, "voxels": BASE_MB + voxel_mb,
-               "maps": BASE_MB + MAP_VOXEL_KB * voxels / 1024}
+               "maps": BASE_MB + MAP_VOXEL_KB * voxels / 1024, "plan": BASE_MB + PLAN_VOXEL_KB * voxels / 1024,
+               "verify": BASE_MB}  # a verification holds its path's samples
     if jobs.refine:  # a batch of a shard's voxels at a time (the grid's voxels: an upper bound of the reachable)
         jobs_mb["refine"] = BASE_MB + REFINE_VOXEL_MB * min(voxels / max(jobs.shards, 1), BATCH_VOXELS)
     est = Estimate(grid_shape=shape, voxels=voxels, points=points, states=states, jobs_mb=jobs_mb)

@@ -19,18 +19,19 @@ import numpy as np
 
 from capmap.errors import ConfigError
 
-__all__ = ["Estimate", "MapJobs", "REFINE_VOXEL_MB", "MAP_VOXEL_KB",
+__all__ = ["Estimate", "MapJobs", "REFINE_VOXEL_MB", "MAP_VOXEL_KB", "PLAN_VOXEL_KB",
            "available_memory_mb", "BASE_MB", "CHUNK", "MAX_BRANCHES", "POINT_BYTES", "MAX_SAMPLES",
            "MAX_STEPS", "MAX_MOTION_S", "check_steps", "check_duration", "line_duration_s"]
 
 BASE_MB = 400.0  # a job's Python with numpy, pandas, numba and Pinocchio imported (measured: 396 MB)
 # a refine job's memory per voxel of its batch: 0.12, 0.15, 0.21 MB measured at 0.75, 0.375, 0.25 m
 REFINE_VOXEL_MB = 0.17
-# a job reading the whole map (merge, summary, 3D page, plans, verification), per grid voxel: 3.2 KB measured
+# a job reading the whole map's tables (merge, summary, 3D page, figures), per grid voxel: 3.2 KB measured
 MAP_VOXEL_KB = 3.3
+PLAN_VOXEL_KB = 0.5  # a plan job (A* over the map's voxels and IK branches), per grid voxel: 0.4-0.5 KB measured
 CHUNK = 500  # points per capacity chunk (capmap.capacity.tables.capacity_table)
 MAX_BRANCHES = 16
-POINT_BYTES = 700  # one point in the voxels stage's tables, with pandas' overhead
+POINT_BYTES = 1000  # one point in the capacity and voxels stages' tables, with pandas' overhead
 MAX_SAMPLES = 20_000_000
 MAX_STEPS = 5_000_000  # samples of a verified motion, control periods of a follow case, RK4 steps, OCP nodes x grid
 
