@@ -432,3 +432,16 @@ def test_capmap_run_refuses_a_template_over_a_finished_run(run_dir, tmp_path):
     assert _check(res, "capmap does not evaluate YTE templates", "yte.yaml") is None, res.stderr
     assert not (tmp_path / "pwned").exists()
     assert _tree_digest(work / "results") == before
+
+
+@pytest.mark.slow
+def test_jobs_that_cannot_fit_side_by_side_cost_no_output(run_dir, tmp_path):
+    """A finished run asked again with 256 shards on 256 cores: more memory side by side than this machine has.
+    One line naming the cores that fit, before any job; every output byte-identical."""
+    work, _ = run_dir
+    before = _tree_digest(work / "results")
+    cfg = config_file(tmp_path, shards=256)
+    res = subprocess.run(["snakemake", "all", "-s", str(ROOT / "Snakefile"), "-d", str(work), "--cores", "256",
+                          "--nolock", "--config", f"configfile={cfg}"], capture_output=True, text=True, timeout=300)
+    assert _check(res, "--cores 256: 256 jobs", None) is None, res.stderr[-1500:]
+    assert _tree_digest(work / "results") == before
