@@ -445,3 +445,33 @@ def test_jobs_that_cannot_fit_side_by_side_cost_no_output(run_dir, tmp_path):
                           "--nolock", "--config", f"configfile={cfg}"], capture_output=True, text=True, timeout=300)
     assert _check(res, "--cores 256: 256 jobs", None) is None, res.stderr[-1500:]
     assert _tree_digest(work / "results") == before
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(os.geteuid() != 0, reason="mounts a small tmpfs (a disk that fills): needs root")
+def test_a_full_disk_over_a_finished_run_is_one_line_and_leaves_no_temp_file(run_dir, tmp_path):
+    """A copy of a finished run on a disk with ~64 kB left, asked for a finer follow case (its jobs rerun and write
+    megabytes): the job that meets the full disk fails with one capmap line naming the file, leaves no temp file,
+    and every output of a job that did not rerun is byte-identical."""
+    import shutil
+
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    size = sum(p.stat().st_size for p in run_dir[0].rglob("*") if p.is_file()) + 16 * 2**20
+    subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(disk)], check=True)
+    try:
+        work = disk / "run"
+        shutil.copytree(run_dir[0], work, symlinks=True)
+        before = _tree_digest(work / "results")
+        free = shutil.disk_usage(disk).free
+        (disk / "filler").write_bytes(b"\0" * max(free - 64 * 1024, 0))
+        res = _run(work, config_file(tmp_path, **{"follow.period_s": 0.0005, "follow.store_period_s": 0.0005}))
+        lines = [ln for ln in res.stderr.splitlines() if ln.startswith("capmap: cannot write")]
+        assert res.returncode == 1 and lines and "No space left on device" in lines[0], res.stderr[-2500:]
+        assert not list((work / "results").rglob("*.tmp.parquet"))
+        after = _tree_digest(work / "results")
+        kept = {k: v for k, v in before.items() if "/follow/" not in "/" + k and "/logs/" not in "/" + k
+                and "catalogue" not in k and "/report/" not in "/" + k}
+        assert {k: after.get(k) for k in kept} == kept
+    finally:
+        subprocess.run(["umount", str(disk)], check=False)
