@@ -41,6 +41,12 @@ def chain(tmp_path_factory):
         doc["dualarm"][key] = str(ROOT / doc["dualarm"][key])
     cfg = check_run_config(doc, "tiny.yaml")
     d = tmp_path_factory.mktemp("dualarm")
+    return cfg, d, run_chain(cfg, d)
+
+
+def run_chain(cfg, d):
+    """The dual-arm stages of ``cfg`` up to the optimisation, each as its rule calls it, their files in ``d``
+    (cloud, env, unknown, capsules; traj, fine, outer, torques, s.csv, s.md); returns the slice of a stage."""
 
     def sl(stage):
         return canonical(stage_slice(cfg, stage))
@@ -54,7 +60,7 @@ def chain(tmp_path_factory):
            "csv": "s.csv", "md": "s.md"}
     stage_dualarm_optimise(str(d / "env.parquet"), str(d / "unknown.parquet"), str(d / "capsules.parquet"),
                            {k: str(d / v) for k, v in out.items()}, sl("dualarm_optimise"))
-    return cfg, d, sl
+    return sl
 
 
 def test_the_envelope_holds_every_scanned_point(chain):
@@ -102,3 +108,13 @@ def test_the_check_and_the_figures(chain):
     stage_dualarm_animation(str(d / "traj.parquet"), str(d / "env.parquet"), str(d / "capsules.parquet"),
                             str(d / "anim.html"), sl("dualarm_animation"))
     assert (d / "anim.html").stat().st_size > 10_000
+
+
+def test_a_motion_not_planned_keeps_the_tables_columns(chain):
+    """The tables written when no motion can be planned have the columns of those of a planned one."""
+    from capmap.dualarm.ocp.motion import no_motion_tables
+
+    _, d, _ = chain
+    joints = datasets.read(d / "traj.parquet").attrs["capmap"]["joints"]
+    for name, empty in zip(("traj", "fine", "outer", "torques"), no_motion_tables(joints)):
+        assert list(empty.columns) == list(datasets.read(d / f"{name}.parquet").columns), name

@@ -12,18 +12,11 @@ import pytest
 import yaml
 
 from capmap.checks import check_run_config
-from capmap.config import canonical, stage_slice
 from capmap.config.validation import load_yaml
 from capmap.io import datasets
-from capmap.stages.dualarm import (
-    stage_dualarm_capsules,
-    stage_dualarm_envelope,
-    stage_dualarm_scan,
-    stage_dualarm_unknown,
-)
 from capmap.stages.dualarm_figures import stage_dualarm_animation, stage_dualarm_plots
-from capmap.stages.dualarm_solve import stage_dualarm_optimise
 from tests.scenario import ROOT
+from tests.stages.test_dualarm_chain import run_chain
 
 # around the right gripper at the pre-insertion pose (panel centre (0.67, 0, 0.25), grasp 0.17 m to its right),
 # clear of the panel's start pose (centre (0.50, 0.04, 0.05))
@@ -43,20 +36,7 @@ def blocked(tmp_path_factory):
     doc["dualarm"]["robot"] = str(ROOT / doc["dualarm"]["robot"])
     doc["dualarm"]["scene"] = str(d / "scene.yaml")
     cfg = check_run_config(doc, "tiny.yaml")  # the block is only known to a job: the scan sees it
-
-    def sl(stage):
-        return canonical(stage_slice(cfg, stage))
-
-    stage_dualarm_scan(str(d / "cloud.parquet"), sl("dualarm_scan"))
-    stage_dualarm_envelope(str(d / "cloud.parquet"), str(d / "env.parquet"), sl("dualarm_envelope"))
-    stage_dualarm_unknown(str(d / "cloud.parquet"), str(d / "env.parquet"), str(d / "unknown.parquet"),
-                          sl("dualarm_unknown"))
-    stage_dualarm_capsules(str(d / "capsules.parquet"), sl("dualarm_capsules"))
-    out = {k: str(d / v) for k, v in {"trajectory": "traj.parquet", "fine": "fine.parquet", "outer": "outer.parquet",
-                                      "torques": "torques.parquet", "csv": "s.csv", "md": "s.md"}.items()}
-    stage_dualarm_optimise(str(d / "env.parquet"), str(d / "unknown.parquet"), str(d / "capsules.parquet"), out,
-                           sl("dualarm_optimise"))
-    return d, sl
+    return d, run_chain(cfg, d)
 
 
 def test_a_key_pose_in_collision_is_written_as_infeasible(blocked):

@@ -16,6 +16,7 @@ import pytest
 from capmap.checks import check_run_config
 from capmap.config import canonical, stage_slice
 from capmap.config.validation import load_yaml
+from capmap.core.reduction import free
 from capmap.io import datasets
 from capmap.stages.following import stage_follow
 from capmap.stages.following_figures import stage_follow_plots
@@ -48,6 +49,12 @@ def test_follow_ground_stage_is_never_faster_than_toppra_and_keeps_its_limits(cf
     stage_follow_plots(str(d / "ts.parquet"), str(d / "tp.parquet"),
                        dict(s=str(d / "p.png"), torques=str(d / "t.png"), split=str(d / "split.png")), "{}")
     assert all((d / n).stat().st_size > 10_000 for n in ("p.png", "t.png", "split.png"))
+    # a path not followed from its first segment keeps these tables' columns
+    from capmap.following.tables import PathRun, follow_tables
+    from capmap.robots import load
+
+    empty = follow_tables("ground", free(load(g.robot)), PathRun([], [], None, "links"))
+    assert [list(t.columns) for t in empty] == [list(ts.columns), list(datasets.read(d / "tp.parquet").columns)]
 
 
 def test_reconfig_stages_follow_the_law_to_its_target(cfg, tmp_path):
