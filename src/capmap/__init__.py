@@ -17,7 +17,23 @@ below everything, plots only read DataFrames.
 """
 
 __version__ = "0.1.0"
-__all__ = ["numba_folder"]
+__all__ = ["load", "catalogue", "numba_folder"]
+
+
+def load(run: str = "default", name: str = "voxels", results: str = "results"):
+    """A dataset of a run as a pandas DataFrame: ``capmap.load("default", "voxels")`` (the names:
+    ``capmap.catalogue("default")``; docs/outputs.md). See :func:`capmap.io.catalogue.load`."""
+    from capmap.io.catalogue import load as _load
+
+    return _load(run, name, results)
+
+
+def catalogue(run: str = "default", results: str = "results"):
+    """The datasets of a run (name, description, what a row is, path, rows, columns with units) as a
+    DataFrame. See :func:`capmap.io.catalogue.catalogue`."""
+    from capmap.io.catalogue import catalogue as _catalogue
+
+    return _catalogue(run, results)
 
 
 def numba_folder(package, base: str) -> str:

@@ -17,6 +17,8 @@
   [--payload M] [--configuration C]`` verifies that straight line on a configuration (default: the
   arm's own at the task start). Both read a run's config (``--configfile``, default
   ``config/config.yaml``), answer without running the pipeline, and print a table (or ``--json``).
+- ``capmap catalogue [RUN]`` lists a run's datasets: the names :func:`capmap.load` takes, their rows and
+  what they hold.
 - ``capmap run [CONFIG] [TARGET ...] [--cores N] [-n]`` checks CONFIG (default ``config/config.yaml``) with
   capmap's own loader, then runs the workflow on it (``snakemake --config configfile=CONFIG``: Snakemake
   never opens the file itself, so a config one did not write cannot run code or hang the reader).
@@ -27,18 +29,19 @@ Installed, the same commands are ``capmap ...``. A usage error is one ``capmap:`
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import shutil
 import sys
+import textwrap
 from pathlib import Path
 
-from capmap.checks import check_run_config
-from capmap.config.run import DEFAULT_CONFIG, run_document
+from capmap.config.run import DEFAULT_CONFIG
 from capmap.errors import CapmapError
-from capmap.io.datasets import verify_catalogue
-from capmap.robots import load, lock_classes
-from capmap.stages.query import answer_line, answer_point
+
+# each command imports what it runs when it runs (--help and a usage error answer at once, a query
+# does not load the dual-arm or reconfiguration families)
 
 __all__ = ["main"]
 
@@ -47,7 +50,8 @@ class _Parser(argparse.ArgumentParser):
     """argparse with a usage error as one ``capmap:`` line and exit status 1 (not argparse's 2 and usage text)."""
 
     def error(self, message: str):
-        print(f"capmap: {self.prog}: {message} (see {self.prog} --help)", file=sys.stderr)
+        what = self.prog.removeprefix("capmap").strip()
+        print(f"capmap: {what + ': ' if what else ''}{message} (see {self.prog} --help)", file=sys.stderr)
         sys.exit(1)
 
 
@@ -75,9 +79,12 @@ def _parser() -> argparse.ArgumentParser:
     chk.add_argument("runs", nargs="*", help="run folders, results/<run> (default: every run under results/)")
     cfg = sub.add_parser("check-config", help="read and check config files as the workflow does, before any job")
     cfg.add_argument("files", nargs="*", default=[DEFAULT_CONFIG], help=f"config files (default: {DEFAULT_CONFIG})")
+    cat = sub.add_parser("catalogue", help="the datasets of a run: name (for capmap.load), rows, what they hold")
+    cat.add_argument("run", nargs="?", default="default", help="a run's name or folder (default: default)")
+    cat.add_argument("--results", default="results", help="the results folder (default: results)")
     arm = sub.add_parser("arm", help="the IK classification of a robot with each joint locked in turn")
     arm.add_argument("robot", help="a robot file (config/robots/*.yaml)")
-    arm.add_argument("--angle-deg", type=float, default=None, help="the lock angle (default: mid-range)")
+    arm.add_argument("--angle-deg", type=_finite, default=None, help="the lock angle (default: mid-range)")
     qry = sub.add_parser("query", help="the capacity at a point, or a straight line verified, without the pipeline")
     qsub = qry.add_subparsers(dest="what", required=True)
     qp = qsub.add_parser("point", help="every configuration's capacity at a position (task orientation)")
@@ -87,10 +94,12 @@ def _parser() -> argparse.ArgumentParser:
     for name in ("ax", "ay", "az", "bx", "by", "bz"):
         ql.add_argument(name, type=_finite, help=f"{'start' if name[0] == 'a' else 'end'} {name[1]}, m (base frame)")
     ql.add_argument("--configuration", default=None, help="e.g. S+E-W+ (default: the arm's own at the task start)")
+    qp.add_argument("--joints", action="store_true", help="also each configuration's joint angles")
     for q in (qp, ql):
-        q.add_argument("--payload", type=_finite, default=None, help="payload, kg")
+        q.add_argument("--payload", type=_finite, default=None, help="payload, kg (adds the verdict and margins)")
         q.add_argument("--configfile", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
-        q.add_argument("--json", action="store_true", help="answer as JSON")
+    for p in (chk, cfg, cat, arm, qp, ql):
+        p.add_argument("--json", action="store_true", help="answer as JSON (errors stay one line on stderr)")
     return ap
 
 
@@ -101,10 +110,18 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "query":
         return _query(args)
     if args.command == "check-config":
-        return _check_config(args.files)
+        return _check_config(args.files, args.json)
     if args.command == "arm":
-        return _arm(args.robot, args.angle_deg)
-    runs = [Path(r) for r in args.runs] or sorted(p for p in Path("results").glob("*") if p.is_dir())
+        return _arm(args.robot, args.angle_deg, args.json)
+    if args.command == "catalogue":
+        return _catalogue(args.run, args.results, args.json)
+    return _check(args.runs, args.json)
+
+
+def _check(run_folders: list[str], as_json: bool) -> int:
+    from capmap.io.datasets import verify_catalogue
+
+    runs = [Path(r) for r in run_folders] or sorted(p for p in Path("results").glob("*") if p.is_dir())
     absent = [r for r in runs if not r.is_dir()]
     bare = [r for r in runs if r.is_dir() and not (r / "catalogue.parquet").is_file()]
     for r in absent:
@@ -126,32 +143,68 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     for p in problems:
         print(f"capmap: {p}", file=sys.stderr)
-    if not problems:
+    if as_json:
+        print(json.dumps({"catalogues": list(map(str, catalogues)), "intact": not problems, "problems": problems}))
+    elif not problems:
         print(f"capmap: every catalogued dataset is intact ({', '.join(map(str, catalogues))})")
     return 1 if problems else 0
 
 
-def _check_config(files: list[str]) -> int:
+def _check_config(files: list[str], as_json: bool = False) -> int:
     """The files merged in order, as ``--configfile A B`` merges them."""
+    from capmap.checks import check_run_config
+    from capmap.config.run import run_document
+
     source = ", ".join(files)
     try:
         run = check_run_config(run_document(files), source)
     except CapmapError as exc:
         print(f"capmap: {exc}", file=sys.stderr)
         return 1
-    print(f"capmap: {source}: valid; run {run.name!r}; {run.failure.describe()}; {run.limits.describe()}")
+    if as_json:
+        print(json.dumps({"files": files, "valid": True, "run": run.name, "lock": run.failure.describe(),
+                          "limits": run.limits.describe()}))
+    else:
+        print(f"capmap: {source}: valid; run {run.name!r}; {run.failure.describe()}; {run.limits.describe()}")
     return 0
 
 
-def _arm(path: str, angle_deg: float | None) -> int:
+def _arm(path: str, angle_deg: float | None, as_json: bool) -> int:
+    from capmap.robots import load, lock_classes
+
     try:
         robot = load(path)
     except CapmapError as exc:
         print(f"capmap: {exc}", file=sys.stderr)
         return 1
+    lines = lock_classes(robot, angle_deg)
+    if as_json:
+        print(json.dumps({"robot": robot.name, "joints": list(robot.joint_names), "locks": list(lines)}))
+        return 0
     print(f"capmap: {robot.name}: {robot.n_joints} joints ({', '.join(robot.joint_names)})")
-    for line in lock_classes(robot, angle_deg):
+    for line in lines:
         print(f"  {line}")
+    return 0
+
+
+def _catalogue(run: str, results: str, as_json: bool) -> int:
+    """A run's datasets: the names capmap.load takes, their rows and what they hold."""
+    from capmap.io.catalogue import catalogue
+
+    try:
+        cat = catalogue(run, results)
+    except CapmapError as exc:
+        print(f"capmap: {exc}", file=sys.stderr)
+        return 1
+    if as_json:
+        print(cat[["name", "description", "row", "path", "rows", "units"]].to_json(orient="records", indent=1))
+        return 0
+    w = max(map(len, cat.name))
+    for r in cat.itertuples():
+        print(f"{r.name:<{w}}  {r.rows:>9,} rows  {r.path}")
+        print(textwrap.fill(getattr(r, "description", "(no description: a catalogue of an older capmap)"), 100,
+                            initial_indent="    ", subsequent_indent="    "))
+    print(f"capmap: {len(cat)} datasets; in pandas: capmap.load({run!r}, name) (docs/outputs.md)")
     return 0
 
 
@@ -159,8 +212,10 @@ def _query(args) -> int:
     try:
         if args.payload is not None and not (args.payload >= 0 and args.payload < float("inf")):
             raise CapmapError(f"--payload {args.payload} must be a finite mass >= 0 kg")
+        from capmap.stages.query import answer_line, answer_point
+
         if args.what == "point":
-            text = answer_point(args.configfile, [args.x, args.y, args.z], args.payload, args.json)
+            text = answer_point(args.configfile, [args.x, args.y, args.z], args.payload, args.json, joints=args.joints)
         else:
             text = answer_line(args.configfile, [args.ax, args.ay, args.az], [args.bx, args.by, args.bz], args.payload,
                                args.configuration, args.json)
@@ -194,7 +249,11 @@ def _run(args) -> int:
 
 def entry() -> None:
     """The ``capmap`` command (``[project.scripts]``)."""
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except BrokenPipeError:  # capmap catalogue | head: the reader has what it wanted
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        sys.exit(0)
 
 
 def _run_folder(catalogue: Path) -> Path:
@@ -204,4 +263,4 @@ def _run_folder(catalogue: Path) -> Path:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

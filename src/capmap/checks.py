@@ -34,16 +34,12 @@ from capmap.core.profiles import MIN_PHASE_INTERVALS
 from capmap.core.reduction import LockedArm, free
 from capmap.core.robot import Robot
 from capmap.core.tracking import nearest_branch
-from capmap.dualarm.build import cloud_span_m, load_dual_arm_file, unknown_settings
-from capmap.dualarm.scene.robot import build_dual_arm
-from capmap.dualarm.scene.solids import surface_points
-from capmap.dualarm.scene_file import load_scene
 from capmap.errors import CapmapError, ConfigError
 from capmap.io.fingerprint import code_fingerprint, file_sha256
-from capmap.reconfig.build import rate_limits, reconfig_problem
 from capmap.robots import load
 
-__all__ = ["check_run_config", "check_goal", "check_dt", "check_follow", "check_atlas", "check_on_grid", "check_motions",
+__all__ = ["check_run_config", "check_capacity_config", "check_goal", "check_dt", "check_follow", "check_atlas",
+           "check_on_grid", "check_motions",
            "check_dualarm", "dual_arm_limits"]
 
 
@@ -64,8 +60,40 @@ def _map_keys(prefix: str, edge_key: str, directions: DirectionsConfig) -> dict[
             "directions": f"{prefix}directions.{'n' if directions.kind == 'sphere' else 'step_deg'}"}
 
 
+def check_capacity_config(doc: dict, source: str = "config") -> RunConfig:
+    """The checks of the capacity map's part of a config (schema, robot file, lock, limits, directions,
+    tasks, the map's size): what ``capmap query`` needs, without the other families' (their files)."""
+    return _capacity_checked(doc, source)[0]
+
+
 def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     """Everything that can be checked before any job: schema, robot file, lock, limits, directions."""
+    cfg, robot, arm, limits = _capacity_checked(doc, source)
+    with _named(source):
+        check_motions(cfg, cfg.failure, source)
+    if cfg.follow is not None:
+        with _named(source):
+            check_follow(cfg.follow, cfg, source)
+    if cfg.reconfig is not None:
+        from capmap.reconfig.build import rate_limits, reconfig_problem  # here: a capacity query does not load it
+
+        with _named(source):
+            rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
+    if cfg.atlas is not None:
+        check_atlas(cfg.atlas, robot, source)
+        keys = _map_keys("atlas.", "atlas.edge_m", cfg.atlas.directions)
+        try:
+            estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(directions_of(cfg.atlas.directions)),
+                         len(limits.names), MapJobs(1, False), keys)
+        except ConfigError as exc:
+            raise ConfigError(f"{source}: {exc}") from None
+    if cfg.dualarm is not None:
+        check_dualarm(cfg, source)
+    return cfg
+
+
+def _capacity_checked(doc: dict, source: str) -> tuple[RunConfig, Robot, LockedArm, object]:
+    """The config with its failure, estimate, limits and tasks resolved; the robot, the locked arm, its limits."""
     cfg = parse_config(doc, source)
     robot = load(cfg.robot)
     failure, arm = resolve_failure(robot, cfg.lock, cfg.task, source)
@@ -90,25 +118,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
     except ConfigError as exc:
         raise ConfigError(f"{source}: {exc}") from None
     check_on_grid(cfg, failure, grid, source)
-    with _named(source):
-        check_motions(cfg, failure, source)
-    if cfg.follow is not None:
-        with _named(source):
-            check_follow(cfg.follow, cfg, source)
-    if cfg.reconfig is not None:
-        with _named(source):
-            rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
-    if cfg.atlas is not None:
-        check_atlas(cfg.atlas, robot, source)
-        keys = _map_keys("atlas.", "atlas.edge_m", cfg.atlas.directions)
-        try:
-            estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(directions_of(cfg.atlas.directions)),
-                         len(limits.names), MapJobs(1, False), keys)
-        except ConfigError as exc:
-            raise ConfigError(f"{source}: {exc}") from None
-    if cfg.dualarm is not None:
-        check_dualarm(cfg, source)
-    return replace(cfg, failure=failure, estimate=estimate, limits=limits_cfg.canonical(), tasks=tasks)
+    return replace(cfg, failure=failure, estimate=estimate, limits=limits_cfg.canonical(), tasks=tasks), robot, arm, limits
 
 
 def check_dt(cfg: RunConfig, source: str = "config") -> None:
@@ -250,6 +260,8 @@ def check_motions(cfg: RunConfig, failure: Failure, source: str = "config") -> N
 def check_dualarm(cfg: RunConfig, source: str = "config") -> None:
     """The dual-arm files load, a user's cloud file is one the scan job can read, and the horizons
     and the synthetic scan fit."""
+    from capmap.dualarm.scene_file import load_scene  # the dual-arm family's modules load only when it is checked
+
     da = cfg.dualarm
     scene = load_scene(da.scene)
     try:
@@ -289,6 +301,9 @@ def dual_arm_limits(robot_file: str, thickness_m: float) -> tuple[str, np.ndarra
     collision and visual mesh, the joints and frames the file names); its errors as they are. The build
     loads every visual mesh (~1.4 s for the default robot): a success is remembered (:func:`_memo_file`), so
     the runs after the first that build the same robot from the same files and code read it instead."""
+    from capmap.dualarm.build import load_dual_arm_file
+    from capmap.dualarm.scene.robot import build_dual_arm
+
     desc = load_dual_arm_file(robot_file)  # first: the files' own checks (regular, bounded, found) before hashing them
     memo = _memo_file(robot_file, thickness_m)
     if memo is not None and memo.is_file():
@@ -312,6 +327,9 @@ def dual_arm_limits(robot_file: str, thickness_m: float) -> tuple[str, np.ndarra
 
 def _dualarm_sizes(da, scene) -> None:
     """The user's cloud file readable; the horizons, the re-check grid and the synthetic scan fit."""
+    from capmap.dualarm.build import cloud_span_m, unknown_settings
+    from capmap.dualarm.scene.solids import surface_points
+
     if da.cloud_file is not None:
         check_cloud_file(da.cloud_file, viewpoints=len(da.scan.viewpoints_m))
     u = unknown_settings(da.unknown)

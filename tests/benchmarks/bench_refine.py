@@ -23,7 +23,7 @@ import pandas as pd
 from capmap.capacity.build import capacity_problem, refine_settings
 from capmap.capacity.evaluator import LockedEvaluator
 from capmap.capacity.refine import VoxelMinima, refine
-from capmap.capacity.tables import grid_of
+from capmap.capacity.tables import voxel_table
 from capmap.checks import check_run_config
 from capmap.config.run import run_document
 from tests.benchmarks.machine import machine
@@ -51,8 +51,7 @@ def main():
     settings = refine_settings(run.refine, run.task.payload_kg)
     C = len(problem.labels.names)
 
-    vox = pd.read_parquet(args.run / "voxels" / "sampled.parquet")
-    grid = grid_of(vox)
+    vox, grid = voxel_table(pd.read_parquet(args.run / "capacity" / "points.parquet"), run.voxel_edge_m)  # as sampled
     for seed in args.seeds:
         reach = vox[vox.n_reachable > 0]
         ijk = reach[["i", "j", "k"]].to_numpy()

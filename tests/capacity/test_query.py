@@ -71,3 +71,33 @@ def test_line_query_on_a_configuration_and_bad_questions(question):
         point_query(q, [100.0, 0, 0])
     with pytest.raises(CapmapError, match="distinct finite"):
         line_query(q, X_INI, X_INI, 1500.0, 0.5, "S+E-W+")
+
+
+def _closed_boxes_holding(lower, shape, edge, p, tol):
+    """Brute force over every voxel of the grid: those whose closed box holds p to within tol."""
+    out = []
+    for i in range(shape[0]):
+        for j in range(shape[1]):
+            for k in range(shape[2]):
+                lo = np.asarray(lower) + edge * np.array([i, j, k])
+                if np.all(p >= lo - tol) and np.all(p <= lo + edge + tol):
+                    out.append((i, j, k))
+    return sorted(out)
+
+
+def test_a_point_touches_the_voxels_whose_closed_box_holds_it():
+    """Inside one voxel, on a face (2), an edge (4), a corner (8), at the grid's border, outside:
+    Grid.touching against a brute force over the grid's voxels."""
+    from capmap.capacity.voxels import Grid
+
+    grid = Grid(np.array([-1.5, 0.75, 2.25]), (4, 3, 5), 0.75)
+    rng = np.random.default_rng(3)
+    corners = grid.lower + 0.75 * rng.integers(0, [5, 4, 6], size=(40, 3))  # grid nodes, some on the border
+    faces = corners + rng.uniform(0.01, 0.74, size=(40, 3)) * (rng.random((40, 3)) < 0.5)
+    inside = grid.lower + rng.uniform(0, 1, size=(40, 3)) * 0.75 * np.array(grid.shape)
+    outside = np.array([[-3.0, 1.0, 3.0], [0.0, 10.0, 3.0]])
+    for p in np.vstack([corners, faces, inside, outside, corners + 4e-7]):
+        got = sorted(map(tuple, grid.touching(p, 1e-6).tolist()))
+        assert got == _closed_boxes_holding(grid.lower, grid.shape, 0.75, p, 1e-6), p
+    assert len(grid.touching(grid.lower + 0.75 * np.array([1, 1, 1]))) == 8
+    assert len(grid.touching(grid.lower + 0.75 * np.array([1, 1, 1]) + 2e-6)) == 1  # beyond the tolerance: inside one

@@ -66,6 +66,9 @@ import pytest  # noqa: E402
     (("query", "point", "1", "2", "3", "--payload=-inf"), "is not a finite number"),
     (("query", "point", "1", "2", "3", "--payload", "-1"), "--payload -1.0 must be a finite mass >= 0 kg"),
     (("frobnicate",), "invalid choice: 'frobnicate'"),
+    (("catalogue", "no-such-run"), "no catalogue.parquet"),
+    (("arm", "config/robots/ssrms7.yaml", "--angle-deg", "nan"), "'nan' is not a finite number"),
+    (("check-config", "--json", "no/such.yaml"), "no/such.yaml"),
     (("run", "--cores"), "expected one argument"),
 ])
 def test_a_usage_error_is_one_line(args, expect):
@@ -73,7 +76,8 @@ def test_a_usage_error_is_one_line(args, expect):
 
 
 @pytest.mark.parametrize("args", [("--help",), ("query", "point", "--help"), ("query", "line", "--help"),
-                                  ("run", "--help")])
+                                  ("run", "--help"), ("check", "--help"), ("check-config", "--help"),
+                                  ("catalogue", "--help"), ("arm", "--help")])
 def test_help_is_printed(args):
     res = _cli(*args)
     assert res.returncode == 0 and res.stdout.startswith("usage: capmap") and not res.stderr, res.stderr
@@ -134,3 +138,14 @@ def test_config_named_twice_is_one_line(tmp_path):
                          capture_output=True, text=True, timeout=300)
     line = [ln for ln in res.stderr.splitlines() if ln.startswith("capmap:")]
     assert res.returncode == 1 and len(line) == 1 and "give the run's config one way" in line[0], res.stderr[-1500:]
+
+
+def test_json_answers_parse():
+    """--json on the commands that answer without a run: one JSON document on stdout."""
+    import json
+
+    res = _cli("check-config", "--json", "tests/data/tiny.yaml")
+    assert res.returncode == 0 and json.loads(res.stdout)["valid"] is True, res.stderr
+    res = _cli("arm", "config/robots/ssrms7.yaml", "--json")
+    doc = json.loads(res.stdout)
+    assert res.returncode == 0 and len(doc["joints"]) == 7 and len(doc["locks"]) >= 7

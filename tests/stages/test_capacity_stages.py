@@ -23,7 +23,7 @@ from capmap.config.validation import load_yaml
 from capmap.io import datasets
 from capmap.stages.atlas import stage_atlas_map
 from capmap.stages.baseline import stage_baseline_shard
-from capmap.stages.capacity import stage_capacity, stage_model, stage_sample, stage_voxels
+from capmap.stages.capacity import stage_capacity, stage_model, stage_points, stage_sample, stage_voxels
 from capmap.stages.refine import stage_refine, stage_voxel_map
 from tests.scenario import ROOT
 
@@ -56,8 +56,8 @@ def run(tmp_path_factory):
     stage_sample(str(d / "points.parquet"), sl("sample"))
     for k in range(SHARDS):
         stage_capacity(str(d / "points.parquet"), str(d / f"cap{k}.parquet"), sl("capacity"), k, SHARDS)
-    stage_voxels([str(d / f"cap{k}.parquet") for k in range(SHARDS)], str(d / "sampled.parquet"),
-                 str(d / "cappoints.parquet"), sl("voxels"))
+    stage_points([str(d / f"cap{k}.parquet") for k in range(SHARDS)], str(d / "cappoints.parquet"), sl("capacity"))
+    stage_voxels(str(d / "cappoints.parquet"), str(d / "sampled.parquet"), sl("voxels"))
     for k in range(SHARDS):
         stage_refine(str(d / "sampled.parquet"), str(d / f"ref{k}.parquet"), str(d / f"conf{k}.parquet"), sl("refine"),
                      k, SHARDS)
@@ -103,6 +103,9 @@ def test_voxels_stage_is_the_minimum_of_its_points(run):
     _, d, _ = run
     vox = datasets.read(d / "sampled.parquet")
     pts = datasets.read(d / "cappoints.parquet")
+    grid = vox.attrs["capmap"]["grid"]  # binned here, independently of the stage
+    idx = np.floor((pts[["x_m", "y_m", "z_m"]].to_numpy() - grid["lower_m"]) / grid["edge_m"]).astype(int)
+    pts = pts.assign(i=idx[:, 0], j=idx[:, 1], k=idx[:, 2])
     reach = pts[pts.reachable]
     least = reach.groupby(["i", "j", "k"]).capacity_kg.min()
     got = vox.set_index(["i", "j", "k"]).capacity_kg.loc[least.index]

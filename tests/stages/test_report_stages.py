@@ -6,6 +6,7 @@ import hashlib
 import pandas as pd
 import pytest
 
+from capmap.errors import DataError
 from capmap.io import datasets
 from capmap.stages.report import TABLE_TITLES, stage_catalogue, stage_concat_summary, stage_report_tables
 
@@ -14,7 +15,7 @@ from capmap.stages.report import TABLE_TITLES, stage_catalogue, stage_concat_sum
 def two_datasets(tmp_path):
     """Two datasets as a run writes them: results/<run>/<family>/<name>.parquet, with provenance."""
     paths = []
-    for sub, name, n in (("verify/payload_1500kg", "waypoints", 3), ("follow/ground", "timeseries", 5)):
+    for sub, name, n in (("verify/payload_1500kg", "timeseries", 3), ("follow/ground", "timeseries", 5)):
         p = tmp_path / "results" / "tiny" / sub / f"{name}.parquet"
         p.parent.mkdir(parents=True)
         df = pd.DataFrame({"t_s": range(n), "tau_j1_nm": [0.5] * n})
@@ -33,6 +34,35 @@ def test_catalogue_counts_and_hashes_each_file(two_datasets, tmp_path):
         with open(p, "rb") as f:
             assert sha == hashlib.sha256(f.read()).hexdigest()
     assert all("tau_j1_nm [N m]" in list(cols) for cols in cat["columns"])  # the unit read from the name
+    # each dataset named uniquely by its place in the run, described, with its units
+    assert list(cat.name) == ["verify_1500kg", "follow_ground"] and list(cat.units) == ["N m, s", "N m, s"]
+    assert cat.description.str.len().min() > 40 and list(cat.row) == ["time sample of a path", "stored control period"]
+
+
+def test_catalogue_refuses_two_datasets_of_one_name_and_one_of_no_kind(tmp_path):
+    paths = []
+    for sub in ("a", "b"):  # two run folders' voxel maps: one name twice
+        p = tmp_path / sub / "voxels" / "voxels.parquet"
+        datasets.write(pd.DataFrame({"capacity_kg": [1.0]}), p, datasets.provenance("voxel_map", {}))
+        paths.append(str(p))
+    with pytest.raises(DataError, match="catalogue names used twice: voxels"):
+        stage_catalogue(paths, str(tmp_path / "c.parquet"))
+    odd = tmp_path / "odd" / "thing.parquet"
+    datasets.write(pd.DataFrame({"x_m": [1.0]}), odd, datasets.provenance("x", {}))
+    with pytest.raises(DataError, match="no entry in capmap.io.catalogue.DATASETS"):
+        stage_catalogue([str(odd)], str(tmp_path / "c.parquet"))
+
+
+def test_load_reads_a_dataset_by_its_catalogue_name(two_datasets, tmp_path, monkeypatch):
+    import capmap
+
+    stage_catalogue(two_datasets, str(tmp_path / "results" / "tiny" / "catalogue.parquet"))
+    monkeypatch.chdir(tmp_path / "results")  # the catalogue's paths are relative to the run's working folder
+    df = capmap.load("tiny", "follow_ground", results=tmp_path / "results")
+    assert len(df) == 5 and df.attrs["capmap"]["stage"] == "timeseries"
+    assert list(capmap.catalogue("tiny", results=tmp_path / "results").name) == ["verify_1500kg", "follow_ground"]
+    with pytest.raises(DataError, match="no dataset 'nope'; there are: verify_1500kg, follow_ground"):
+        capmap.load("tiny", "nope", results=tmp_path / "results")
 
 
 def test_concat_summary_keeps_every_row_in_order(tmp_path):
@@ -54,7 +84,7 @@ def test_report_tables_name_each_dataset_by_its_path_and_list_stale_outputs(two_
                         {"catalogue": "Every ``dataset``.", "gain": "The gain."})
     page = (tmp_path / "html" / "catalogue.html").read_text()
     assert TABLE_TITLES["catalogue"][0] in page and "Every dataset." in page  # title, caption without rst marks
-    # two datasets both called by their stem would be ambiguous; the page names them by their path in the run
-    assert "verify/payload_1500kg/waypoints" in page and "follow/ground/timeseries" in page
+    # each dataset by its catalogue name, with its description
+    assert "verify_1500kg" in page and "follow_ground" in page and "torque-limited follower" in page
     assert "Not of this config" in page and "payload_9kg" in page
     assert "12.5" in (tmp_path / "html" / "gain.html").read_text()

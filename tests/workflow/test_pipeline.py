@@ -22,7 +22,7 @@ pytestmark = pytest.mark.slow  # a whole tiny pipeline: .ci/run runs these (-m s
 
 def test_outputs_and_provenance(run_dir):
     tmp, _ = run_dir
-    pts = pd.read_parquet(tmp / "results/tiny/voxels/points.parquet")
+    pts = pd.read_parquet(tmp / "results/tiny/capacity/points.parquet")
     vox = pd.read_parquet(tmp / "results/tiny/voxels/voxels.parquet")
     for col in ("point_id", "x_m", "y_m", "z_m", "reachable", "n_branches", "capacity_kg", "binding",
                 "worst_alpha_deg", "worst_beta_deg", "worst_branch"):
@@ -30,10 +30,10 @@ def test_outputs_and_provenance(run_dir):
     for col in ("i", "j", "k", "x_m", "y_m", "z_m", "n_points", "capacity_kg"):
         assert col in vox.columns
     meta = pts.attrs["capmap"]
-    assert meta["stage"] == "voxels" and meta["seed"] == 7 and meta["capmap_version"]
+    assert meta["stage"] == "capacity" and meta["seed"] == 7 and meta["capmap_version"]
     assert meta["config"]["run"]["limits"]["joint_torque_nm"] == 700
     # points: each id exactly once across shards
-    assert pts.point_id.is_unique and len(pts) == pd.read_parquet(tmp / "results/tiny/sample/points.parquet").shape[0]
+    assert pts.point_id.is_unique and np.array_equal(pts.point_id, np.arange(len(pts)))  # every sampled point once
     # reachable <=> at least one branch <=> finite capacity
     assert np.array_equal(pts.reachable, pts.n_branches > 0)
     assert np.array_equal(pts.reachable, np.isfinite(pts.capacity_kg))
@@ -42,7 +42,7 @@ def test_outputs_and_provenance(run_dir):
 
 def test_voxel_capacity_is_min_of_points_inside(run_dir):
     tmp, _ = run_dir
-    pts = pd.read_parquet(tmp / "results/tiny/voxels/points.parquet")
+    pts = pd.read_parquet(tmp / "results/tiny/capacity/points.parquet")
     vox = pd.read_parquet(tmp / "results/tiny/voxels/voxels.parquet")
     grid = vox.attrs["capmap"]["grid"]
     edge, lower = grid["edge_m"], np.array(grid["lower_m"])
@@ -64,11 +64,18 @@ def test_voxel_capacity_is_min_of_points_inside(run_dir):
 def test_catalogue_lists_every_dataset(run_dir):
     tmp, _ = run_dir
     cat = pd.read_parquet(tmp / "results/tiny/catalogue.parquet")
-    assert set(cat.name) == {"joints", "points", "shard_0_of_2", "shard_1_of_2", "sampled", "voxels", "configurations",
-                             "waypoints", "timeseries", "segments", "toppra", "nullspace", "pinv", "cloud",
-                             "environment", "unknown", "robot_capsules", "trajectory", "fine", "outer",
-                             "torques"}  # two 'points', three 'timeseries'
-    assert len(cat) == 25  # the plan-gain experiment is its own target (experiments), with its own catalogue
+    assert set(cat.name) == {"joints", "points", "voxels", "configurations", "plan_1500kg",
+                             "verify_1500kg", "verify_1500kg_segments", "follow_space", "follow_space_toppra",
+                             "follow_ground", "follow_ground_toppra", "reconfig_nullspace", "reconfig_pinv",
+                             "dualarm_cloud", "dualarm_environment", "dualarm_unknown", "dualarm_capsules",
+                             "dualarm_trajectory", "dualarm_fine", "dualarm_solver", "dualarm_torques"}
+    assert len(cat) == 21 and cat.name.is_unique and (cat.description.str.len() > 40).all()
+    # the per-shard tables and the sample were temporary: gone once merged, only the merged tables remain
+    assert not list((tmp / "results/tiny").glob("**/*_of_*.parquet"))
+    assert not (tmp / "results/tiny/sample/points.parquet").exists()
+    assert not (tmp / "results/tiny/voxels/sampled.parquet").exists()
+    for row in cat.itertuples():  # every column name is a Python identifier (DataFrame.query, attribute access)
+        assert all(c.split(" [")[0].isidentifier() for c in row.columns), row.path
     for _, row in cat.iterrows():
         data = (tmp / row.path).read_bytes()
         assert hashlib.sha256(data).hexdigest() == row.sha256
@@ -230,9 +237,28 @@ def test_query_line_equals_the_verify_stage_and_point_reads_the_map(run_dir):
     p = X_DES
     g = vox.attrs["capmap"]["grid"]
     i, j, k = ((p - np.array(g["lower_m"])) // g["edge_m"]).astype(int)
-    pt = _query(tmp, cfg, "point", *map(str, p))
-    assert tuple(pt["voxel"]["voxel"]) == (i, j, k)
-    assert pt["voxel"]["map_kg"] == pytest.approx(vox.set_index(["i", "j", "k"]).loc[(i, j, k), "capacity_kg"])
+    pt = _query(tmp, cfg, "point", *map(str, p), "--payload", "1500")
+    by_ijk = vox.set_index(["i", "j", "k"])
+    assert [i, j, k] in pt["voxel"]["voxels"]
+    touched = by_ijk.loc[[tuple(v) for v in pt["voxel"]["voxels"]]]
+    assert pt["voxel"]["map_kg"] == pytest.approx(touched[touched.n_reachable > 0].capacity_kg.min())
+    # the verdict: the arm's configuration (of its start) and whether its least branch carries the payload
+    mine = [b for b in pt["branches"] if b["arms"]]
+    assert {b["configuration"] for b in mine} == {pt["arm_configuration"]}
+    assert pt["verdict"]["arm_carries"] == (min(b["capacity_kg"] for b in mine) >= 1500)
+    # a voxel's stored worst point lies on its closed box, often on a face or corner: the answer is every voxel
+    # it touches (independently: each voxel whose closed box holds the point), and the least of them
+    lower, e = np.array(g["lower_m"]), g["edge_m"]
+    reach = vox[vox.n_reachable > 0]
+    w = reach[(np.abs(((reach[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy() - lower) / e + 0.5) % 1 - 0.5)
+               < 1e-9).any(axis=1)].iloc[0]
+    wp = w[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy(dtype=float)
+    lo = lower + e * vox[["i", "j", "k"]].to_numpy()
+    holds = vox[np.all((wp >= lo - 1e-6) & (wp <= lo + e + 1e-6), axis=1)]
+    at = _query(tmp, cfg, "point", *map(repr, wp))
+    assert sorted(map(tuple, at["voxel"]["voxels"])) == sorted(zip(holds.i, holds.j, holds.k)) and len(holds) >= 2
+    assert at["voxel"]["map_kg"] == pytest.approx(holds[holds.n_reachable > 0].capacity_kg.min())
+    assert at["voxel"]["map_kg"] <= w.capacity_kg
     assert len(pt["branches"]) >= 1 and all(b["configuration"] for b in pt["branches"])
 
 

@@ -76,19 +76,19 @@ def test_a_damaged_shard_is_one_line_and_check_finds_it(run_dir, tmp_path):
     work, _ = run_dir
     copy = tmp_path / "run"
     shutil.copytree(work / "results", copy / "results")
-    shard = copy / "results" / "tiny" / "capacity" / "shard_0_of_2.parquet"
+    shard = copy / "results" / "tiny" / "capacity" / "points.parquet"
     shard.write_bytes(shard.read_bytes()[: shard.stat().st_size // 2])  # truncated
     with pytest.raises(DataError) as err:
-        stage_voxels([str(shard)], str(tmp_path / "v.parquet"), str(tmp_path / "p.parquet"),
+        stage_voxels(str(shard), str(tmp_path / "v.parquet"),
                      json.dumps(pd.read_parquet(work / "results/tiny/voxels/voxels.parquet").attrs["capmap"]["config"]))
     msg = str(err.value)
     assert "\n" not in msg and str(shard) in msg and "snakemake --cores 2 all --forcerun" in msg
-    (copy / "results" / "tiny" / "capacity" / "shard_1_of_2.parquet").unlink()  # and one deleted
+    (copy / "results" / "tiny" / "voxels" / "configurations.parquet").unlink()  # and one deleted
     res = subprocess.run(["python", "-m", "capmap", "check", str(copy / "results" / "tiny")], capture_output=True, text=True)
     lines = res.stderr.splitlines()
     assert res.returncode == 1 and len(lines) == 2, res.stderr
-    assert any("shard_0_of_2.parquet" in ln and "not a readable Parquet" in ln for ln in lines)
-    assert any("shard_1_of_2.parquet: missing" in ln for ln in lines)
+    assert any("capacity/points.parquet" in ln and "not a readable Parquet" in ln for ln in lines)
+    assert any("voxels/configurations.parquet: missing" in ln for ln in lines)
     ok = subprocess.run(["python", "-m", "capmap", "check", str(work / "results" / "tiny")], capture_output=True, text=True)
     assert ok.returncode == 0, ok.stderr
     (copy / "results" / "bare").mkdir()  # a run folder without a catalogue, and one that does not exist
@@ -104,14 +104,14 @@ def test_a_deleted_intermediate_is_named_with_the_command_that_rebuilds_it(run_d
     copy = tmp_path / "run"
     shutil.copytree(work, copy, ignore=shutil.ignore_patterns("locks", "incomplete"))
     assert planned_jobs(copy, cfg) == {}
-    (copy / "results" / "tiny" / "capacity" / "shard_1_of_2.parquet").unlink()
+    (copy / "results" / "tiny" / "capacity" / "points.parquet").unlink()
     res = subprocess.run(["snakemake", "all", "-n", "-s", str(ROOT / "Snakefile"), "-d", str(copy), "--configfile",
                           str(cfg)], capture_output=True, text=True, timeout=600)
-    warn = [ln for ln in res.stderr.splitlines() if "shard_1_of_2.parquet is in the catalogue but missing" in ln]
+    warn = [ln for ln in res.stderr.splitlines() if "capacity/points.parquet is in the catalogue but missing" in ln]
     assert res.returncode == 0 and len(warn) >= 1
-    # the printed command carries the run's config: run as printed, it rebuilds the shard
-    assert f"snakemake --cores 2 all --configfile {cfg} --forcerun results/tiny/capacity/shard_1_of_2.parquet" in warn[0]
+    # the printed command carries the run's config: run as printed, it rebuilds the table
+    assert f"snakemake --cores 2 all --configfile {cfg} --forcerun results/tiny/capacity/points.parquet" in warn[0]
     res = subprocess.run(["snakemake", "all", "-n", "-s", str(ROOT / "Snakefile"), "-d", str(copy), "--configfile",
-                          str(cfg), "--forcerun", "results/tiny/capacity/shard_1_of_2.parquet"],
+                          str(cfg), "--forcerun", "results/tiny/capacity/points.parquet"],
                          capture_output=True, text=True, timeout=600)
-    assert res.returncode == 0 and re.search(r"(?m)^capacity\s+1$", res.stdout + res.stderr), res.stdout[-2000:]
+    assert res.returncode == 0 and re.search(r"(?m)^points\s+1$", res.stdout + res.stderr), res.stdout[-2000:]

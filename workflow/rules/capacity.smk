@@ -25,7 +25,7 @@ rule sample:
     input:
         model=out("model/joints.parquet"),
     output:
-        out("sample/points.parquet"),
+        temp(out("sample/points.parquet")),
     log:
         out("logs/sample.log"),
     priority: 20
@@ -42,7 +42,7 @@ rule capacity:
     input:
         points=out("sample/points.parquet"),
     output:
-        out("capacity/shard_{k}_of_{n}.parquet"),
+        temp(out("capacity/shard_{k}_of_{n}.parquet")),
     log:
         out("logs/capacity/shard_{k}_of_{n}.log"),
     wildcard_constraints:
@@ -57,13 +57,29 @@ rule capacity:
         "../scripts/capacity.py"
 
 
-rule voxels:
-    """Gather the shards into the voxel grid (minimum capacity over the sampled points per voxel)."""
+rule points:
+    """The capacity shards gathered into one per-point table (the shards are temporary)."""
     input:
         shards=expand(out("capacity/shard_{k}_of_{n}.parquet"), k=range(SHARDS), n=SHARDS),
     output:
-        voxels=out("voxels/sampled.parquet"),
-        points=out("voxels/points.parquet"),
+        out("capacity/points.parquet"),
+    log:
+        out("logs/points.log"),
+    priority: 20
+    conda:
+        "../envs/capmap.yaml"
+    params:
+        slice=params("capacity", "points"),
+    script:
+        "../scripts/points.py"
+
+
+rule voxels:
+    """The voxel grid over the points (minimum capacity over the sampled points per voxel)."""
+    input:
+        points=out("capacity/points.parquet"),
+    output:
+        voxels=temp(out("voxels/sampled.parquet")),
     log:
         out("logs/voxels.log"),
     priority: 20
@@ -81,8 +97,8 @@ rule refine:
     input:
         voxels=out("voxels/sampled.parquet"),
     output:
-        voxels=out("voxels/refined_{k}_of_{n}.parquet"),
-        configurations=out("voxels/configurations_{k}_of_{n}.parquet"),
+        voxels=temp(out("voxels/refined_{k}_of_{n}.parquet")),
+        configurations=temp(out("voxels/configurations_{k}_of_{n}.parquet")),
     log:
         out("logs/refine/shard_{k}_of_{n}.log"),
     wildcard_constraints:
@@ -125,7 +141,7 @@ rule summary:
     input:
         voxels=out("voxels/voxels.parquet"),
         configurations=out("voxels/configurations.parquet"),
-        points=out("voxels/points.parquet"),
+        points=out("capacity/points.parquet"),
         waypoints=expand(out("plan/payload_{payload}kg/waypoints.parquet"), payload=PAYLOADS),
     output:
         csv=out("summary/capacity_summary.csv"),

@@ -24,8 +24,9 @@ rule follow:
 
 
 rule follow_plots:
-    """Command vs followed vs TOPP-RA path coordinate, lag, deviation; torques before and after limiting; their
-    split into link dynamics, rotor inertia and friction."""
+    """The follower's duration against TOPP-RA's (path coordinate, speed, lag, deviation); torques before and after
+    limiting; their split into link dynamics, rotor inertia and friction (a robot without drives: the follower's
+    torques against TOPP-RA's)."""
     input:
         timeseries=out("follow/{case}/timeseries.parquet"),
         toppra=out("follow/{case}/toppra.parquet"),

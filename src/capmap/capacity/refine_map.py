@@ -16,6 +16,7 @@ from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
 from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.capacity.voxels import Grid
+from capmap.config.estimate import BATCH_VOXELS
 
 __all__ = ["REFINED_COLUMNS", "CONFIGURATION_COLUMNS", "RefinedShard", "refine_shard", "merge_refined"]
 
@@ -26,7 +27,6 @@ CONFIGURATION_COLUMNS = ["i", "j", "k", "x_m", "y_m", "z_m", "configuration", "c
                          "converged", "worst_x_m", "worst_y_m", "worst_z_m", *AXIS_COLUMNS]
 
 
-BATCH_VOXELS = 4096  # voxels refined together: a refine job's memory is bounded by this, not by its shard's size
 
 
 @dataclass(frozen=True)

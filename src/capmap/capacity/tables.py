@@ -20,7 +20,9 @@ from capmap.core.robot import Robot
 __all__ = ["AXIS_COLUMNS", "model_table", "sample_table", "capacity_table", "voxel_table", "grid_meta", "grid_of",
            "configuration_voxels"]
 
-AXIS_COLUMNS = [f"capacity_along_{label}_kg" for label in AXIS_LABELS]  # moves along the 13 grid axes
+AXIS_COLUMNS = [f"capacity_along_{label.replace('+', '_plus_').replace('-', '_minus_')}_kg" for label in AXIS_LABELS]
+"""Capacity for moves along the 13 grid axes, named as Python identifiers: 'capacity_along_x_kg', ...,
+'capacity_along_x_plus_y_kg', 'capacity_along_x_minus_y_minus_z_kg' (axis label 'x-y-z')."""
 
 
 def model_table(robot: Robot) -> pd.DataFrame:
@@ -129,7 +131,8 @@ def voxel_table(pts: pd.DataFrame, edge_m: float) -> tuple[pd.DataFrame, Grid]:
     wxyz = np.where(worst[:, None] >= 0, xyz[np.maximum(worst, 0)], np.nan)
     vox = pd.DataFrame({"i": idx[:, 0], "j": idx[:, 1], "k": idx[:, 2],
                         "x_m": centres[:, 0], "y_m": centres[:, 1], "z_m": centres[:, 2],
-                        "n_points": vm.n_points, "n_reachable": vm.n_reachable, "capacity_kg": vm.capacity_kg,
+                        "n_points": vm.n_points, "n_reachable": vm.n_reachable, "reachable": vm.n_reachable > 0,
+                        "capacity_kg": vm.capacity_kg,
                         "binding": pd.Categorical(binding),
                         "worst_point_id": np.where(worst >= 0, pts.point_id.to_numpy()[np.maximum(worst, 0)], -1),
                         "worst_x_m": wxyz[:, 0], "worst_y_m": wxyz[:, 1], "worst_z_m": wxyz[:, 2]})

@@ -47,6 +47,19 @@ class Grid:
         inside = np.all((idx >= 0) & (idx < np.array(self.shape)), axis=-1)
         return np.where(inside[..., None], idx, -1)
 
+    def touching(self, point: np.ndarray, tol_m: float = 1e-6) -> np.ndarray:
+        """Indices (K, 3), K in 0..8, of the voxels whose closed box holds ``point`` (3,) m to within
+        ``tol_m``: one inside a voxel, two on a face, four on an edge, eight on a corner (as a voxel's
+        stored worst point often is: the voxel's value holds on its closed box); none outside the grid."""
+        u = (np.asarray(point, dtype=float) - self.lower) / self.edge_m
+        near = np.round(u)
+        on = np.abs(u - near) * self.edge_m <= tol_m
+        lo = np.where(on, near - 1, np.floor(u)).astype(int)
+        hi = np.where(on, near, np.floor(u)).astype(int)
+        axes = [np.arange(a, b + 1) for a, b in zip(lo, hi)]
+        idx = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        return idx[np.all((idx >= 0) & (idx < np.array(self.shape)), axis=1)]
+
     def flat(self, idx: np.ndarray) -> np.ndarray:
         return np.ravel_multi_index(tuple(np.moveaxis(idx, -1, 0)), self.shape)
 

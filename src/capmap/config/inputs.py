@@ -7,8 +7,6 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import pyarrow.parquet as pq
-
 from capmap.config.validation import file_kind, shown, too_big
 from capmap.errors import ConfigError
 
@@ -47,6 +45,8 @@ def check_cloud_file(path: str, key: str = "dualarm.cloud.file", limit: int = MA
     _regular(path, key, limit)
     if suffix == ".parquet":
         try:
+            import pyarrow.parquet as pq  # a user's Parquet cloud only
+
             columns = pq.read_schema(path).names
         except Exception as exc:  # pyarrow raises several types for a file that is not Parquet
             raise ConfigError(f"{key} = {shown(path)}: not a Parquet file ({str(exc).splitlines()[0][:120]})") from None

@@ -137,7 +137,7 @@ def _empty_series(case: str, joints) -> tuple[pd.DataFrame, pd.DataFrame]:
 
 
 def stored_rows(ts: pd.DataFrame, every: int, limit_nm: np.ndarray) -> pd.DataFrame:
-    """The rows of a follower time series (one per control period) kept for storage: in each segment
+    """The rows of a follower's (or TOPP-RA's) time series (one per control period) kept for storage: in each segment
     every ``every``-th row and its last, the rows where ``limited`` or ``infeasible`` changes, and in
     each window of ``every`` rows the row of the largest torque in proportion to ``limit_nm``
     (n_active,) N m (the ``tau_j*_nm`` columns, in order), so that a plot of the stored series reaches
@@ -156,7 +156,9 @@ def stored_rows(ts: pd.DataFrame, every: int, limit_nm: np.ndarray) -> pd.DataFr
     keep = (pos % every == 0) | last
     order = np.lexsort((-ratio, window))  # by window, the largest ratio first
     keep[order[np.r_[True, window[order][1:] != window[order][:-1]]]] = True
-    for flag in ("limited", "infeasible"):
+    for flag in ("limited", "infeasible"):  # the follower's flags (TOPP-RA's series has none)
+        if flag not in ts:
+            continue
         f = ts[flag].to_numpy()
         keep[1:] |= (f[1:] != f[:-1]) & ~first[1:]
         keep[:-1] |= (f[1:] != f[:-1]) & ~first[1:]

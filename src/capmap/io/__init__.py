@@ -1,7 +1,10 @@
-"""Input and output shared by every family: Parquet datasets with provenance and the
-catalogue (:mod:`~capmap.io.datasets`), summary tables (:mod:`~capmap.io.tables`), logging
-and one-line errors for the stages (:mod:`~capmap.io.logs`)."""
+"""Input and output shared by every family: Parquet datasets with provenance (:mod:`~capmap.io.datasets`),
+the catalogue and the API that reads a run's results (:mod:`~capmap.io.catalogue`), columns without
+pandas (:mod:`~capmap.io.arrays`), summary tables (:mod:`~capmap.io.tables`), logging and one-line errors
+for the stages (:mod:`~capmap.io.logs`)."""
 
-from capmap.io import datasets, logs, tables
+from capmap._lazy import lazy_exports
 
-__all__ = ["datasets", "logs", "tables"]
+_EXPORTS = {"datasets": "datasets", "catalogue": "catalogue", "arrays": "arrays", "logs": "logs", "tables": "tables"}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,4 +1,4 @@
-"""Parquet datasets with provenance, and the data catalogue.
+"""Parquet datasets with provenance; checking a run against its catalogue (:mod:`capmap.io.catalogue` writes it).
 
 Every dataset carries ``df.attrs["capmap"]`` (readable with ``pd.read_parquet(p).attrs``):
 stage, config slice, config hash, seed, package version. Column names carry their units
@@ -11,14 +11,16 @@ import hashlib
 import json
 import os
 from pathlib import Path
-
-import pandas as pd
+from typing import TYPE_CHECKING
 
 import capmap
 from capmap.errors import DataError
 from capmap.io.fingerprint import file_sha256
 
-__all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "read", "rebuild_hint_config", "catalogue",
+if TYPE_CHECKING:  # pandas loads when a table is read or written (capmap query reads columns without it)
+    import pandas as pd
+
+__all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "read", "rebuild_hint_config",
            "verify_catalogue", "missing_catalogued"]
 
 UNITS = [("_deg", "deg"), ("_rad", "rad"), ("_kg", "kg"), ("_nm", "N m"), ("_n", "N"), ("_mps2", "m/s^2"),
@@ -64,14 +66,15 @@ def provenance(stage: str, config_slice: dict, seed: int | None = None, **extra)
 
 
 def write(df: pd.DataFrame, path: str | Path, prov: dict) -> None:
-    """Write a Parquet file with provenance in its metadata (atomically: temp file then rename)."""
+    """Write a Parquet file with provenance in its metadata (atomically: temp file then rename; zstd:
+    about a third smaller than the default snappy on these float tables, read by any Parquet reader)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     df = df.copy()
     df.attrs = {"capmap": prov}
     tmp = path.with_suffix(".tmp.parquet")
     try:
-        df.to_parquet(tmp, index=False)
+        df.to_parquet(tmp, index=False, compression="zstd")
         tmp.replace(path)
     except BaseException:  # a full disk, a read-only folder, an interrupt: no half-written file left behind
         tmp.unlink(missing_ok=True)
@@ -91,6 +94,8 @@ def read(path: str | Path) -> pd.DataFrame:
     """Read a dataset; a missing, truncated or foreign file is one :class:`DataError` line naming it
     and the command that rebuilds it."""
     rebuild = f"rebuild it with: snakemake --cores 2 all{os.environ.get(_CONFIG_ARGS_ENV, '')} --forcerun {path}"
+    import pandas as pd
+
     try:
         return pd.read_parquet(path)
     except FileNotFoundError:
@@ -98,25 +103,6 @@ def read(path: str | Path) -> pd.DataFrame:
     except Exception as exc:  # pyarrow raises several types for a damaged file
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise DataError(f"{path} is not a readable Parquet dataset ({first}); {rebuild}") from None
-
-
-def catalogue(paths: list[str | Path]) -> pd.DataFrame:
-    """One row per dataset: name, path, stage, rows, columns (with units), sha256, config hash."""
-    rows = []
-    for p in paths:
-        df = read(p)
-        meta = df.attrs.get("capmap", {})
-        rows.append({
-            "name": Path(p).stem,
-            "path": str(p),
-            "stage": meta.get("stage", ""),
-            "rows": len(df),
-            "columns": [f"{c} [{column_unit(c)}]" if column_unit(c) else c for c in df.columns],
-            "sha256": file_sha256(p),
-            "config_hash": meta.get("config_hash", ""),
-            "capmap_version": meta.get("capmap_version", ""),
-        })
-    return pd.DataFrame(rows)
 
 
 def verify_catalogue(catalogue_path: str | Path, root: str | Path = ".") -> list[str]:
@@ -142,6 +128,8 @@ def missing_catalogued(catalogue_path: str | Path, root: str | Path = ".") -> li
     """Paths a catalogue lists that are no longer on disk (cheap: no hashing; [] without a
     readable catalogue). Snakemake does not rebuild a deleted intermediate whose consumers are up
     to date, so the workflow names these before it says "Nothing to be done"."""
+    import pandas as pd
+
     try:
         cat = pd.read_parquet(catalogue_path, columns=["path"])
     except Exception:  # no catalogue yet, or a damaged one (python -m capmap check reports it)

@@ -11,17 +11,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PlannedPath", "capacity_3d_html", "slider_levels"]
+__all__ = ["PlannedPath", "capacity_3d_html", "slider_levels", "PATH_COLOURS"]
+
+PATH_COLOURS = ("darkorange", "magenta", "saddlebrown", "deepskyblue", "olive", "orchid")  # not in viridis, not red
 
 
 @dataclass(frozen=True)
 class PlannedPath:
     """A planned path: ``points_m`` (W, 3) waypoints; ``label`` for the legend (e.g. '1500 kg: A*');
-    ``ends``: a name written at its first and last waypoint (a further task's own start and goal)."""
+    ``ends``: a name written at its first and last waypoint (a further task's own start and goal);
+    ``moves_kg`` (W,): the capacity of the move arriving at each waypoint along its own direction (NaN
+    at the start; None: not known), in its hover text and the legend (its least)."""
 
     label: str
     points_m: np.ndarray
     ends: str = ""
+    moves_kg: np.ndarray | None = None
 
 
 def slider_levels(capacity_kg: np.ndarray, payloads_kg: tuple[float, ...], n: int = 20) -> np.ndarray:
@@ -41,46 +46,27 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
     reachable voxels of each map (capacity of the voxel: the least over its points and motion
     directions, on the map's IK branches; binding: the limit that sets it), the first shown, buttons
     switch between them; ``edge_m`` the voxel edge; ``start_m``, ``goal_m`` (3,); the payload slider
-    starts at the first payload, the height slider at the top (the whole map)."""
+    starts at the first payload, the height slider at the top (the whole map). It opens on a readable
+    view: the voxels carrying the payload faint (the paths show through them), those below it and the
+    0 kg ones hidden (a click on their legend entry shows them); one meaning per colour: the capacity
+    scale for the voxels, red for 0 kg voxels only, black for the direct line and its start and goal,
+    one colour per planned path (:data:`PATH_COLOURS`), drawn thick."""
     import plotly.graph_objects as go
 
     # the binding limits as text, '' where none is given or set (no hover line for it)
     maps = [(m[0], m[1], m[2], np.array(["" if str(b) in ("nan", "None") else str(b)
                                          for b in (m[3] if len(m) == 4 else [""] * len(m[2]))], dtype=object))
             for m in maps]
-    _, xyz, c, bind = maps[0]
-    c, xyz = np.asarray(c, float), np.asarray(xyz, float)
     every = np.concatenate([np.asarray(m[2], float) for m in maps])
     allxyz = np.concatenate([np.asarray(m[1], float).reshape(-1, 3) for m in maps] + [np.vstack([start_m, goal_m])])
     around = np.concatenate([allxyz] + [np.asarray(p.points_m, float).reshape(-1, 3) for p in paths])
     levels = slider_levels(every, payloads_kg)
     first = float(payloads_kg[0]) if payloads_kg else 0.0
-    cmax = float(np.nanmax(every)) if every.size else 1.0
     heights = np.unique(np.round(allxyz[:-2, 2], 4)) if len(allxyz) > 2 else np.array([0.0])
     lo, hi = around.min(axis=0) - edge_m, around.max(axis=0) + edge_m
     names = sorted({str(b) for m in maps for b in m[3]} - {""})
-
-    def hover(v, b):
-        return [f"{x:.0f} kg" + (f", bound by {y}" if y else "") for x, y in zip(v, b)]
-
-    keep, zero = c >= first, c == 0
-    hov = "(%{x:.2f}, %{y:.2f}, %{z:.2f}) m<br>%{text}<extra></extra>"
     fig = go.Figure()
-    fig.add_trace(go.Scatter3d(
-        x=xyz[keep, 0].tolist(), y=xyz[keep, 1].tolist(), z=xyz[keep, 2].tolist(), mode="markers",
-        name="voxels carrying the payload",
-        marker=dict(size=3, color=c[keep].tolist(), cmin=0.0, cmax=cmax, colorscale="Viridis", opacity=0.5,
-                    colorbar=dict(title=dict(text="capacity [kg]"), x=1.02)),
-        text=hover(c[keep], bind[keep]), hovertemplate=hov))
-    fig.add_trace(go.Scatter3d(
-        x=xyz[~keep, 0].tolist(), y=xyz[~keep, 1].tolist(), z=xyz[~keep, 2].tolist(), mode="markers",
-        name="reachable, below the payload",
-        marker=dict(size=2, color="lightgrey", opacity=0.25), visible="legendonly",
-        text=hover(c[~keep], bind[~keep]), hovertemplate=hov))
-    fig.add_trace(go.Scatter3d(
-        x=xyz[zero, 0].tolist(), y=xyz[zero, 1].tolist(), z=xyz[zero, 2].tolist(), mode="markers",
-        name="0 kg: a singular surface crosses the voxel", marker=dict(size=2.5, color="crimson", opacity=0.6),
-        text=hover(c[zero], bind[zero]), hovertemplate=hov))
+    _add_voxels(fig, go, maps[0], first, float(np.nanmax(every)) if every.size else 1.0)
     _add_paths(fig, go, start_m, goal_m, paths)
     steps = [dict(method="skip", label=f"{v:g}", args=[None]) for v in levels]
     cuts = [dict(method="skip", label=f"{z:.2f}", args=[None]) for z in heights]
@@ -89,12 +75,13 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
     span = hi - lo
     fig.update_layout(
         title=dict(text=f"{title}<br><sub>shown: {maps[0][0]} (buttons: the other maps); voxel edge {edge_m:g} m; the "
-                        f"payload slider hides the voxels below a payload, the height slider cuts the map above a layer; "
-                        f"hover: capacity and the limit that binds it</sub>"),
+                        "payload slider hides the voxels below a payload,<br>the height slider cuts the map above a layer; "
+                        "hover: capacity and the limit that binds it; legend: a click shows or hides an entry</sub>"),
         scene=dict(xaxis=dict(title="x [m]", range=[lo[0], hi[0]], autorange=False),
                    yaxis=dict(title="y [m]", range=[lo[1], hi[1]], autorange=False),
                    zaxis=dict(title="z [m]", range=[lo[2], hi[2]], autorange=False),
-                   aspectmode="manual", aspectratio=dict(x=1.0, y=span[1] / span[0], z=span[2] / span[0])),
+                   aspectmode="manual", aspectratio=dict(x=1.0, y=span[1] / span[0], z=span[2] / span[0]),
+                   domain=dict(x=[0.3, 1.0], y=[0.0, 1.0]), camera=_camera(start_m, goal_m, paths, lo, span)),
         uirevision="capmap",  # the camera stays where the user put it while the sliders redraw
         sliders=[dict(active=active, steps=steps, currentvalue=dict(prefix="payload [kg] >= "), pad=dict(t=30),
                       len=0.48, x=0.0),
@@ -102,7 +89,8 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
                       len=0.48, x=0.52)],
         updatemenus=[dict(type="buttons", direction="right", buttons=buttons, active=0, x=0.0, y=1.0,
                           xanchor="left", yanchor="top", showactive=True)] if len(maps) > 1 else [],
-        legend=dict(x=0.0, y=0.9), margin=dict(l=0, r=0, t=110, b=0), height=800)
+        legend=dict(x=0.0, y=0.88, xanchor="left", font=dict(size=11), title=dict(text="click to show or hide:")),
+        margin=dict(l=0, r=0, t=110, b=0), height=800)
     data = json.dumps([{"x": np.asarray(m[1])[:, 0].round(4).tolist(), "y": np.asarray(m[1])[:, 1].round(4).tolist(),
                         "z": np.asarray(m[1])[:, 2].round(4).tolist(), "c": np.asarray(m[2], float).round(2).tolist(),
                         "b": [names.index(str(b)) if str(b) in names else -1 for b in m[3]]}
@@ -112,28 +100,72 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
                        config={"displaylogo": False})
 
 
+def _camera(start_m: np.ndarray, goal_m: np.ndarray, paths: list[PlannedPath], lo: np.ndarray, span: np.ndarray):
+    """The opening camera: looking at the middle of the task (start, goal, the paths) from above one side,
+    close enough that the paths read (scroll to zoom out to the whole map)."""
+    pts = np.vstack([start_m, goal_m] + [np.asarray(p.points_m, float).reshape(-1, 3) for p in paths])
+    scale = span / span[0]  # the scene's normalised units: the x extent is 1
+    mid = ((pts.min(axis=0) + pts.max(axis=0)) / 2 - (lo + span / 2)) / span * scale
+    eye = mid + np.array([0.75, -0.75, 0.5])
+    return dict(center=dict(zip("xyz", mid.round(4).tolist())), eye=dict(zip("xyz", eye.round(4).tolist())))
+
+
+def _add_voxels(fig, go, shown: tuple, first: float, cmax: float) -> None:
+    """The shown map's voxels (name, centres (V, 3), capacity (V,), binding (V,)) as the script's three
+    traces: carrying ``first`` kg (faint, by capacity), below it (grey, hidden), 0 kg (red, hidden)."""
+    _, xyz, c, bind = shown
+    c, xyz = np.asarray(c, float), np.asarray(xyz, float)
+    hov = "(%{x:.2f}, %{y:.2f}, %{z:.2f}) m<br>%{text}<extra></extra>"
+
+    def text(sel):
+        return [f"{x:.0f} kg" + (f", bound by {y}" if y else "") for x, y in zip(c[sel], bind[sel])]
+
+    keep, zero = c >= first, c == 0
+    fig.add_trace(go.Scatter3d(
+        x=xyz[keep, 0].tolist(), y=xyz[keep, 1].tolist(), z=xyz[keep, 2].tolist(), mode="markers",
+        name="voxels carrying the payload",
+        marker=dict(size=3, color=c[keep].tolist(), cmin=0.0, cmax=cmax, colorscale="Viridis", opacity=0.18,
+                    colorbar=dict(title=dict(text="voxel capacity [kg]<br><sub>least over its points<br>and every "
+                                                  "direction</sub>"), x=1.02)),
+        text=text(keep), hovertemplate=hov))
+    fig.add_trace(go.Scatter3d(
+        x=xyz[~keep, 0].tolist(), y=xyz[~keep, 1].tolist(), z=xyz[~keep, 2].tolist(), mode="markers",
+        name="voxels below the payload (grey)", marker=dict(size=2, color="lightgrey", opacity=0.25),
+        visible="legendonly", text=text(~keep), hovertemplate=hov))
+    fig.add_trace(go.Scatter3d(
+        x=xyz[zero, 0].tolist(), y=xyz[zero, 1].tolist(), z=xyz[zero, 2].tolist(), mode="markers",
+        name="0 kg voxels (red): a singular surface crosses them", marker=dict(size=2.5, color="red", opacity=0.35),
+        visible="legendonly", text=text(zero), hovertemplate=hov))
+
+
 def _add_paths(fig, go, start_m: np.ndarray, goal_m: np.ndarray, paths: list[PlannedPath]) -> None:
-    """The direct line, each planned path (its ends labelled) and the start and goal markers."""
+    """The direct line with its start and goal (black), each planned path (its own colour, thick; its ends
+    named, the capacity of each move along its own direction in its hover text and its least in the legend)."""
     line = np.vstack([start_m, goal_m])
     fig.add_trace(go.Scatter3d(x=line[:, 0].tolist(), y=line[:, 1].tolist(), z=line[:, 2].tolist(), mode="lines",
-                               name="direct line",
-                               line=dict(color="red", width=5, dash="dash")))
+                               name="direct line", line=dict(color="black", width=7, dash="dash"), hoverinfo="skip"))
     for k, p in enumerate(paths):
         pts = np.asarray(p.points_m, float)
-        colour = ["black", "darkorange", "magenta", "cyan", "saddlebrown", "royalblue"][k % 6]
+        colour = PATH_COLOURS[k % len(PATH_COLOURS)]
+        moves = np.full(len(pts), np.nan) if p.moves_kg is None else np.asarray(p.moves_kg, float)
+        hover = [f"waypoint {i}" + (f": the move here carries {m:,.0f} kg along its own direction"
+                                    if np.isfinite(m) else "") for i, m in enumerate(moves)]
         text = [""] * len(pts)
         if p.ends:
             text[0], text[-1] = f"{p.ends}: start", f"{p.ends}: goal"
             if len(pts) == 1:
                 text[0] = f"{p.ends}: start and goal"
+        least = f"<br>   each move carries ≥ {np.nanmin(moves):,.0f} kg along its direction" if np.isfinite(
+            moves).any() else ""
         fig.add_trace(go.Scatter3d(x=pts[:, 0].tolist(), y=pts[:, 1].tolist(), z=pts[:, 2].tolist(),
-                                   mode="lines+markers+text" if p.ends else "lines+markers", name=p.label,
-                                   text=text if p.ends else None, textfont=dict(color=colour),
-                                   line=dict(width=6, color=colour), marker=dict(size=3, color=colour)))
-    for pos, name, colour in ((start_m, "start", "green"), (goal_m, "goal", "red")):
+                                   mode="lines+markers+text" if p.ends else "lines+markers", name=p.label + least,
+                                   text=text if p.ends else None, textfont=dict(color=colour), hovertext=hover,
+                                   hovertemplate="%{hovertext}<extra></extra>",
+                                   line=dict(width=11, color=colour), marker=dict(size=4, color=colour)))
+    for pos, name, symbol in ((start_m, "start", "circle"), (goal_m, "goal", "diamond")):
         fig.add_trace(go.Scatter3d(x=[float(pos[0])], y=[float(pos[1])], z=[float(pos[2])], mode="markers+text",
-                                   name=name, text=[name],
-                                   marker=dict(size=8, color=colour, symbol="diamond")))
+                                   name=name, text=[name], textfont=dict(size=14, color="black"),
+                                   marker=dict(size=8, color="black", symbol=symbol)))
 
 
 def _script(data: str, levels: np.ndarray, heights: np.ndarray, names: list[str], active: int) -> str:

@@ -10,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["plt", "save", "not_done_figure"]
+__all__ = ["plt", "save", "not_done_figure", "legend_beside"]
 
 
 def save(fig, out_png: str | Path, rect: tuple[float, float, float, float] | None = None) -> None:
@@ -33,3 +33,9 @@ def not_done_figure(title: str, reason: str, out_png: str | Path) -> None:
     ax.text(0.5, 0.5, textwrap.fill(reason, 100), ha="center", va="center", fontsize=9.5, wrap=True,
             transform=ax.transAxes, bbox={"boxstyle": "round", "facecolor": "#fdecea", "edgecolor": "tab:red"})
     save(fig, out_png)
+
+
+def legend_beside(ax, **kw):
+    """The axes' legend to their right, outside them (never on a curve or a limit line); ``kw`` to ``ax.legend``."""
+    return ax.legend(**{"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0.0, "fontsize": 8,
+                        "frameon": False, **kw})

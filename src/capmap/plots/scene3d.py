@@ -9,7 +9,10 @@ server's static-HTML template.
 
 from __future__ import annotations
 
+import html
+import json
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import meshcat
@@ -19,7 +22,7 @@ import umsgpack
 from meshcat.servers.tree import SceneTree, find_node, walk
 from meshcat.servers.zmqserver import VIEWER_ROOT, create_command
 
-__all__ = ["RecordingWindow", "new_scene", "write_html", "segment_pose", "cylinder", "material", "g"]
+__all__ = ["RecordingWindow", "Overlay", "new_scene", "write_html", "segment_pose", "cylinder", "material", "aim", "g"]
 
 _TEMPLATE = """<!DOCTYPE html>
 <html>
@@ -43,17 +46,76 @@ _TEMPLATE = """<!DOCTYPE html>
             }}
         </style>
         <script id="embedded-json"></script>
+{overlay}
     </body>
 </html>
 """
 
 
-class RecordingWindow:
-    """A MeshCat window that records the scene tree in-process (what ``meshcat-server`` keeps)."""
+@dataclass(frozen=True)
+class Overlay:
+    """Words over an animation's 3D view (top left, clicks pass through to the view): the ``title``, ``lines``
+    under it (settings, verdicts), a ``legend`` of (colour 0xRRGGBB, opacity, what it is), and the simulated
+    time as the animation plays (the clip's time in s: the frames must be sampled at their simulated times),
+    with ``frame_text[k]`` next to it at frame k (``fps`` frames per second)."""
 
-    def __init__(self, title: str = "MeshCat"):
+    title: str
+    lines: tuple[str, ...] = ()
+    legend: tuple[tuple[int, float, str], ...] = ()
+    frame_text: tuple[str, ...] = ()
+    fps: float = 1.0
+
+    def markup(self) -> str:
+        """The overlay's HTML, its style and the script that updates the time readout."""
+        esc = html.escape
+        rows = "".join(f'<div class="capmap-key"><span style="background:rgba({c >> 16},{(c >> 8) & 255},{c & 255},'
+                       f'{max(o, 0.25):.2f})"></span>{esc(text)}</div>' for c, o, text in self.legend)
+        lines = "".join(f'<div class="capmap-line">{esc(line)}</div>' for line in self.lines)
+        texts = json.dumps(list(self.frame_text)).replace("</", "<\\/")
+        return _OVERLAY.format(title=esc(self.title), lines=lines, legend=rows, texts=texts, fps=float(self.fps))
+
+
+_OVERLAY = """<div id="capmap-overlay"><div id="capmap-title">{title}</div>{lines}{legend}
+<div id="capmap-time"></div><div id="capmap-frame"></div></div>
+<style>
+#capmap-overlay {{position: absolute; top: 8px; left: 8px; width: min(40em, 46vw); padding: 8px 12px; pointer-events: none;
+  background: rgba(255, 255, 255, 0.85); border-radius: 6px; font: 13px/1.35 sans-serif; color: #111;}}
+#capmap-title {{font-size: 17px; font-weight: bold; margin-bottom: 2px;}}
+.capmap-line {{color: #333;}}
+.capmap-key {{margin-top: 2px;}}
+.capmap-key span {{display: inline-block; width: 14px; height: 14px; margin-right: 6px; vertical-align: -2px;
+  border: 1px solid #555;}}
+#capmap-time {{font: bold 16px monospace; margin-top: 6px;}}
+#capmap-frame {{font-family: monospace;}}
+</style>
+<script>
+(function () {{
+    var texts = {texts}, fps = {fps};
+    var time = document.getElementById("capmap-time"), frame = document.getElementById("capmap-frame");
+    function tick() {{
+        var a = viewer.animator;
+        var t = a && a.duration > 0 ? a.time : 0;
+        if (a && a.duration > 0) {{
+            time.textContent = "simulated time t = " + t.toFixed(2) + " s of " + a.duration.toFixed(2) + " s";
+        }}
+        if (texts.length) {{
+            frame.textContent = texts[Math.min(texts.length - 1, Math.max(0, Math.round(t * fps)))];
+        }}
+        requestAnimationFrame(tick);
+    }}
+    tick();
+}})();
+</script>"""
+
+
+class RecordingWindow:
+    """A MeshCat window that records the scene tree in-process (what ``meshcat-server`` keeps); ``overlay``:
+    words drawn over the view (none: the bare view)."""
+
+    def __init__(self, title: str = "MeshCat", overlay: Overlay | None = None):
         self.tree = SceneTree()
         self.title = title
+        self.overlay = overlay
 
     def send(self, command) -> None:
         data = command.lower()
@@ -84,12 +146,15 @@ class RecordingWindow:
                 if item is not None:
                     commands.append(create_command(item))
         script = Path(os.path.join(VIEWER_ROOT, "main.min.js")).read_text()
-        return _TEMPLATE.format(title=self.title, mainminjs=script, commands="".join(commands))
+        return _TEMPLATE.format(title=html.escape(self.title), mainminjs=script, commands="".join(commands),
+                                overlay=self.overlay.markup() if self.overlay else "")
 
 
-def new_scene(title: str) -> meshcat.Visualizer:
-    """A MeshCat visualizer recording into a :class:`RecordingWindow`."""
-    return meshcat.Visualizer(window=RecordingWindow(title))
+def new_scene(title: str | Overlay, **words) -> meshcat.Visualizer:
+    """A MeshCat visualizer recording into a :class:`RecordingWindow`, the title (and ``words``: the other
+    fields of an :class:`Overlay`) drawn over the view; or the whole :class:`Overlay`."""
+    overlay = title if isinstance(title, Overlay) else Overlay(title, **words)
+    return meshcat.Visualizer(window=RecordingWindow(overlay.title, overlay))
 
 
 def write_html(vis: meshcat.Visualizer, out_html: str | Path) -> None:
@@ -120,3 +185,14 @@ def cylinder(a: np.ndarray, b: np.ndarray, radius: float) -> tuple[g.Cylinder, n
 def material(color: int, opacity: float = 1.0) -> g.MeshLambertMaterial:
     """A flat-shaded material of colour 0xRRGGBB."""
     return g.MeshLambertMaterial(color=color, opacity=opacity, transparent=opacity < 1.0)
+
+
+def aim(vis: meshcat.Visualizer, roots: tuple[str, ...], centre: np.ndarray, eye: np.ndarray) -> None:
+    """Look at ``centre`` (m, world frame) from ``eye`` (m, from the centre; z up). MeshCat's camera orbits the
+    world's origin: the scene's ``roots`` (every top-level node), the grid and the axes are moved by -centre."""
+    shift = np.eye(4)
+    shift[:3, 3] = -np.asarray(centre, float)
+    for root in (*roots, "/Grid", "/Axes"):
+        vis[root].set_transform(shift)
+    x, y, z = np.asarray(eye, float)
+    vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])  # the camera's frame: y up

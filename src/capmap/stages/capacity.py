@@ -16,7 +16,7 @@ from capmap.io.logs import stage_logger
 from capmap.robots import load, run_arm
 from capmap.stages.common import stage_config
 
-__all__ = ["stage_model", "stage_sample", "stage_capacity", "stage_voxels"]
+__all__ = ["stage_model", "stage_sample", "stage_capacity", "stage_points", "stage_voxels"]
 
 
 # --------------------------------------------------------------------------- model
@@ -75,14 +75,24 @@ def stage_capacity(points: str, out: str, slice_json: str, shard: int, shards: i
 # --------------------------------------------------------------------------- voxels
 
 
-def stage_voxels(shards: list[str], out_voxels: str, out_points: str, slice_json: str) -> None:
+def stage_points(shards: list[str], out: str, slice_json: str) -> None:
+    """The capacity shards gathered into one per-point table, by point_id (the shards are temporary)."""
     cfg = stage_config(slice_json)
     pts = pd.concat([datasets.read(p) for p in shards], ignore_index=True).sort_values("point_id", ignore_index=True)
+    dirs = datasets.read(shards[0]).attrs["capmap"].get("directions") if shards else None
+    datasets.write(pts, out, datasets.provenance("capacity", cfg.doc, seed=cfg.run.sampling.seed, shards=len(shards),
+                                                 directions=dirs))
+    stage_logger(__name__, "points").info(f"{len(pts)} points ({int(pts.reachable.sum())} reachable) from "
+                                          f"{len(shards)} shards -> {out}")
+
+
+def stage_voxels(points: str, out_voxels: str, slice_json: str) -> None:
+    """The sampled voxel map: each voxel the least capacity over its sampled points."""
+    cfg = stage_config(slice_json)
+    pts = datasets.read(points)
     vox, grid = voxel_table(pts, cfg.run.voxel_edge_m)
     meta = grid_meta(grid)
-    seed = cfg.run.sampling.seed
-    datasets.write(vox, out_voxels, datasets.provenance("voxels", cfg.doc, seed=seed, grid=meta))
-    datasets.write(pts, out_points, datasets.provenance("voxels", cfg.doc, seed=seed, grid=meta))
+    datasets.write(vox, out_voxels, datasets.provenance("voxels", cfg.doc, seed=cfg.run.sampling.seed, grid=meta))
     reach = vox.n_reachable > 0
     stage_logger(__name__, "voxels").info(
         f"grid {grid.shape} x {grid.edge_m} m: {int(reach.sum())} reachable voxels of {grid.n_voxels}; "

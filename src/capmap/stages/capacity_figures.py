@@ -16,7 +16,7 @@ from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
 from capmap.plots.baseline import BaselineContext, baseline_figure
 from capmap.plots.capacity import capacity_map
-from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
+from capmap.plots.capacity_3d import PATH_COLOURS, PlannedPath, capacity_3d_html
 from capmap.robots import run_arm
 from capmap.stages.common import Outputs, stage_config
 
@@ -40,25 +40,29 @@ class MapView:
                    configuration_name(run_arm(run), run.failure.q_start_deg))
 
 
-def _planned(waypoints: list[str]) -> tuple[list[tuple[float, float, np.ndarray]], list[str]]:
-    """Each payload's planned path: (payload kg, cost m, waypoints (n, 3) m); the payloads without one."""
+def _planned(waypoints: list[str]) -> tuple[list[tuple[float, float, np.ndarray, np.ndarray]], list[str]]:
+    """Each payload's planned path: (payload kg, cost m, waypoints (n, 3) m, the capacity of the move
+    arriving at each waypoint along its own direction, kg (NaN at the start)); the payloads without one."""
     paths, missing = [], []
     for wp in map(datasets.read, waypoints):
         meta = wp.attrs["capmap"]
         if meta["status"] == "ok":
-            paths.append((meta["payload_kg"], meta["cost_m"], wp[["x_m", "y_m", "z_m"]].to_numpy()))
+            moves = wp.move_capacity_kg.to_numpy(float) if "move_capacity_kg" in wp else np.full(len(wp), np.nan)
+            paths.append((meta["payload_kg"], meta["cost_m"], wp[["x_m", "y_m", "z_m"]].to_numpy(), moves))
         else:
             missing.append(f"{meta['payload_kg']:g} kg")
     return paths, missing
 
 
-def stage_summary(voxels: str, configurations: str, points: str, waypoints: list[str], out: Outputs,
-                  slice_json: str) -> None:
-    """Capacity summary table (``out["csv"]``, ``out["md"]``) and the map figure (``out["png"]``: the arm's
-    configuration and the bound for any, the planned paths drawn)."""
-    vox, pts = datasets.read(voxels), datasets.read(points)
-    view = MapView.from_slice(slice_json)
-    op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
+def _carries(moves: np.ndarray) -> str:
+    """What a planned path's moves carry along their own directions, for its label ('' if unknown)."""
+    return f": each move carries ≥ {np.nanmin(moves):,.0f} kg along its own direction" if np.isfinite(
+        moves).any() else ""
+
+
+
+def _summary_rows(vox: pd.DataFrame, pts: pd.DataFrame, op: pd.DataFrame | None, configuration: str):
+    """The summary table's rows (quantity, value), the reachable voxels and their median capacity (kg)."""
     reach_v = vox[vox.n_reachable > 0]
     reach_p = pts[pts.reachable]
     q = (reach_v.capacity_kg.quantile([0.0, 0.05, 0.5, 0.95, 1.0]) if len(reach_v)
@@ -76,19 +80,31 @@ def stage_summary(voxels: str, configurations: str, points: str, waypoints: list
         rows.append((f"points bound by {name}", int(count)))
     if op is not None:
         r = op[op.n_reachable > 0]
-        rows += [(f"voxels reached on the arm's configuration {view.configuration}", len(r)),
-                 (f"voxel capacity median on {view.configuration} [kg]", round(float(r.capacity_kg.median()), 1)
+        rows += [(f"voxels reached on the arm's configuration {configuration}", len(r)),
+                 (f"voxel capacity median on {configuration} [kg]", round(float(r.capacity_kg.median()), 1)
                   if len(r) else np.nan),
-                 (f"voxels of 0 kg on {view.configuration} (a singular surface crosses them)",
+                 (f"voxels of 0 kg on {configuration} (a singular surface crosses them)",
                   int((r.capacity_kg == 0).sum())),
                  ("voxels of 0 kg for any configuration", int((reach_v.capacity_kg == 0).sum()))]
+    return rows, reach_v, q.iloc[2]
+
+
+def stage_summary(voxels: str, configurations: str, points: str, waypoints: list[str], out: Outputs,
+                  slice_json: str) -> None:
+    """Capacity summary table (``out["csv"]``, ``out["md"]``) and the map figure (``out["png"]``: the arm's
+    configuration and the bound for any, the planned paths drawn)."""
+    vox, pts = datasets.read(voxels), datasets.read(points)
+    view = MapView.from_slice(slice_json)
+    op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
+    rows, reach_v, median = _summary_rows(vox, pts, op, view.configuration)
     write_quantities(rows, out["csv"], out["md"])
-    planned, _ = _planned(waypoints)
-    paths = [("direct line", np.stack([view.start_m, view.goal_m]), {"color": "tab:red", "ls": "--"})]
-    paths += [(f"planned, {m:g} kg", p, {"color": c, "ls": "-"})
-              for (m, _, p), c in zip(planned, ["black", "tab:pink", "tab:brown", "tab:gray"])]
+    planned, missing = _planned(waypoints)
+    paths = [("direct start-goal line", np.stack([view.start_m, view.goal_m]), {"color": "black", "ls": "--"})]
+    paths += [(f"planned path, {m:g} kg{_carries(mv)}", p, {"color": PATH_COLOURS[n % len(PATH_COLOURS)], "ls": "-"})
+              for n, (m, _, p, mv) in enumerate(planned)]
+    paths += [(f"no planned path for {m}", np.empty((0, 3)), {"color": "none"}) for m in missing]
     capacity_map(vox, view, out["png"], op, view.configuration, paths)
-    stage_logger(__name__, "summary").info(f"{len(reach_v)} reachable voxels, median capacity {q.iloc[2]:.1f} kg "
+    stage_logger(__name__, "summary").info(f"{len(reach_v)} reachable voxels, median capacity {median:.1f} kg "
                                            f"-> {out['csv']}, {out['png']}")
 
 
@@ -102,11 +118,11 @@ def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], ou
     view = MapView.from_slice(slice_json)
     op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
     planned, missing = _planned(waypoints)
-    paths = [PlannedPath(f"planned path, {m:g} kg ({cost:.2f} m)", p) for m, cost, p in planned]
+    paths = [PlannedPath(f"planned path, {m:g} kg ({cost:.2f} m)", p, moves_kg=mv) for m, cost, p, mv in planned]
     for name, path in (task_waypoints or {}).items():
         found, none = _planned([path])
-        paths += [PlannedPath(f"task {name}: planned path, {m:g} kg ({cost:.2f} m)", p, ends=name)
-                  for m, cost, p in found]
+        paths += [PlannedPath(f"task {name}: planned path, {m:g} kg ({cost:.2f} m)", p, ends=name, moves_kg=mv)
+                  for m, cost, p, mv in found]
         missing += [f"task {name} ({m})" for m in none]
     edge = vox.attrs["capmap"]["grid"]["edge_m"]
     title = "Capacity map: reachable voxels by dynamic load-carrying capacity" + (

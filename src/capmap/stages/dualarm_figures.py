@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pinocchio as pin
 
 from capmap.config.dualarm import SolverConfig
@@ -21,6 +22,7 @@ from capmap.plots.dualarm import (
     joints,
     torques,
 )
+from capmap.plots.scene3d import Overlay
 from capmap.stages.common import Outputs, stage_config
 
 __all__ = ["stage_dualarm_plots", "stage_dualarm_animation"]
@@ -48,14 +50,15 @@ def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: st
 
 
 def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, out_html: str, slice_json: str) -> None:
-    """MeshCat static HTML of the motion (capsules, the panel, the fitted environment)."""
+    """MeshCat static HTML of the motion (capsules, the panel, the fitted environment), with its title, the
+    verdict, a legend and the simulated time, phase and closest pair as it plays."""
     da = stage_config(slice_json).run.dualarm
     caps, env_df = datasets.read(capsules), datasets.read(environment)
     robot, asm = job_setup(da, env_df, caps, da.horizon)
     traj = datasets.read(trajectory)
     scene = load_scene(da.scene)
     q = traj[[f"q_{j}_rad" for j in robot.joint_names]].to_numpy()
-    if traj.empty:  # no motion could be planned: the scene at the start, the reason in the title
+    if traj.empty:  # no motion could be planned: the scene at the start, the reason in the caption
         q = np.asarray(scene.q_start, dtype=float)[None]
     step = max(1, int(round(1.0 / (da.animation_fps * asm.task.dt))))
     model = asm.model
@@ -67,10 +70,31 @@ def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, ou
     jid = {name: model.getJointId(name) for name in robot.joint_names}
     capsules_at = [(c.name, jid.get(c.joint, 0), c.a, c.b, c.r) for c in robot.capsules]
     fp = model.frames[asm.task.panel]
-    env, _ = envelope_from(env_df)
+    env, (tri_label, _) = envelope_from(env_df)
     panel = (fp.parentJoint, fp.placement.homogeneous, scene.panel.size)
     animation(capsules_at, np.array(frames), panel,
-              Surroundings(env.tri, [(a, b, r) for (a, b), r in zip(env.seg, env.seg_radius)]),
-              1.0 / (step * asm.task.dt), f"{robot.description.name}: {scene.name}"
-              + (f" (no motion: {traj.attrs['capmap']['reason']})" if traj.empty else ""), out_html)
+              Surroundings(env.tri, [(a, b, r) for (a, b), r in zip(env.seg, env.seg_radius)], tri_label),
+              1.0 / (step * asm.task.dt), _caption(traj, step, f"{robot.description.name}: {scene.name}"), out_html)
     stage_logger(__name__, "dualarm animation").info(f"{len(frames)} frames -> {out_html}")
+
+
+PHASES = {"transfer": "transfer", "pre_insertion": "pre-insertion pose", "insertion": "insertion along the pin axis",
+          "final": "final pose"}
+
+
+def _caption(traj: pd.DataFrame, step: int, name: str) -> Overlay:
+    """The animation's words: its title, the verdict (the smallest safety distance at the nodes against the
+    margin), and per frame (every ``step``-th node) the phase and the closest pair; or why there is no motion."""
+    meta = traj.attrs["capmap"]
+    if traj.empty:
+        return Overlay(f"{name}: no motion planned", (f"no motion: {meta['reason']}",),
+                       frame_text=("the scene at the start pose",))
+    t_pre = traj.t_s[traj.phase == "pre_insertion"]
+    d, margin = 1e3 * float(traj.min_distance_m.min()), 1e3 * meta["margin_m"]
+    lines = (f"transfer 0–{t_pre.iloc[0]:.1f} s, then insertion along the pin axis to {traj.t_s.iloc[-1]:.1f} s"
+             if len(t_pre) else f"{traj.t_s.iloc[-1]:.1f} s of motion",
+             f"smallest safety distance at the nodes {d:.2f} mm (margin {margin:g} mm): "
+             + ("collision-free" if d > 0 else "IN COLLISION"))
+    texts = tuple(f"{PHASES.get(r.phase, r.phase)}; closest pair {r.min_distance_pair}, {1e3 * r.min_distance_m:.2f} mm"
+                  for r in traj.iloc[::step].itertuples())
+    return Overlay(f"{name}: dual-arm panel assembly", lines, frame_text=texts)

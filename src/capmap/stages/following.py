@@ -34,7 +34,7 @@ def stage_follow(case: str, out_timeseries: str, out_toppra: str, out_csv: str, 
                                rows=f"every {every} control periods and each window's torque peak" if every > 1
                                else "every control period")
     datasets.write(stored_rows(ts, every, limits.limit), out_timeseries, prov)
-    datasets.write(tp, out_toppra, prov)
+    datasets.write(stored_rows(tp, every, limits.limit), out_toppra, prov)
     write_table(summary_row(case, fc.arm, fc.label, st, run), out_csv, out_md)
     for line in run_lines(run):
         log.info(line)

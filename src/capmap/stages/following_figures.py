@@ -12,8 +12,10 @@ __all__ = ["stage_follow_plots"]
 
 
 def stage_follow_plots(timeseries: str, toppra: str, out: Outputs, slice_json: str) -> None:
-    """The path coordinate against TOPP-RA (``out["s"]``), the torques before and after limiting
-    (``out["torques"]``) and their split into drive terms (``out["split"]``)."""
+    """The follower's progress and duration against TOPP-RA (``out["s"]``), the torques before and after
+    limiting (``out["torques"]``) and their split into drive terms (``out["split"]``; a robot without
+    drives: the follower's torques against TOPP-RA's along the path). ``slice_json`` is not read: the
+    tables carry what the figures need."""
     ts, tp = datasets.read(timeseries), datasets.read(toppra)
     meta = ts.attrs["capmap"]
     if not meta.get("feasible", True):  # each figure says why the path cannot be followed
@@ -23,5 +25,5 @@ def stage_follow_plots(timeseries: str, toppra: str, out: Outputs, slice_json: s
         return
     follow_progress(ts, tp, meta["case"], out["s"])
     follow_torques(ts, meta["torque_limits_nm"], meta["case"], out["torques"])
-    follow_torque_split(ts, meta["torque_limits_nm"], meta["case"], meta["terms"], out["split"])
+    follow_torque_split(ts, tp, meta["torque_limits_nm"], meta["case"], meta["terms"], out["split"])
     stage_logger(__name__, f"follow plots {meta['case']}").info(f"-> {', '.join(out.values())}")

@@ -5,90 +5,160 @@ workflow checks it and, when they are of that config, the run's voxel maps."""
 from __future__ import annotations
 
 import json
+import textwrap
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from capmap.capacity.build import capacity_problem
 from capmap.capacity.engine import margin_pct
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.query import line_query, point_query
-from capmap.capacity.tables import grid_of
-from capmap.checks import check_run_config
+from capmap.capacity.voxels import Grid
+from capmap.checks import check_capacity_config
 from capmap.config.estimate import check_duration, check_steps, line_duration_s
 from capmap.config.run import RunConfig, run_document
 from capmap.config.slices import stage_slice
 from capmap.errors import CapmapError
-from capmap.io import datasets
+from capmap.io.arrays import read_columns
+from capmap.io.datasets import canonical
 
 __all__ = ["load_question", "answer_point", "answer_line"]
 
 def load_question(configfile: str) -> tuple[RunConfig, CapacityProblem]:
-    """The checked run config of ``configfile`` and the capacity problem it asks about (per configuration)."""
-    run = check_run_config(run_document([configfile]), configfile)
+    """The run config of ``configfile`` with its capacity part checked (as the workflow checks it) and the
+    capacity problem it asks about (per configuration)."""
+    run = check_capacity_config(run_document([configfile]), configfile)
     return run, capacity_problem(run, per_configuration=True)
 
 
+BOUNDARY_M = 1e-6
+"""A point this close to a voxel face is on it: it is answered with every voxel it touches (their least)."""
+
+
 def _run_voxels(run: RunConfig, results: Path, point: np.ndarray) -> dict:
-    """The run's voxel values at the point: {"voxel": (i, j, k), "map_kg": all-branch, "configurations":
-    {name: kg}, "note": why there are none}."""
+    """The run's voxel values at the point: {"voxels": [(i, j, k), ...] the voxels it touches (one inside a
+    voxel, up to eight on a corner), "map_kg": the least all-branch value over them, "configurations":
+    {name: least kg}, "note": why there are none}."""
     base = results / run.name / "voxels"
     path, conf_path = base / "voxels.parquet", base / "configurations.parquet"
     if not path.is_file():
-        return {"note": f"no voxel map at {path} (run: snakemake --cores 2 capacity_map)"}
+        return {"note": f"no voxel map at {path} (run: capmap run, or snakemake --cores 2 capacity_map)"}
     try:
-        vox = datasets.read(path)
-        have = {k: v for k, v in vox.attrs["capmap"]["config"].items() if k != "code"}
+        vox, meta = read_columns(path, ["n_reachable", "capacity_kg"])
+        have = {k: v for k, v in meta["config"].items() if k != "code"}
+        g = meta["grid"]
+        grid = Grid(np.asarray(g["lower_m"], dtype=float), tuple(g["shape"]), float(g["edge_m"]))
     except (CapmapError, KeyError, TypeError, AttributeError) as exc:
         return {"note": f"{path} is not a voxel map capmap wrote ({exc}); rerun: snakemake --cores 2 capacity_map"}
     want = {k: v for k, v in stage_slice(run, "refine").items() if k != "code"}
-    if datasets.canonical(want) != datasets.canonical(have):
+    if canonical(want) != canonical(have):
         return {"note": f"{path} is of another config than this one (rerun: snakemake --cores 2 capacity_map)"}
-    grid = grid_of(vox)
-    idx = grid.index(point[None])[0]
-    if np.any(idx < 0):
+    idx = grid.touching(point, BOUNDARY_M)
+    if not len(idx):
         return {"note": "outside the run's voxel grid"}
-    row = vox.iloc[int(grid.flat(idx[None])[0])]
-    bound = float(row.capacity_kg) if row.n_reachable > 0 and np.isfinite(row.capacity_kg) else None  # JSON: null
-    out = {"voxel": [int(v) for v in idx], "map_kg": bound, "configurations": {}}
+    flat = grid.flat(idx)
+    cap = vox["capacity_kg"][flat]
+    cap = cap[(vox["n_reachable"][flat] > 0) & np.isfinite(cap)]
+    out = {"voxels": idx.tolist(), "map_kg": float(cap.min()) if len(cap) else None, "configurations": {}}  # JSON null
     if conf_path.is_file():
-        conf = datasets.read(conf_path)
-        mine = conf[(conf.i == idx[0]) & (conf.j == idx[1]) & (conf.k == idx[2])]
-        out["configurations"] = {str(c): float(v) for c, v in zip(mine.configuration, mine.capacity_kg) if np.isfinite(v)}
+        conf, _ = read_columns(conf_path, ["i", "j", "k", "configuration", "capacity_kg"])
+        mine = np.isin(grid.flat(np.stack([conf["i"], conf["j"], conf["k"]], axis=1)), flat) & np.isfinite(conf["capacity_kg"])
+        for c, v in zip(conf["configuration"][mine], conf["capacity_kg"][mine]):
+            out["configurations"][str(c)] = min(float(v), out["configurations"].get(str(c), np.inf))
     return out
 
 
-def answer_point(configfile: str, point, payload_kg: float | None, as_json: bool, results: str = "results") -> str:
-    """The text (or JSON) answer to ``query point``."""
+def _arm_configuration(run: RunConfig, q: CapacityProblem) -> str:
+    """The configuration the arm holds at the task start (of task.q_ini_deg / the start configuration)."""
+    q_ref = np.deg2rad(np.asarray(run.failure.q_start_deg, dtype=float))[q.dyn.arm.active]
+    return q.labels.names[int(q.labels.labels(q_ref[None])[0])]
+
+
+def _verdict(ans, arm_cfg: str, payload_kg: float) -> dict:
+    """Whether the arm's configuration (and any) carries the payload at the point."""
+    cap = np.asarray(ans.capacity_kg)
+    mine = cap[[c == arm_cfg for c in ans.configuration]]
+    best = int(np.argmax(cap))
+    return {"payload_kg": payload_kg, "arm_configuration": arm_cfg,
+            "arm_reaches": bool(len(mine)), "arm_capacity_kg": float(mine.min()) if len(mine) else None,
+            "arm_carries": bool(len(mine) and mine.min() >= payload_kg),
+            "arm_margin_pct": float(margin_pct(mine.min(), payload_kg)) if len(mine) else None,
+            "configurations_carrying": sorted({c for c, v in zip(ans.configuration, cap) if v >= payload_kg}),
+            "best_configuration": ans.configuration[best], "best_capacity_kg": float(cap[best])}
+
+
+def _verdict_line(v: dict, n_conf: int) -> str:
+    m, c = v["payload_kg"], v["arm_configuration"]
+    n = len(v["configurations_carrying"])
+    if not v["arm_reaches"]:
+        return (f"verdict: the arm's configuration {c} does not reach this point; {n} of {n_conf} configurations "
+                f"carry {m:g} kg (the best: {v['best_capacity_kg']:.0f} kg on {v['best_configuration']})")
+    return (f"verdict: carries {m:g} kg on {c}, the arm's: {'yes' if v['arm_carries'] else 'NO'}, margin "
+            f"{v['arm_margin_pct']:.0f} %; {n} of {n_conf} configurations carry it")
+
+
+def answer_point(configfile: str, point, payload_kg: float | None, as_json: bool, results: str = "results",
+                 joints: bool = False) -> str:
+    """The text (or JSON) answer to ``query point``: every IK branch's capacity at the point, the arm's
+    configuration marked, the verdict for ``payload_kg``, the run's voxel values there (``joints``: the
+    branches' joint angles too; always in the JSON)."""
     run, q = load_question(configfile)
     p = np.asarray(point, dtype=float)
     ans = point_query(q, p)
     vox = _run_voxels(run, Path(results), p)
-    arm = q.dyn.arm
-    u = np.round(ans.worst_u, 4) + 0.0  # a unit vector: 4 decimals (and no -0)
-    df = pd.DataFrame({"configuration": ans.configuration, "capacity_kg": ans.capacity_kg, "binding": ans.binding,
-                       "worst_ux": u[:, 0], "worst_uy": u[:, 1], "worst_uz": u[:, 2]})
-    if payload_kg is not None:
-        df["margin_pct"] = margin_pct(ans.capacity_kg, payload_kg)
-        df["carries"] = ans.capacity_kg >= payload_kg
+    arm_cfg = _arm_configuration(run, q)
     voxel_cfg = vox.get("configurations", {})
-    df["voxel_capacity_kg"] = [voxel_cfg.get(c, np.nan) for c in ans.configuration]
-    for c, j in enumerate(arm.active_joint_numbers):
-        df[f"q_j{j}_deg"] = np.rad2deg(ans.q_rad[:, c])
+    names = q.dyn.arm.active_joint_numbers
+    verdict = None if payload_kg is None else _verdict(ans, arm_cfg, payload_kg)
     if as_json:
-        return json.dumps({"point_m": p.tolist(), "payload_kg": payload_kg, "run": run.name, "voxel": vox,
-                           "branches": json.loads(df.to_json(orient="records"))}, indent=1)
-    head = (f"capmap: run {run.name!r}, {run.failure.describe()}\npoint [{', '.join(f'{v:g}' for v in p)}] m at the task "
-            f"orientation: {len(df)} IK branches on {df.configuration.nunique()} configurations "
-            f"({q.labels.description})")
+        branches = [{"configuration": c, "arms": c == arm_cfg, "capacity_kg": float(k), "binding": b,
+                     "worst_direction": [float(x) for x in np.round(u, 6) + 0.0], "voxel_capacity_kg": voxel_cfg.get(c),
+                     **({"margin_pct": float(margin_pct(k, payload_kg))} if payload_kg is not None else {}),
+                     **{f"q_j{j}_deg": float(np.rad2deg(x)) for j, x in zip(names, qq)}}
+                    for c, k, b, u, qq in zip(ans.configuration, ans.capacity_kg, ans.binding, ans.worst_u, ans.q_rad)]
+        return json.dumps({"point_m": p.tolist(), "run": run.name, "lock": run.failure.describe(),
+                           "arm_configuration": arm_cfg, "verdict": verdict, "voxel": vox, "branches": branches},
+                          indent=1)
+    head = [f"capmap: run {run.name!r}: {run.failure.describe().split(';')[0]}",
+            f"point [{', '.join(f'{v:g}' for v in p)}] m at the task orientation: {len(ans.configuration)} IK branches "
+            f"on {len(set(ans.configuration))} configurations"]
+    rows = [_row(c, k, b, u, voxel_cfg.get(c), payload_kg, c == arm_cfg)
+            for c, k, b, u in zip(ans.configuration, ans.capacity_kg, ans.binding, ans.worst_u)]
+    table = [_HEADER if payload_kg is not None else _HEADER.replace("margin_pct", "          ")] + rows
+    if joints:
+        table += ["", "config   " + "".join(f"{f'q_j{j}_deg':>10}" for j in names)]
+        table += [f"{c:<9}" + "".join(f"{np.rad2deg(x):10.2f}" for x in qq) for c, qq in zip(ans.configuration, ans.q_rad)]
+    tail = [f"* the arm's configuration ({arm_cfg}: the one it holds at the task start); "
+            f"{q.labels.description.split(';')[0]}"]
+    if verdict is not None:
+        tail.append(_verdict_line(verdict, len(q.labels.names)))
+    tail.append(_voxel_line(vox))
+    return "\n".join(_wrap(head) + [r.rstrip() for r in table] + _wrap(tail))
+
+
+_HEADER = "config      capacity_kg  margin_pct  binding      worst direction (x, y, z)  voxel_kg"
+
+
+def _row(conf: str, cap: float, binding: str, u, voxel_kg, payload_kg, mine: bool) -> str:
+    direction = "(" + ", ".join(f"{v + 0.0:+.3f}" for v in u) + ")"
+    margin = f"{margin_pct(cap, payload_kg):10.1f}" if payload_kg is not None else " " * 10
+    vk = "—" if voxel_kg is None else f"{voxel_kg:.0f}"
+    return f"{conf + (' *' if mine else ''):<10}{cap:12.0f}  {margin}  {binding:<12} {direction:<26} {vk:>8}"
+
+
+def _voxel_line(vox: dict) -> str:
     if "note" in vox:
-        tail = f"run's voxel map: {vox['note']}"
-    else:
-        bound = "no sampled point reached" if vox["map_kg"] is None else f"{vox['map_kg']:.1f} kg for any configuration"
-        tail = (f"run's voxel {tuple(vox['voxel'])}: {bound} (the all-branch bound); voxel_capacity_kg: each "
-                f"configuration's minimum over the voxel")
-    return "\n".join([head, df.to_string(index=False, float_format=lambda v: f"{v:.4g}"), tail])
+        return f"run's voxel map: {vox['note']}"
+    where = (f"voxel {tuple(vox['voxels'][0])}" if len(vox["voxels"]) == 1 else
+             f"on the boundary of {len(vox['voxels'])} voxels {', '.join(str(tuple(v)) for v in vox['voxels'])}: the least")
+    bound = "no sampled point reached" if vox["map_kg"] is None else f"{vox['map_kg']:.1f} kg"
+    return (f"run's map: {where}: {bound} for any configuration; voxel_kg: each configuration's least over the voxel "
+            "(the map holds over the whole voxel and every motion direction)")
+
+
+def _wrap(lines: list[str], width: int = 100) -> list[str]:
+    return [w for ln in lines for w in textwrap.wrap(ln, width, subsequent_indent="  ", break_on_hyphens=False)]
 
 
 def answer_line(configfile: str, a, b, payload_kg: float | None, configuration: str | None, as_json: bool) -> str:

@@ -33,9 +33,13 @@ def stage_reconfig_animation(tables: list[str], out_html: str, slice_json: str) 
     model = platform_model(problem.description)
     segments = link_segments(problem.description)
     links = tuple(sorted({s[0] for s in segments}))
-    frames = {}
+    frames, words = {}, []
     for df in map(datasets.read, tables):
         meta = df.attrs["capmap"]
+        m = meta.get("summary", {})
+        if "m_final" in m:  # the verdict of each method, over the view
+            name = {"nullspace": "null-space", "pinv": "pseudo-inverse"}.get(meta["method"], meta["method"])
+            words.append(f"{name}: manipulability m {m['m_initial']:.1f} → {m['m_final']:.1f} ({m['m_change_pct']:+.0f} %)")
         t = np.arange(0.0, df.t_s.iloc[-1] + 1e-9, 1.0 / cfg.animation_fps)
         rows = np.clip(np.searchsorted(df.t_s.to_numpy(), t), 0, len(df) - 1)
         sub = df.iloc[rows]
@@ -45,5 +49,6 @@ def stage_reconfig_animation(tables: list[str], out_html: str, slice_json: str) 
                   for _, r in sub.iterrows()]
         frames[meta["method"]] = np.array([model.placements(s, links) for s in states])
     animation(links, segments, frames, cfg.animation_fps, problem.split.unlocked,
-              f"{problem.description.name}: {problem.split.unlocked} unlocked", out_html)
+              f"{problem.description.name}: reconfiguration with {problem.split.unlocked} unlocked"
+              + "".join(f"\n{w}" for w in words), out_html)
     stage_logger(__name__, "reconfig animation").info(f"{len(next(iter(frames.values())))} frames -> {out_html}")

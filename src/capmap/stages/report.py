@@ -8,6 +8,7 @@ from pathlib import Path
 import pandas as pd
 
 from capmap.io import datasets
+from capmap.io.catalogue import catalogue_table
 from capmap.io.html_tables import table_html
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_table
@@ -16,8 +17,8 @@ __all__ = ["stage_catalogue", "stage_concat_summary", "stage_report_tables", "TA
 
 
 def stage_catalogue(paths: list[str], out: str) -> None:
-    """One row per dataset (see :func:`capmap.io.datasets.catalogue`)."""
-    cat = datasets.catalogue(paths)
+    """One row per dataset (see :func:`capmap.io.catalogue.catalogue_table`)."""
+    cat = catalogue_table(paths)
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     cat.to_parquet(out, index=False)
     stage_logger(__name__, "catalogue").info(f"{len(cat)} datasets -> {out}")
@@ -58,9 +59,6 @@ def stage_report_tables(tables: dict[str, str], outputs: dict[str, str], stale: 
         if name == "catalogue":
             df = df.drop(columns=["capmap_version"], errors="ignore")
             df["sha256"] = df.sha256.str[:12]
-            # one name per dataset: its path under the run's folder (verify/payload_1500kg/waypoints, not waypoints)
-            df["name"] = [str(Path(*Path(p).parts[2:]).with_suffix("")) if len(Path(p).parts) > 2 else n
-                          for n, p in zip(df.name, df.path)]
             extra = ("<h2>Not of this config</h2><p class='caption'>Left on disk by an earlier config of this run "
                      "(a payload, task, case or family since removed): not current, not in this report.</p><ul>"
                      + "".join(f"<li>{html.escape(p)}</li>" for p in stale) + "</ul>") if stale else ""
