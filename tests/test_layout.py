@@ -90,11 +90,17 @@ def test_module_is_small(name):
     assert n <= MAX_LINES, f"{name} has {n} lines (limit {MAX_LINES})"
 
 
+# modules that import a family inside the function that needs it: the command line (``capmap --help`` and a
+# usage error answer at once, ``capmap query`` does not load the dual-arm family) and the pre-run checks of the
+# families a capacity query does not check. Each import still points the allowed way.
+IMPORT_WHEN_USED = {"capmap.__main__", "capmap.checks"}
+
+
 @pytest.mark.parametrize("name", sorted(m for m in MODULES if m.count(".")))
 def test_imports_point_one_way_and_sit_at_the_top(name):
     part = _part(name)
     for imported, at_top in _imports(MODULES[name]):
-        assert at_top, f"{name} imports {imported} inside a function"
+        assert at_top or name in IMPORT_WHEN_USED, f"{name} imports {imported} inside a function"
         other = _part(imported)
         if other != part:
             assert other in ALLOWED[part], f"{name} ({part}) must not import {imported} ({other})"

@@ -52,13 +52,15 @@ def numba_folder(package, base: str) -> str:
 
 
 def _numba_cache_dir() -> None:
-    """Numba's on-disk cache in a folder per content of capmap's compiled sources (:func:`numba_folder`).
-    Numba checks a cached function against its own file's time stamp only, not the functions it calls in
-    other files, so an edit of a callee (the dual-arm node kernel, called by the compiled FDDP) would
-    leave its callers' cached code stale; a new folder per content recompiles everything instead
-    (``python -m capmap.kernels`` warms it). Under NUMBA_CACHE_DIR when set, else the package's
-    __pycache__ when writable, else the user's cache folder. Set before numba is imported (numba reads it
-    then), or in numba's config after."""
+    """Numba's on-disk cache in a folder per content of capmap's compiled sources (:func:`numba_folder`),
+    shared by every checkout on the machine (:mod:`capmap._numba_cache`: kernels named by their place in
+    the package and stamped by content, not by path and time). Numba checks a cached function against
+    its own file only, not the functions it calls in other files, so an edit of a callee (the dual-arm
+    node kernel, called by the compiled FDDP) would leave its callers' cached code stale; a new folder
+    per content recompiles everything instead (``python -m capmap.kernels`` warms it). Under
+    NUMBA_CACHE_DIR when set, else the user's cache folder (``$XDG_CACHE_HOME/capmap`` or
+    ``~/.cache/capmap``) when writable, else the package's __pycache__. Set before numba is imported
+    (numba reads it then), or in numba's config after."""
     import os
     import sys
     from pathlib import Path
@@ -70,11 +72,21 @@ def _numba_cache_dir() -> None:
     elif given:
         base = given
     else:
-        base = str(package / "__pycache__") if os.access(package, os.W_OK) else str(Path.home() / ".cache" / "capmap")
+        user = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "capmap"
+        try:
+            user.mkdir(parents=True, exist_ok=True)
+            writable = os.access(user, os.W_OK)
+        except OSError:
+            writable = False
+        base = str(user) if writable else str(package / "__pycache__")
     folder = numba_folder(package, base)
-    os.environ.update(NUMBA_CACHE_DIR=folder, CAPMAP_NUMBA_BASE=base, CAPMAP_NUMBA_DIR=folder)
+    locators = os.environ.get("NUMBA_CACHE_LOCATOR_CLASSES") or \
+        "capmap._numba_cache.ContentLocator,UserProvidedCacheLocator,InTreeCacheLocator,UserWideCacheLocator"
+    os.environ.update(NUMBA_CACHE_DIR=folder, CAPMAP_NUMBA_BASE=base, CAPMAP_NUMBA_DIR=folder,
+                      NUMBA_CACHE_LOCATOR_CLASSES=locators)
     if "numba" in sys.modules:
         sys.modules["numba"].config.CACHE_DIR = folder
+        sys.modules["numba"].config.CACHE_LOCATOR_CLASSES = locators
 
 
 _numba_cache_dir()

@@ -9,7 +9,7 @@ import subprocess
 import pytest
 
 import capmap.capacity.sizing as sizing
-from capmap.config.estimate import BATCH_VOXELS
+from capmap.capacity.refine_data import BATCH_VOXELS
 from capmap.config.capacity import SamplingConfig
 from capmap.config.estimate import BASE_MB, MAP_VOXEL_KB, REFINE_VOXEL_MB, Estimate, MapJobs
 from capmap.errors import ConfigError

@@ -88,3 +88,12 @@ def test_report_tables_name_each_dataset_by_its_path_and_list_stale_outputs(two_
     assert "verify_1500kg" in page and "follow_ground" in page and "torque-limited follower" in page
     assert "Not of this config" in page and "payload_9kg" in page
     assert "12.5" in (tmp_path / "html" / "gain.html").read_text()
+
+
+def test_the_outputs_page_lists_the_registry():
+    """docs/outputs.md's dataset table is the registry's (python -m capmap.io.catalogue --write docs/outputs.md)."""
+    from pathlib import Path
+
+    from capmap.io.catalogue import outputs_table
+
+    assert outputs_table() in (Path(__file__).parents[2] / "docs" / "outputs.md").read_text()

@@ -10,7 +10,9 @@ import numpy as np
 
 from capmap.errors import CapmapError
 
-__all__ = ["RefineSettings", "Evaluation", "VoxelMinima"]
+__all__ = ["BATCH_VOXELS", "RefineSettings", "Evaluation", "VoxelMinima"]
+
+BATCH_VOXELS = 4096  # voxels refined together: a refine job's memory is bounded by this, not by its shard's size
 
 
 @dataclass(frozen=True)

@@ -14,9 +14,9 @@ from capmap.capacity.engine import SINGULAR
 from capmap.capacity.evaluator import LockedEvaluator
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
+from capmap.capacity.refine_data import BATCH_VOXELS
 from capmap.capacity.tables import AXIS_COLUMNS, grid_of
 from capmap.capacity.voxels import Grid
-from capmap.config.estimate import BATCH_VOXELS
 
 __all__ = ["REFINED_COLUMNS", "CONFIGURATION_COLUMNS", "RefinedShard", "refine_shard", "merge_refined"]
 

@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from capmap.capacity.refine_data import BATCH_VOXELS
 from capmap.capacity.sampling import joint_samples
 from capmap.capacity.voxels import Grid
 from capmap.config.capacity import SamplingConfig
 from capmap.config.estimate import (
     BASE_MB,
-    BATCH_VOXELS,
     CHUNK,
     MAP_VOXEL_KB,
     MAX_BRANCHES,

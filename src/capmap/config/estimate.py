@@ -6,7 +6,7 @@ The memory model is per kind of job, its constants measured (``tests/benchmarks/
 each estimate beside the measured peak at three voxel edges): a Python process with Pinocchio and numba
 imported holds ~400 MB; a capacity shard holds one chunk of 500 points x IK branches x directions x limit
 outputs in a few float64 arrays; the voxels stage holds every point of the map in a table of ~40 columns;
-a refine job holds one batch of voxels (:data:`BATCH_VOXELS`) and their points;
+a refine job holds one batch of voxels (:data:`capmap.capacity.refine_data.BATCH_VOXELS`) and their points;
 the jobs that read the whole map hold a few KB per voxel. The estimate itself draws the seeded joint samples:
 :func:`capmap.capacity.sizing.estimate_map`; this module holds its result and the step guards."""
 
@@ -26,7 +26,6 @@ __all__ = ["Estimate", "MapJobs", "REFINE_VOXEL_MB", "MAP_VOXEL_KB", "PLAN_VOXEL
 BASE_MB = 400.0  # a job's Python with numpy, pandas, numba and Pinocchio imported (measured: 396 MB)
 # a refine job's memory per voxel of its batch: 0.12, 0.15, 0.21 MB measured at 0.75, 0.375, 0.25 m
 REFINE_VOXEL_MB = 0.17
-BATCH_VOXELS = 4096  # voxels refined together: a refine job's memory is bounded by this, not by its shard's size
 # a job reading the whole map's tables (merge, summary, 3D page, figures), per grid voxel: 3.2 KB measured
 MAP_VOXEL_KB = 3.3
 PLAN_VOXEL_KB = 0.5  # a plan job (A* over the map's voxels and IK branches), per grid voxel: 0.4-0.5 KB measured

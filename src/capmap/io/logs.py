@@ -1,4 +1,6 @@
-"""Logging for the stages: progress to the rule's log file and to stderr, one line per event.
+"""Logging for the stages: every line to the rule's log file; to the console (stderr) one line per
+finished job (its last message, wall time and memory), warnings, and for a long job a progress line at
+most every :data:`CONSOLE_EVERY_S` seconds.
 
 Every module logs through ``logging.getLogger(__name__)`` (below the ``capmap`` logger);
 :func:`stage_logger` adds the stage's label to each line (``[12:00:01] capacity shard 0 of 4:
@@ -37,12 +39,41 @@ def stage_logger(name: str, label: str) -> logging.LoggerAdapter:
     return _Labelled(logging.getLogger(name), {"label": label})
 
 
+CONSOLE_EVERY_S = 30.0
+"""A job's progress reaches the console at most this often (its log file gets every line)."""
+
+
+class _Console(logging.StreamHandler):
+    """stderr for a job: warnings at once; an INFO line only when CONSOLE_EVERY_S have passed since the
+    job started or since the last one shown; the last INFO line held for :meth:`finish`."""
+
+    def __init__(self) -> None:
+        super().__init__(sys.stderr)
+        self.shown_at = time.monotonic()
+        self.last: logging.LogRecord | None = None
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if record.levelno >= logging.WARNING:
+            super().emit(record)
+            return
+        self.last = record
+        if time.monotonic() - self.shown_at >= CONSOLE_EVERY_S:
+            self.shown_at = time.monotonic()
+            super().emit(record)
+
+    def finish(self, tail: str) -> None:
+        """The job's one line: its last message and ``tail`` (wall time, memory)."""
+        if self.last is not None:
+            self.last.msg, self.last.args = f"{self.last.getMessage()} ({tail})", None
+            super().emit(self.last)
+
+
 @contextmanager
-def logging_to(log_path: str | Path | None) -> Iterator[None]:
-    """Send the capmap loggers' INFO lines to stderr and (if given) appended to ``log_path``;
-    the handlers are closed when the block ends."""
+def logging_to(log_path: str | Path | None, console: logging.Handler | None = None) -> Iterator[None]:
+    """Send the capmap loggers' INFO lines to ``console`` (default: every line to stderr) and, if given,
+    appended to ``log_path``; the handlers are closed when the block ends."""
     fmt = logging.Formatter("[%(asctime)s] %(message)s", datefmt="%H:%M:%S")
-    handlers: list[logging.Handler] = [logging.StreamHandler(sys.stderr)]
+    handlers: list[logging.Handler] = [console or logging.StreamHandler(sys.stderr)]
     if log_path:
         Path(log_path).parent.mkdir(parents=True, exist_ok=True)
         handlers.append(logging.FileHandler(log_path, mode="a"))
@@ -125,11 +156,16 @@ def _end_with_the_workflow(poll_s: float = 1.0) -> None:
 def call(fn, log: str | None = None, **kwargs) -> None:
     """Entry for the thin Snakemake scripts: ``fn(**kwargs)`` with logging to ``log`` and one-line
     errors; the job's wall time and peak memory (resident set) are logged at the end (the sizes
-    the cluster profile's per-rule resources are set from)."""
+    the cluster profile's per-rule resources are set from). The console gets one line per job
+    (:class:`_Console`)."""
     t0 = time.perf_counter()
     _end_with_the_workflow()
-    with one_line_errors(log), logging_to(log):
+    console = _Console()
+    with one_line_errors(log), logging_to(log, console):
         fn(**kwargs)
         peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # Linux: kB
-        logging.getLogger(f"{ROOT}.job").info(f"job {fn.__name__}: {time.perf_counter() - t0:.1f} s wall, "
-                                              f"peak memory {peak_mb:.0f} MB")
+        wall = time.perf_counter() - t0
+        last, console.shown_at = console.last, float("inf")  # the job's line below goes to its log file only
+        logging.getLogger(f"{ROOT}.job").info(f"job {fn.__name__}: {wall:.1f} s wall, peak memory {peak_mb:.0f} MB")
+        console.last = last
+        console.finish(f"{wall:.1f} s, {peak_mb:.0f} MB")

@@ -46,59 +46,73 @@ def _layer(df: pd.DataFrame, column: str, k: int, edge: float) -> tuple[np.ndarr
     return img, [x0, x0 + nx * edge, y0, y0 + ny * edge]
 
 
-def baseline_figure(df: pd.DataFrame, conv: pd.DataFrame, context: BaselineContext, out_png: str | Path) -> None:
-    """Four panels: the volume carrying each payload, healthy and failed (the arm's configuration and
-    any); the start's voxel layer of the healthy map and of the loss on the arm's configuration; the rise
-    of the checked voxels' healthy values at half and a quarter of the angle step."""
-    configuration, joint, angle_deg, step_deg = context.configuration, context.joint, context.angle_deg, context.step_deg
-    edge_m, start_m, payloads_kg = context.edge_m, context.start_m, context.payloads_kg
-    fig, ax = plt.subplots(2, 2, figsize=(13, 10.5))
-    a = ax[0, 0]
+def _volumes(a, df: pd.DataFrame, configuration: str, edge_m: float, payloads_kg) -> str:
+    """The volume carrying each payload M, against M: healthy, failed on ``configuration``, failed for any
+    configuration; each task payload marked. Returns the verdict at the task payloads (text)."""
     top = np.nanmax(df.healthy_capacity_kg.to_numpy(), initial=1.0)
     m = np.linspace(0.0, top * 1.02, 400)
-    for col, label, style in (("healthy_capacity_kg", "healthy arm (best self-motion)", dict(color="black")),
-                              ("arm_configuration_capacity_kg", f"failed, on the arm's configuration {configuration}",
-                               dict(color="tab:blue")),
-                              ("capacity_kg", "failed, any configuration (the bound)", dict(color="tab:blue", ls="--"))):
+    curves = (("healthy_capacity_kg", "healthy arm (best self-motion)", dict(color="black", lw=2)),
+              ("arm_configuration_capacity_kg", f"failed, on the arm's configuration {configuration}",
+               dict(color="tab:blue", lw=2)),
+              ("capacity_kg", "failed, any configuration (the bound)", dict(color="tab:blue", ls="--")))
+    vol = {}
+    for col, label, style in curves:
         v = np.sort(df[col].dropna().to_numpy())
+        vol[col] = lambda p, v=v: (len(v) - np.searchsorted(v, p, side="left")) * edge_m ** 3
         if len(v):
-            a.plot(m, (len(v) - np.searchsorted(v, m, side="left")) * edge_m**3, label=label, **style)
-    for p in payloads_kg:
-        a.axvline(p, color="gray", ls=":", lw=1)
-        a.text(p, a.get_ylim()[1] * 0.97, f" {p:g} kg", color="gray", fontsize=8, va="top")
-    a.set(xlabel="payload M [kg]", ylabel="volume of voxels carrying M [m³]",
-          title=f"What the failure of joint {joint} (locked at {angle_deg:g} deg) cost")
-    a.legend(fontsize=8)
-    lo = _lower(df, edge_m)
-    k = int(np.floor((start_m[2] - lo[2]) / edge_m))  # the task start's layer
-    z = lo[2] + (k + 0.5) * edge_m
-    for a, col, title, cmap in ((ax[0, 1], "healthy_capacity_kg", "healthy arm's capacity", "viridis"),
-                                (ax[1, 0], "arm_configuration_loss_kg",
-                                 f"loss on {configuration}: healthy − failed (failed 0 where it does not reach)", "magma_r")):
-        img, extent = _layer(df, col, k, edge_m)
-        im = a.imshow(img, origin="lower", cmap=cmap, extent=extent, interpolation="nearest",
-                      vmin=0.0 if col == "healthy_capacity_kg" else None)
-        fig.colorbar(im, ax=a, label=f"{'capacity' if col.startswith('healthy') else 'loss'} [kg]")
-        if col != "healthy_capacity_kg":
-            lost = df[(df.k == k) & df.capacity_kg.isna() & df.healthy_capacity_kg.notna()]
-            a.plot(lost.x_m, lost.y_m, ".", color="tab:gray", ms=3,
-                   label="the failed arm does not reach it (loss = healthy value)")
-        neg = df[(df.k == k) & (df[col] < 0)]
-        if len(neg):
-            a.plot(neg.x_m, neg.y_m, "x", color="tab:cyan", ms=4, label="loss < 0 (reach differs inside the voxel)")
-        a.plot(start_m[0], start_m[1], "o", ms=10, mfc="none", mec="tab:green", mew=2, label="task start")
-        a.set(xlabel="x [m]", ylabel="y [m]", title=f"{title}\nlayer z = {z:.2f} m (the task start's)")
-        a.legend(fontsize=7, loc="lower left")
-    a = ax[1, 1]
-    for col, label in (("rise_half_step_rel", f"{step_deg / 2:g} deg"), ("rise_quarter_step_rel", f"{step_deg / 4:g} deg")):
-        v = np.sort(100 * conv[col].dropna().to_numpy())[::-1]
-        a.plot(np.arange(1, len(v) + 1), v, marker=".", ms=3, label=f"angle step {label}")
-    a.axhline(0.0, color="gray", lw=0.8)
-    n = int(conv.rise_quarter_step_rel.notna().sum())
-    a.set(xlabel="checked voxel (sorted by rise)", ylabel="rise of the healthy value over the step's [%]",
-          title=f"Is a {step_deg:g} deg step of joint {joint} fine enough?\nworst points of {len(conv)} random voxels "
-                f"({len(conv) - n} of 0 kg left out)")
-    a.legend(fontsize=8)
-    fig.suptitle("Healthy-arm baseline: the arm without the failure (best angle of the failed joint at each point) "
-                 "against the failed arm", fontsize=11)
-    save(fig, out_png, rect=(0, 0, 1, 0.97))
+            a.plot(m, vol[col](m), label=label, **style)
+    verdicts = []
+    for n, p in enumerate(payloads_kg):
+        h, f = vol["healthy_capacity_kg"](p), vol["arm_configuration_capacity_kg"](p)
+        lost = f"{100 * (1 - f / h):.0f} %" if h > 0 else "—"
+        verdicts.append(f"{p:g} kg: {h:,.0f} → {f:,.0f} m³ on {configuration} ({lost} lost)")
+        a.axvline(p, color="0.3", ls=":", lw=1)
+        a.text(p, 0.97 - 0.09 * n, f" {p:g} kg: healthy {h:,.0f} m³,\n failed {f:,.0f} m³ ({lost} lost) ",
+               transform=a.get_xaxis_transform(), fontsize=8.5, va="top", ha="right" if p > 0.6 * top else "left",
+               bbox=dict(fc="white", ec="none", alpha=0.85))
+    a.set(xlabel="payload M [kg]", ylabel="volume of the voxels carrying M [m³]", xlim=(0, top * 1.02),
+          title="How much: the volume that carries each payload")
+    a.grid(alpha=0.3)
+    a.legend(fontsize=8.5, loc="upper center", bbox_to_anchor=(0.5, -0.12))
+    return "; ".join(verdicts)
+
+
+def baseline_figure(df: pd.DataFrame, conv: pd.DataFrame, context: BaselineContext, out_png: str | Path) -> None:
+    """What the failure cost, in two panels: how much (the volume carrying each payload M, healthy and
+    failed on the arm's configuration and for any, the loss at the task payloads written) and where (the
+    loss on the arm's configuration over the task start's voxel layer). The check of the angle step (the
+    rise of the checked voxels' healthy values at half and a quarter of it) is a line under the title."""
+    c = context
+    fig, ax = plt.subplots(1, 2, figsize=(15, 7), layout="constrained")
+    verdict = _volumes(ax[0], df, c.configuration, c.edge_m, c.payloads_kg)
+    lo = _lower(df, c.edge_m)
+    k = int(np.floor((c.start_m[2] - lo[2]) / c.edge_m))  # the task start's layer
+    a = ax[1]
+    img, extent = _layer(df, "arm_configuration_loss_kg", k, c.edge_m)
+    im = a.imshow(img, origin="lower", cmap="magma_r", extent=extent, interpolation="nearest",
+                  vmin=min(0.0, float(np.nanmin(img, initial=0.0))))
+    fig.colorbar(im, ax=a, label=f"loss on {c.configuration} [kg]: healthy − failed capacity (white: neither reaches)")
+    lost = df[(df.k == k) & df.arm_configuration_capacity_kg.isna() & df.healthy_capacity_kg.notna()]
+    a.plot(lost.x_m, lost.y_m, ".", color="tab:cyan", ms=5, label=f"{c.configuration} does not reach it: "
+                                                                   "loss = the healthy value")
+    neg = df[(df.k == k) & (df.arm_configuration_loss_kg < 0)]
+    if len(neg):
+        a.plot(neg.x_m, neg.y_m, "x", color="tab:green", ms=5, label="loss < 0 (the arms reach different points)")
+    a.plot(c.start_m[0], c.start_m[1], "o", ms=11, mfc="white", mec="black", mew=1.5, label="task start")
+    a.set(xlabel="x [m]", ylabel="y [m]", aspect="equal",
+          title=f"Where: the loss over the task start's voxel layer, z = {lo[2] + (k + 0.5) * c.edge_m:.2f} m")
+    a.legend(fontsize=8.5, loc="upper center", bbox_to_anchor=(0.5, -0.12))
+    fig.suptitle(f"What the failure of joint {c.joint} (locked at {c.angle_deg:g} deg) cost: {verdict}\n"
+                 + _convergence(conv, c.step_deg), fontsize=11.5)
+    save(fig, out_png)
+
+
+def _convergence(conv: pd.DataFrame, step_deg: float) -> str:
+    """The check of the angle step, in words: how much the checked voxels' healthy values rise at half and a
+    quarter of it (they are lower bounds)."""
+    rise = 100 * conv.rise_quarter_step_rel.dropna().to_numpy()
+    if not len(rise):
+        return f"healthy values: best over a {step_deg:g} deg grid of the failed joint's angle (no voxel checked)"
+    return (f"healthy values are lower bounds: with a {step_deg / 4:g} deg step instead of {step_deg:g} deg, "
+            f"{len(rise)} checked voxels rise by {np.median(rise):.2g} % median, {rise.max():.2g} % at most "
+            f"({int((rise > 1).sum())} by more than 1 %)")

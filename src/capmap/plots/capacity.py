@@ -44,8 +44,7 @@ def _cut(vol: np.ndarray, grid: dict, a: np.ndarray, b: np.ndarray, layer_z: flo
     d = (b - a)[:2]
     d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-9 else np.array([1.0, 0.0])
     n = np.array([-d[1], d[0]])
-    corners = np.array([[lo[0], lo[1]], [lo[0] + shape[0] * dx, lo[1] + shape[1] * dx]])
-    reach = np.abs((np.array(np.meshgrid(*corners.T)).reshape(2, -1).T - a[:2]) @ d).max()
+    reach = np.linalg.norm(shape[:2] * dx) + np.linalg.norm(a[:2] - lo[:2])  # beyond the grid: cropped by the caller
     u = np.arange(-reach, reach, dx / 2) + dx / 4
     z = lo[2] + np.arange(0, shape[2] * dx, dx / 2) + dx / 4
     U, Z = np.meshgrid(u, z)
@@ -112,24 +111,20 @@ def capacity_map(vox: pd.DataFrame, view, out_png: str | Path, op: pd.DataFrame 
         axes[1].set(xlim=(h[cols[0]], h[cols[-1] + 1]), ylim=(v[rows[0]], v[rows[-1] + 1]))
     task = np.vstack([np.column_stack(project(np.asarray(x, float).reshape(-1, 3))[:2])
                       for x in [view.start_m, view.goal_m] + [x for _, x, _ in paths]])
-    pad = 4 * grid["edge_m"]
-    axes[2].set(xlim=(task[:, 0].min() - pad, task[:, 0].max() + pad),
-                ylim=(task[:, 1].min() - pad, task[:, 1].max() + pad))
+    lo_t, hi_t = task.min(axis=0) - 4 * grid["edge_m"], task.max(axis=0) + 4 * grid["edge_m"]
+    axes[2].set(xlim=(lo_t[0], hi_t[0]), ylim=(lo_t[1], hi_t[1]))
     axes[1].indicate_inset_zoom(axes[2], edgecolor="black")
     missing = [f"{m:g} kg" for m in view.payloads_kg if m not in levels]
     axes[1].set_title("Where: vertical plane through start and goal\nwhite lines: the task payloads carried in every "
-                      "direction" + (f" ({', '.join(missing)}: nowhere here)" if missing else ""))
+                      "direction" + (f" ({', '.join(missing)}: nowhere here)" if missing else ""), fontsize=10.5)
     axes[2].set_title("Around the task: the paths" + (f" (drawn on the plane, {off:.2f} m off it at most)"
                                                       if off > 0.05 * grid["edge_m"] else "") +
-                      "\na path needs only its own direction: it can carry more than the voxels it crosses")
+                      "\na path needs only its own direction: it can carry more than the voxels it crosses", fontsize=10.5)
     cb = fig.colorbar(im, ax=axes[1:], shrink=0.8, label="voxel capacity [kg] (least over its points and every "
                                                           "direction; white: not reached)")
     for m in [m for m in view.payloads_kg if m <= vmax]:
         cb.ax.axhline(m, color="white", lw=2)
     axes[2].legend(fontsize=8.5, loc="upper center", bbox_to_anchor=(0.5, -0.1))
-    for ax in axes:
-        ax.title.set_fontsize(10.5)
-    fig.get_layout_engine().set(h_pad=0.12)
     fig.suptitle(f"Dynamic load-carrying capacity of the locked arm on {which}: how much of the workspace, and where, "
                  "carries the task payloads", fontsize=13)
     save(fig, out_png)
@@ -155,8 +150,8 @@ def _share_panel(ax, main: pd.DataFrame, bound: pd.DataFrame | None, which: str,
                 bbox=dict(fc="white", ec="none", alpha=0.85))
     n_reach = int((main.n_reachable > 0).sum())
     ax.set(xlabel="payload M [kg]", ylabel="reachable voxels carrying M in every direction [%]", ylim=(0, 100),
-           xlim=(0, 1.05 * top), title=f"How much: {n_reach:,} voxels reached ({n_reach * edge ** 3:,.0f} m³, "
-                                       f"edge {edge:g} m)")
+           xlim=(0, 1.05 * top))
+    ax.set_title(f"How much: {n_reach:,} voxels reached ({n_reach * edge ** 3:,.0f} m³, edge {edge:g} m)", fontsize=10.5)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8.5, loc="upper center", bbox_to_anchor=(0.5, -0.1))
 
@@ -178,7 +173,7 @@ def _path_table(ts: pd.DataFrame, payload_kg: float) -> dict:
 
 
 def _verdict(name: str, p: dict, payload_kg: float) -> str:
-    label = PATH_STYLE.get(name, {}).get("label", name)
+    label = PATH_STYLE.get(name, {}).get("label", name)  # e.g. "planned path holds: weakest segment 4149 kg (+3.7 %...)"
     if p["lost"] is not None:
         return f"{label} FAILS: tracking lost at {p['g'].t_s.iloc[p['lost']]:.1f} s (singular), {p['weakest']:.0f} kg"
     return (f"{label} {'holds' if p['holds'] else 'FAILS'}: weakest segment {p['weakest']:.0f} kg "
@@ -266,7 +261,6 @@ def _profile(ax, name: str, p: dict, payload_kg: float) -> None:
     ax.grid(alpha=0.3)
 
 
-# the quantity and unit of each load column, for axis labels and legends
 QUANTITY = {"tau": ("joint torque", "N m"), "base_f": ("base disturbance force", "N"),
             "base_m": ("base disturbance moment", "N m")}
 
@@ -289,13 +283,12 @@ def _peak(g: pd.DataFrame, columns: list[str], limits: dict) -> tuple[float, str
     return best
 
 
-def _also(g: pd.DataFrame, columns: list[str], limits: dict) -> str:
-    """'' or a line naming the other loads of ``limits`` that the path exceeds, and their figures."""
+def _also(g: pd.DataFrame, columns: list[str], limits: dict) -> tuple[list[str], str]:
+    """The other loads of ``limits`` that the path exceeds (their names) and, in words, with their figures."""
     figs = {"tau": "torques.png", "base_f": "base_force.png", "base_m": "base_moment.png"}
     over = [k for k in limits if k not in columns and _peak(g, [k], limits)[0] > 1]
-    parts = [", ".join(load_label(k) for k in over if k.startswith(p)) + f" ({f})" for p, f in figs.items()
-             if any(k.startswith(p) for k in over)]
-    return f"\nthis path also exceeds: {'; '.join(parts)}" if parts else ""
+    groups = [(f, [load_label(k) for k in over if k.startswith(p)]) for p, f in figs.items()]
+    return [load_label(k) for k in over], "; ".join(f"{', '.join(n)} ({f})" for f, n in groups if n)
 
 
 def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, out_png: str | Path) -> None:
@@ -316,19 +309,19 @@ def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, 
         t = g.t_s.to_numpy()
         lost = np.flatnonzero(~g.tracked.to_numpy(bool)) if "tracked" in g else np.array([], int)
         t_lost = t[lost[0]] if len(lost) else None
-        lim_max = max(limits[c] for c in columns)
         over = np.zeros(len(g), bool)
         for n, col in enumerate(columns):
             c, y = colors[n % len(colors)], g[col].to_numpy(dtype=float)
             ax.plot(t, y, color=c, lw=1.2, label=load_label(col) + ("" if same else f" (limit ±{limits[col]:g} {unit})"))
             over |= np.abs(np.nan_to_num(y)) > limits[col]
-            if not same or n == 0:
-                for sign in (1, -1):
-                    ax.axhline(sign * limits[col], color="0.3" if same else c, ls=":", lw=1.4,
-                               label=f"limit ±{limits[col]:g} {unit}" if same and sign > 0 else None)
+        for n, col in enumerate(columns[:1] if same else columns):  # after the loads: the legend lists them first
+            for sign in (1, -1):
+                ax.axhline(sign * limits[col], color="0.3" if same else colors[n % len(colors)], ls=":", lw=1.4,
+                           label=f"limit ±{limits[col]:g} {unit}" if same and sign > 0 else None)
         peak, at, t_peak = _peak(g, columns, limits)
         big = max((np.nanmax(np.abs(g[c])) for c in columns if np.isfinite(g[c]).any()), default=0.0)
-        top = 1.3 * max(lim_max, big) if big <= 3 * lim_max else 2.5 * lim_max  # a spike beyond 3x: off scale
+        lim = max(limits[c] for c in columns)
+        top = 1.3 * max(lim, big) if big <= 3 * lim else 2.5 * lim  # a spike beyond 3x the limit: off scale
         ax.set_ylim(-top, top)
         if over.any():
             ax.fill_between(t, -top, top, where=over, color="tab:red", alpha=0.15, step="mid", lw=0,
@@ -343,16 +336,16 @@ def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, 
         label = PATH_STYLE.get(name, {}).get("label", name)
         worst = f"{load_label(at)} at {100 * peak:.0f} % of its {limits[at]:g} {unit} limit (t = {t_peak:.1f} s)"
         verdict = (f"FAILS: tracking lost at {t_lost:.1f} s (singular); before it {worst}" if t_lost is not None
-                   else f"EXCEEDS: {worst}" if peak > 1 else f"holds: peak {worst}")
-        heads.append(f"{label} {'holds' if peak <= 1 and t_lost is None else 'fails'} ({100 * peak:.0f} %)")
+                   else f"EXCEEDS a limit: {worst}" if peak > 1 else f"within limits: peak {worst}")
+        ok = peak <= 1 and t_lost is None
+        names, also = _also(g, columns, limits)
+        heads.append(f"{label} {'within limits' if ok else 'FAILS'} ({100 * peak:.0f} %)"
+                     + (f" but fails on {', '.join(names)}" if ok and names else ""))
         ax.set(ylabel=f"{quantity} [{unit}]")
-        ax.set_title(f"{label} {verdict}" + _also(g, columns, limits), fontsize=10.5,
-                     color="tab:red" if peak > 1 or t_lost is not None else "black")
+        ax.set_title(f"{label} {verdict}" + (f"\n{'but' if ok else 'it also'} exceeds {also}" if also else ""),
+                     fontsize=10.5, color="black" if ok else "tab:red")
         ax.grid(alpha=0.3)
-        h, lab = ax.get_legend_handles_labels()
-        order = sorted(range(len(lab)), key=lambda i: (lab[i].startswith("limit"), lab[i] == "over its limit"))
-        ax.legend([h[i] for i in order], [lab[i] for i in order], fontsize=8.5, loc="upper left",
-                  bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+        ax.legend(fontsize=8.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     axes[-1, 0].set_xlabel("time t [s]")
     fig.suptitle(f"{title}: " + "; ".join(heads) + ("" if "planned" in paths else " (no planned path at this payload)"),
                  fontsize=12)

@@ -76,7 +76,8 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
     fig.update_layout(
         title=dict(text=f"{title}<br><sub>shown: {maps[0][0]} (buttons: the other maps); voxel edge {edge_m:g} m; the "
                         "payload slider hides the voxels below a payload,<br>the height slider cuts the map above a layer; "
-                        "hover: capacity and the limit that binds it; legend: a click shows or hides an entry</sub>"),
+                        "hover: capacity and the limit that binds it; x, y, z in m (base frame): scroll out for the "
+                        "whole map</sub>"),
         scene=dict(xaxis=dict(title="x [m]", range=[lo[0], hi[0]], autorange=False),
                    yaxis=dict(title="y [m]", range=[lo[1], hi[1]], autorange=False),
                    zaxis=dict(title="z [m]", range=[lo[2], hi[2]], autorange=False),
@@ -105,8 +106,8 @@ def _camera(start_m: np.ndarray, goal_m: np.ndarray, paths: list[PlannedPath], l
     close enough that the paths read (scroll to zoom out to the whole map)."""
     pts = np.vstack([start_m, goal_m] + [np.asarray(p.points_m, float).reshape(-1, 3) for p in paths])
     scale = span / span[0]  # the scene's normalised units: the x extent is 1
-    mid = ((pts.min(axis=0) + pts.max(axis=0)) / 2 - (lo + span / 2)) / span * scale
-    eye = mid + np.array([0.75, -0.75, 0.5])
+    mid = 2 * ((pts.min(axis=0) + pts.max(axis=0)) / 2 - (lo + span / 2)) / span * scale  # the box: -scale..scale
+    eye = mid + np.array([0.6, 0.6, 0.42])
     return dict(center=dict(zip("xyz", mid.round(4).tolist())), eye=dict(zip("xyz", eye.round(4).tolist())))
 
 
@@ -124,7 +125,7 @@ def _add_voxels(fig, go, shown: tuple, first: float, cmax: float) -> None:
     fig.add_trace(go.Scatter3d(
         x=xyz[keep, 0].tolist(), y=xyz[keep, 1].tolist(), z=xyz[keep, 2].tolist(), mode="markers",
         name="voxels carrying the payload",
-        marker=dict(size=3, color=c[keep].tolist(), cmin=0.0, cmax=cmax, colorscale="Viridis", opacity=0.18,
+        marker=dict(size=3, color=c[keep].tolist(), cmin=0.0, cmax=cmax, colorscale="Viridis", opacity=0.3,
                     colorbar=dict(title=dict(text="voxel capacity [kg]<br><sub>least over its points<br>and every "
                                                   "direction</sub>"), x=1.02)),
         text=text(keep), hovertemplate=hov))

@@ -199,11 +199,11 @@ def animation(links: tuple[str, ...], segments: list[tuple[str, np.ndarray, np.n
             node.set_object(geom, material(0xE0A030 if boom else colours.get(method, 0x808080),
                                            opacity.get(method, 0.25)))
             node.set_transform(pose)
-    vis["platform"].set_object(g.Cylinder(0.5, 1.25), material(0x909090))
+    vis["platform/disc"].set_object(g.Cylinder(0.5, 1.25), material(0x909090))
     Rx = np.eye(4)
     Rx[1:3, 1:3] = [[0, -1], [1, 0]]  # the cylinder's axis (y) to z
     Rx[2, 3] = 0.25
-    vis["platform"].set_transform(Rx)
+    vis["platform/disc"].set_transform(Rx)
     anim = ma.Animation(default_framerate=fps)
     for method, poses in frames.items():
         for f, frame in enumerate(poses):
@@ -216,9 +216,10 @@ def animation(links: tuple[str, ...], segments: list[tuple[str, np.ndarray, np.n
     vis.set_animation(anim, play=True, repetitions=2**31 - 1)  # looped until the page is closed
     ends = [(links.index(link), e) for link, a, b in segments for e in (a, b)]
     pts = np.array([T[i, :3, :3] @ e + T[i, :3, 3] for p in frames.values() for T in p[::10] for i, e in ends])
-    rig = np.eye(4)
-    rig[:3, 3] = (pts.min(axis=0) + pts.max(axis=0)) / 2  # the camera orbits the middle of the motion
-    vis["/Cameras/default"].set_transform(rig)
-    far = 1.8 * np.linalg.norm(np.ptp(pts, axis=0)) / 2 * np.array([1.0, -1.0, 0.5]) / 1.5  # front right, above
-    vis["/Cameras/default/rotated/<object>"].set_property("position", [far[0], far[2], -far[1]])  # (y-up frame)
+    shift = np.eye(4)  # MeshCat's camera orbits the origin: the scene, grid and axes moved to centre the motion
+    shift[:3, 3] = -(pts.min(axis=0) + pts.max(axis=0)) / 2
+    for root in (*frames, "platform", "/Grid", "/Axes"):
+        vis[root].set_transform(shift)
+    x, y, z = 0.55 * np.linalg.norm(np.ptp(pts, axis=0)) * np.array([1.0, -1.0, 0.5])  # front right, above: all in view
+    vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])  # (the camera's frame: y up)
     write_html(vis, out_html)

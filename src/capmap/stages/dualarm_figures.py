@@ -28,15 +28,19 @@ from capmap.stages.common import Outputs, stage_config
 __all__ = ["stage_dualarm_plots", "stage_dualarm_animation"]
 
 
+FIGURES = {"errors": "task-constraint errors", "distances": "safety distances", "joints": "joint positions",
+           "velocities": "joint velocities", "torques": "joint torques", "convergence": "solver convergence"}
+
+
 def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: str, out: Outputs) -> None:
     """Constraint errors, safety distances, joints and velocities vs their limits, torques vs the
     effort limits, convergence (``out``: errors, distances, joints, velocities, torques, convergence)."""
     traj, fine_df, outer_df = datasets.read(trajectory), datasets.read(fine), datasets.read(outer)
     tq = datasets.read(torques_file)
     meta = traj.attrs["capmap"]
-    if traj.empty:  # no motion could be planned: each figure says why
-        for png in out.values():
-            not_done_figure("dual-arm assembly: no motion could be planned", meta["reason"], png)
+    if traj.empty:  # no motion could be planned: each figure says what it would show, and why it does not
+        for key, png in out.items():
+            not_done_figure(f"Dual-arm assembly, {FIGURES.get(key, key)}: no motion could be planned", meta["reason"], png)
         return stage_logger(__name__, "dualarm plots").info("infeasible -> " + ", ".join(out.values()))
     constraint_errors(traj, out["errors"])
     distances(traj, fine_df, meta["margin_m"], meta["active"], out["distances"])
@@ -88,7 +92,7 @@ def _caption(traj: pd.DataFrame, step: int, name: str) -> Overlay:
     meta = traj.attrs["capmap"]
     if traj.empty:
         return Overlay(f"{name}: no motion planned", (f"no motion: {meta['reason']}",),
-                       frame_text=("the scene at the start pose",))
+                       frame_text=("t = 0 s: the scene at the start pose (no motion)",))
     t_pre = traj.t_s[traj.phase == "pre_insertion"]
     d, margin = 1e3 * float(traj.min_distance_m.min()), 1e3 * meta["margin_m"]
     lines = (f"transfer 0–{t_pre.iloc[0]:.1f} s, then insertion along the pin axis to {traj.t_s.iloc[-1]:.1f} s"

@@ -1,0 +1,214 @@
+"""The capacity family's figures tell their result from the data: each verified path's verdict and its own
+capacity beside the map's voxels under it (the voxel's value read at the sample's voxel, along the grid axis
+of its travel), each load panel its own limit and verdict with the legend off the curves, the summary map's
+start, goal and paths where they are (not projected onto another layer), the 3D page opening with 0 kg voxels
+hidden and one meaning per colour, the baseline's and the atlas' verdicts. Synthetic tables; the figures'
+texts and artists read from the figure objects."""
+
+from __future__ import annotations
+
+import json
+import re
+from types import SimpleNamespace
+
+import matplotlib.colors as mcolors
+import numpy as np
+import pandas as pd
+import pytest
+
+import capmap.plots.atlas as pa
+import capmap.plots.baseline as pb
+import capmap.plots.capacity as pc
+from capmap.capacity.directions import GRID_AXES
+from capmap.capacity.tables import AXIS_COLUMNS
+from capmap.plots.capacity_3d import PATH_COLOURS, PlannedPath, capacity_3d_html
+from capmap.plots.common import plt
+from capmap.stages.verify_figures import under_path
+
+EDGE = 1.0
+SHAPE = (8, 8, 8)
+LIMITS = {"tau_j2_nm": 700.0, "tau_j3_nm": 700.0, "base_fx_n": 200.0, "base_mx_nm": 500.0}
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """The figures the plot functions would save, kept open for reading."""
+    kept = []
+    for module in (pc, pa, pb):
+        monkeypatch.setattr(module, "save", lambda fig, out_png, rect=None: kept.append(fig))
+    yield kept
+    for fig in kept:
+        plt.close(fig)
+
+
+def _texts(fig) -> str:
+    out = [fig._suptitle.get_text() if fig._suptitle else ""]
+    for sub in getattr(fig, "subfigs", []):
+        out.append(_texts(sub))
+    for ax in fig.axes:
+        out += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel()] + [t.get_text() for t in ax.texts]
+        if ax.get_legend():
+            out += [t.get_text() for t in ax.get_legend().get_texts()]
+    out += [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    return "\n".join(out)
+
+
+def _map(rng=None) -> pd.DataFrame:
+    """Every voxel of an 8 x 8 x 8 grid of 1 m voxels (C order): capacity 3000 + 100 i kg, 0 kg on the layer
+    k = 6; each grid axis a kg above it (axis a); the corner i = 7, j = 7 not reached."""
+    idx = np.stack(np.unravel_index(np.arange(np.prod(SHAPE)), SHAPE), axis=1)
+    cap = np.where(idx[:, 2] == 6, 0.0, 3000.0 + 100.0 * idx[:, 0])
+    vox = pd.DataFrame({"i": idx[:, 0], "j": idx[:, 1], "k": idx[:, 2], **{c: (idx[:, n] + 0.5) * EDGE
+                                                                            for n, c in enumerate(("x_m", "y_m", "z_m"))},
+                        "n_reachable": np.where((idx[:, 0] == 7) & (idx[:, 1] == 7), 0, 5), "capacity_kg": cap})
+    for a, col in enumerate(AXIS_COLUMNS):
+        vox[col] = np.where(cap > 0, cap + 100.0 * (a + 1), 0.0)
+    vox.attrs = {"capmap": {"grid": {"lower_m": [0.0, 0.0, 0.0], "shape": list(SHAPE), "edge_m": EDGE}}}
+    return vox
+
+
+def _ts(direct_kg: float = 3820.0, planned_kg: float = 4149.0) -> pd.DataFrame:
+    """A direct line along +y (one segment) and a planned path along +y then x+y (two segments), each state's
+    capacity its path's weakest in the middle, the loads carrying 4000 kg: the direct line's M_x at 105 % of
+    its limit, the planned path's at 97 %."""
+    rows = []
+    legs = {"direct": [((1.5, 0.5, 1.5), (1.5, 6.5, 1.5))],
+            "planned": [((1.5, 0.5, 1.5), (1.5, 3.5, 1.5)), ((1.5, 3.5, 1.5), (4.5, 6.5, 1.5))]}
+    for name, weakest, mx in (("direct", direct_kg, 525.0), ("planned", planned_kg, 485.0)):
+        t0 = 0.0
+        for seg, (a, b) in enumerate(legs[name]):
+            s = np.linspace(0.0, 1.0, 31)
+            pos = np.asarray(a) + s[:, None] * (np.asarray(b) - np.asarray(a))
+            cap = np.where(np.abs(s - 0.5) < 0.05, weakest + 500.0 * seg, 6000.0)
+            rows.append(pd.DataFrame({"path": name, "t_s": t0 + 10 * s, "segment": seg, "x_m": pos[:, 0],
+                                      "y_m": pos[:, 1], "z_m": pos[:, 2], "state_capacity_kg": cap, "tracked": True,
+                                      "in_joint_range": True, "tau_j2_nm": 300 * np.sin(6 * s),
+                                      "tau_j3_nm": -200 * np.sin(6 * s), "base_fx_n": 50 * np.cos(6 * s),
+                                      "base_mx_nm": mx * np.sign(np.sin(6 * s + 0.1))}))
+            t0 += 10.0
+    ts = pd.concat(rows, ignore_index=True)
+    ts["path"] = pd.Categorical(ts.path, ["direct", "planned"])
+    return ts
+
+
+def test_under_path_reads_the_voxel_each_sample_is_in_along_its_axis_of_travel():
+    vox, ts = _map(), _ts()
+    ts.loc[5, "tracked"] = False  # an untracked sample does not count in its segment's capacity
+    ts.loc[5, "state_capacity_kg"] = 1.0
+    out = under_path(vox, ts)
+    idx = np.floor(ts[["x_m", "y_m", "z_m"]].to_numpy() / EDGE).astype(int).clip(0, 7)
+    row = np.ravel_multi_index(idx.T, SHAPE)
+    np.testing.assert_allclose(out.voxel_kg, vox.capacity_kg.to_numpy()[row])
+    axis_y = next(a for a, g in enumerate(GRID_AXES) if tuple(g) == (0, 1, 0))
+    axis_xy = next(a for a, g in enumerate(GRID_AXES) if tuple(g) == (1, 1, 0))
+    along_y = (out.path == "direct") | (out.segment == 0)
+    np.testing.assert_allclose(out.voxel_along_kg[along_y], vox[AXIS_COLUMNS[axis_y]].to_numpy()[row[along_y]])
+    np.testing.assert_allclose(out.voxel_along_kg[~along_y], vox[AXIS_COLUMNS[axis_xy]].to_numpy()[row[~along_y]])
+    for (name, seg), g in out.groupby(["path", "segment"], observed=True):
+        src = ts.loc[g.index]
+        assert (g.segment_capacity_kg == src.state_capacity_kg[src.tracked].min()).all()
+    planned = out[out.path == "planned"]
+    assert planned.distance_m.iloc[0] == 0 and planned.distance_m.iloc[-1] == pytest.approx(3 + 3 * np.sqrt(2))
+
+
+def test_the_workspace_figure_gives_each_path_its_verdict_and_its_own_capacity(figures):
+    vox = _map()
+    vox["capacity_best_axis_kg"] = vox[AXIS_COLUMNS].max(axis=1)
+    pc.workspace_paths(vox, under_path(vox, _ts()), 4000.0, "w.png", "configuration S-E-W+")
+    fig = figures[0]
+    text = _texts(fig)
+    assert "planned path holds: weakest segment 4149 kg (+3.7 % margin)" in text
+    assert "direct line FAILS: weakest segment 3820 kg (-4.5 % margin)" in text
+    assert "planned path holds, direct line fails" in fig._suptitle.get_text()
+    assert "carries 4000 kg in every direction" in text and "along some grid axes only" in text
+    profiles = [ax for ax in fig.axes if ax.get_ylabel() == "capacity [kg]"]
+    assert len(profiles) == 2
+    for ax in profiles:  # the payload drawn on each path's panel
+        assert any(np.allclose(line.get_ydata(), 4000.0) for line in ax.get_lines())
+
+
+def test_each_load_panel_draws_its_limit_and_its_verdict_with_the_legend_beside_it(figures):
+    ts = _ts()
+    pc.load_series(ts, ["tau_j2_nm", "tau_j3_nm"], LIMITS, "Joint torques carrying 4000 kg", "t.png")
+    pc.load_series(ts, ["base_mx_nm"], LIMITS, "Base disturbance moment carrying 4000 kg", "m.png")
+    torques, moment = figures
+    direct, planned = (ax for ax in moment.axes if ax.get_title())
+    assert direct.get_title().startswith("direct line EXCEEDS a limit: M_x at 105 % of its 500 N m limit")
+    assert planned.get_title().startswith("planned path within limits: peak M_x at 97 % of its 500 N m limit")
+    assert "direct line FAILS (105 %); planned path within limits (97 %)" in moment._suptitle.get_text()
+    assert "but exceeds M_x (base_moment.png)" in torques.axes[0].get_title()  # the torques hold, the line does not
+    for fig, lim in ((torques, 700.0), (moment, 500.0)):
+        for ax in fig.axes:
+            levels = {round(float(line.get_ydata()[0]), 6) for line in ax.get_lines() if len(set(line.get_ydata())) == 1}
+            assert {lim, -lim} <= levels
+            anchor = ax.get_legend().get_bbox_to_anchor().transformed(ax.transAxes.inverted())
+            assert anchor.x0 >= 1.0  # beside the axes, off the curves
+
+
+def test_the_summary_map_draws_start_goal_and_paths_where_they_are(figures):
+    vox = _map()
+    start, goal = np.array([1.5, 1.5, 1.5]), np.array([4.5, 5.5, 5.5])
+    view = SimpleNamespace(start_m=start, goal_m=goal, payloads_kg=(3200.0, 9000.0))
+    path = np.array([start, [2.5, 2.5, 3.5], goal])
+    pc.capacity_map(vox, view, "m.png", None, "", [("direct start-goal line", np.stack([start, goal]), {"color": "k"}),
+                                                   ("planned path, 3200 kg: each move carries ≥ 4,100 kg", path,
+                                                    {"color": PATH_COLOURS[0]})])
+    fig = figures[0]
+    text = _texts(fig)
+    assert "tab:" not in text and "9000 kg: nowhere here" in text
+    assert "each move carries ≥ 4,100 kg" in text
+    d = np.hypot(*(goal - start)[:2])
+    for ax in fig.axes[1:3]:  # both map panels: start and goal at their own place on the plane
+        marks = [line for line in ax.get_lines() if line.get_marker() in ("o", "*")]
+        xy = {line.get_marker(): (line.get_xdata()[0], line.get_ydata()[0]) for line in marks}
+        assert xy["o"] == pytest.approx((0.0, start[2])) and xy["*"] == pytest.approx((d, goal[2]))
+
+
+def _page_traces(page: str) -> list[dict]:
+    return json.loads(re.search(r'Plotly.newPlot\(\s*"capmap-3d",\s*(\[.*?\]),\s*\{"template"', page, re.S).group(1))
+
+
+def test_the_3d_page_opens_readable_with_one_meaning_per_colour():
+    vox = _map()
+    r = vox[vox.n_reachable > 0]
+    path = PlannedPath("planned path, 3200 kg (5.00 m)", np.array([[1.5, 1.5, 1.5], [2.5, 2.5, 2.5]]),
+                       moves_kg=np.array([np.nan, 4100.0]))
+    page = capacity_3d_html([("configuration S-E-W+", r[["x_m", "y_m", "z_m"]].to_numpy(), r.capacity_kg.to_numpy())],
+                            EDGE, np.array([1.5, 1.5, 1.5]), np.array([2.5, 2.5, 2.5]), [path], (3200.0,), "t")
+    traces = {t["name"]: t for t in _page_traces(page)}
+    zero = next(t for n, t in traces.items() if n.startswith("0 kg"))
+    assert zero["visible"] == "legendonly" and len(zero["x"]) == int((r.capacity_kg == 0).sum())
+    below = next(t for n, t in traces.items() if n.startswith("voxels below"))
+    assert below["visible"] == "legendonly"
+    shown = traces["voxels carrying the payload"]
+    assert shown.get("visible", True) is True and shown["marker"]["opacity"] <= 0.5  # faint: the paths show through
+    planned = next(t for n, t in traces.items() if n.startswith("planned path, 3200 kg (5.00 m)"))
+    assert "each move carries ≥ 4,100 kg" in planned["name"] and planned["line"]["width"] >= 8
+    colour = {n: mcolors.to_hex(t.get("line", t.get("marker", {})).get("color", "none")) for n, t in traces.items()
+              if not n.startswith("voxels carrying")}
+    assert colour[zero["name"]] == mcolors.to_hex("red")
+    assert {colour["direct line"], colour["start"], colour["goal"]} == {mcolors.to_hex("black")}
+    assert colour[planned["name"]] not in {mcolors.to_hex("red"), mcolors.to_hex("black")}
+
+
+def test_the_baseline_and_atlas_figures_state_what_the_failure_cost(figures):
+    vox = _map()
+    b = vox[["i", "j", "k", "x_m", "y_m", "z_m"]].copy()
+    b["healthy_capacity_kg"] = 4000.0
+    b["capacity_kg"] = b["arm_configuration_capacity_kg"] = np.where(b.i < 4, 3500.0, 1000.0)
+    b["arm_configuration_loss_kg"] = b.healthy_capacity_kg - b.arm_configuration_capacity_kg
+    conv = pd.DataFrame({"rise_half_step_rel": [0.001, 0.02], "rise_quarter_step_rel": [0.002, 0.03]})
+    ctx = pb.BaselineContext("S-E-W+", 1, 100.0, 10.0, EDGE, np.array([1.5, 1.5, 1.5]), (1500.0, 3800.0))
+    pb.baseline_figure(b, conv, ctx, "loss.png")
+    title = figures[0]._suptitle.get_text()
+    assert "1500 kg: 512 → 256 m³ on S-E-W+ (50 % lost)" in title and "3800 kg: 512 → 0 m³ on S-E-W+ (100 % lost)" in title
+    assert "2 checked voxels rise by" in title and "3 % at most" in title
+    atlas = pd.DataFrame({"joint": [1, 1, 4, 4], "angle_deg": [100.0, 130.0, 100.0, 130.0], "payload_kg": 1500.0,
+                          "reachable_volume_m3": [4900.0, 4800.0, 1800.0, 1000.0],
+                          "capacity_median_kg": [1900.0, 1800.0, 0.0, 0.0],
+                          "volume_carrying_payload_m3": [4300.0, 4100.0, 450.0, 160.0],
+                          "plan_exists": [True, True, False, False], "direct_feasible": [True, False, False, False]})
+    pa.atlas_heatmap(atlas, "heat.png")
+    text = _texts(figures[1])
+    assert "most with joint 1 at 100 deg (4,300 m³), least with joint 4 at 130 deg (160 m³)" in text
+    assert "plan + direct" in text and "no path" in text
