@@ -22,7 +22,7 @@ def cache(tmp_path, monkeypatch):
 def _no_build(monkeypatch):
     def refuse(*a, **k):
         raise AssertionError("built although remembered")
-    monkeypatch.setattr(checks, "build_dual_arm", refuse)
+    monkeypatch.setattr("capmap.dualarm.scene.robot.build_dual_arm", refuse)  # where the check imports it from
 
 
 def test_the_remembered_limits_are_the_builds(local, cache, monkeypatch):  # noqa: F811

@@ -32,7 +32,9 @@ import argparse
 import json
 import math
 import os
+import re
 import shutil
+import subprocess
 import sys
 import textwrap
 from pathlib import Path
@@ -242,9 +244,27 @@ def _run(args) -> int:
     cmd = [exe, "-s", str(snakefile), "--cores", str(args.cores), *args.targets, *(["-n"] if args.dry_run else []),
            *(["--config", f"configfile={config}"] if config else [])]
     print(f"capmap: {' '.join(cmd)}", file=sys.stderr)
-    sys.stderr.flush()
-    os.execv(exe, cmd)
-    return 1  # not reached
+    return _snakemake(cmd)
+
+
+# Snakemake's scheduling chatter (two lines per job, and its set-up): the job's own capmap line says what ran
+_CHATTER = re.compile(r"^(Select jobs to execute\.\.\.|Execute \d+ jobs\.\.\.|Using shell: .*|Conda environments: ignored|"
+                      r"Assuming unrestricted shared filesystem usage\.|Building DAG of jobs\.\.\.|"
+                      r"Using workflow specific profile .*)$")
+
+
+def _snakemake(cmd: list[str]) -> int:
+    """Run Snakemake, its console without the scheduling chatter (its log under .snakemake/log keeps
+    every line); Ctrl-C reaches it as it would from the terminal (same process group)."""
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+    try:
+        for line in proc.stdout:
+            if not _CHATTER.match(line.rstrip("\n")):
+                sys.stderr.write(line)
+                sys.stderr.flush()
+    except KeyboardInterrupt:
+        pass
+    return proc.wait()
 
 
 def entry() -> None:

@@ -57,7 +57,7 @@ def test_load_reads_a_dataset_by_its_catalogue_name(two_datasets, tmp_path, monk
     import capmap
 
     stage_catalogue(two_datasets, str(tmp_path / "results" / "tiny" / "catalogue.parquet"))
-    monkeypatch.chdir(tmp_path / "results")  # the catalogue's paths are relative to the run's working folder
+    monkeypatch.chdir(tmp_path / "results")  # elsewhere than the workflow's folder: found under the run folder
     df = capmap.load("tiny", "follow_ground", results=tmp_path / "results")
     assert len(df) == 5 and df.attrs["capmap"]["stage"] == "timeseries"
     assert list(capmap.catalogue("tiny", results=tmp_path / "results").name) == ["verify_1500kg", "follow_ground"]
@@ -97,3 +97,18 @@ def test_the_outputs_page_lists_the_registry():
     from capmap.io.catalogue import outputs_table
 
     assert outputs_table() in (Path(__file__).parents[2] / "docs" / "outputs.md").read_text()
+
+
+def test_axis_capacities_are_stored_never_above_the_computed_value():
+    """float32 storage of the axis columns rounds toward lower capacity: never above, at most one float32 step
+    (1.2e-7 relative) below; NaN and inf kept."""
+    import numpy as np
+
+    from capmap.capacity.tables import AXIS_COLUMNS, axes_stored
+
+    x = np.random.default_rng(5).uniform(0, 5000, 10000)
+    x[:3] = [np.nan, np.inf, 0.0]
+    got = axes_stored(pd.DataFrame({AXIS_COLUMNS[0]: x}))[AXIS_COLUMNS[0]].to_numpy()
+    assert got.dtype == np.float32 and np.isnan(got[0]) and np.isinf(got[1]) and got[2] == 0
+    g, v = got[3:].astype(float), x[3:]
+    assert (g <= v).all() and (v - g <= 2.4e-7 * v).all() and (g < v).any()

@@ -17,7 +17,7 @@ from capmap.capacity.voxels import Grid, voxelise
 from capmap.core.reduction import LockedArm
 from capmap.core.robot import Robot
 
-__all__ = ["AXIS_COLUMNS", "model_table", "sample_table", "capacity_table", "voxel_table", "grid_meta", "grid_of",
+__all__ = ["AXIS_COLUMNS", "model_table", "sample_table", "capacity_table", "voxel_table", "axes_stored", "grid_meta", "grid_of",
            "configuration_voxels"]
 
 AXIS_COLUMNS = [f"capacity_along_{label.replace('+', '_plus_').replace('-', '_minus_')}_kg" for label in AXIS_LABELS]
@@ -140,6 +140,22 @@ def voxel_table(pts: pd.DataFrame, edge_m: float) -> tuple[pd.DataFrame, Grid]:
         vox[col] = axis[:, c]
     pts["i"], pts["j"], pts["k"] = pidx[:, 0], pidx[:, 1], pidx[:, 2]
     return vox, grid
+
+
+def axes_stored(df: pd.DataFrame) -> pd.DataFrame:
+    """``df`` with its capacities along the grid axes (:data:`AXIS_COLUMNS`) as float32 rounded toward
+    zero capacity: at most 1.2e-7 relative below the computed value, never above it (a stored capacity
+    must not overstate); half their size in the per-point and per-configuration tables."""
+    out = df.copy()
+    for col in AXIS_COLUMNS:
+        if col in out:
+            x = out[col].to_numpy(dtype=float)
+            y = x.astype(np.float32)
+            with np.errstate(invalid="ignore"):
+                up = y.astype(float) > x
+            y[up] = np.nextafter(y[up], np.float32(-np.inf))
+            out[col] = y
+    return out
 
 
 def grid_meta(grid: Grid) -> dict:

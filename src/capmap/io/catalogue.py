@@ -164,9 +164,9 @@ def load(run: str | Path = "default", name: str = "voxels", results: str | Path 
     hit = cat[cat.name == name]
     if hit.empty:
         raise DataError(f"{folder}: no dataset {name!r}; there are: {', '.join(cat.name)}")
-    path = Path(hit.path.iloc[0])
-    root = folder.parent.parent if not path.is_absolute() else Path("/")
-    return read(path if path.is_absolute() or path.is_file() else root / path)
+    path = Path(hit.path.iloc[0])  # as the workflow named it, from its working folder
+    _, doc = describe(path)
+    return read(folder.joinpath(*path.parts[-len(Path(doc.pattern).parts):]))  # its place in this run folder
 
 
 def outputs_table() -> str:

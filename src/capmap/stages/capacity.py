@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from capmap.capacity.build import capacity_problem
-from capmap.capacity.tables import capacity_table, grid_meta, model_table, sample_table, voxel_table
+from capmap.capacity.tables import axes_stored, capacity_table, grid_meta, model_table, sample_table, voxel_table
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.robots import load, run_arm
@@ -80,8 +80,8 @@ def stage_points(shards: list[str], out: str, slice_json: str) -> None:
     cfg = stage_config(slice_json)
     pts = pd.concat([datasets.read(p) for p in shards], ignore_index=True).sort_values("point_id", ignore_index=True)
     dirs = datasets.read(shards[0]).attrs["capmap"].get("directions") if shards else None
-    datasets.write(pts, out, datasets.provenance("capacity", cfg.doc, seed=cfg.run.sampling.seed, shards=len(shards),
-                                                 directions=dirs))
+    prov = datasets.provenance("capacity", cfg.doc, seed=cfg.run.sampling.seed, shards=len(shards), directions=dirs)
+    datasets.write(axes_stored(pts), out, prov)
     stage_logger(__name__, "points").info(f"{len(pts)} points ({int(pts.reachable.sum())} reachable) from "
                                           f"{len(shards)} shards -> {out}")
 

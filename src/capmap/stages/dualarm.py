@@ -35,8 +35,9 @@ def stage_dualarm_scan(out: str, slice_json: str) -> None:
     else:
         pts, view = scan(load_scene(da.scene), settings, np.random.default_rng(seed))
         source = f"synthetic scan from {len(settings.viewpoints)} viewpoints, noise {settings.noise_m:g} m"
-    # float32: 0.5 um at 5 m, far below any scan's noise; half the size of the run's largest dual-arm file
-    xyz = np.asarray(pts, dtype=np.float32)
+    # a synthetic scan in float32, as a scanner's (0.5 um at 5 m, far below its noise; half the run's largest
+    # dual-arm file); a user's cloud as given
+    xyz = np.asarray(pts, dtype=np.float32 if cloud_file is None else float)
     df = pd.DataFrame({"x_m": xyz[:, 0], "y_m": xyz[:, 1], "z_m": xyz[:, 2], "viewpoint": view})
     datasets.write(df, out, datasets.provenance("dualarm_scan", sc.doc, seed=seed, source=source))
     log.info(f"{len(df)} points ({source}) -> {out}")

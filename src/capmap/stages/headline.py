@@ -22,7 +22,9 @@ def _capacity(out: Path) -> list[str]:
     zero = int(float(s.get("voxels of 0 kg for any configuration", 0)))
     return [f"capacity map: {int(float(s['reachable voxels'])):,} reachable voxels, median "
             f"{float(s['voxel capacity median [kg]']):,.0f} kg, max {float(s['voxel capacity max [kg]']):,.0f} kg; "
-            f"{zero:,} voxels carry 0 kg (singular); most points bound by {top}"]
+            f"{zero:,} voxels carry 0 kg (singular); most points bound by {top}",
+            "  (a voxel's value holds for a motion in any direction; a path is verified along its own direction, "
+            "so it can carry more than the map's voxels it crosses)"]
 
 
 def _plans(out: Path) -> list[str]:

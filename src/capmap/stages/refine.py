@@ -8,6 +8,7 @@ import numpy as np
 
 from capmap.capacity.build import capacity_problem, refine_settings
 from capmap.capacity.refine_map import merge_refined, refine_shard
+from capmap.capacity.tables import axes_stored
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.stages.common import stage_config
@@ -46,7 +47,7 @@ def stage_voxel_map(sampled: str, refined: list[str], configurations: list[str],
     vox, conf = merge_refined(datasets.read(sampled), [datasets.read(p) for p in refined], parts, meta["configurations"])
     grid = vox.attrs["capmap"]["grid"]
     datasets.write(vox, out, datasets.provenance("voxels", cfg.doc, grid=grid, refined=bool(refined)))
-    datasets.write(conf, out_configurations, datasets.provenance("voxels", cfg.doc, grid=grid, refined=bool(refined),
+    datasets.write(axes_stored(conf), out_configurations, datasets.provenance("voxels", cfg.doc, grid=grid, refined=bool(refined),
                                                                  configurations=meta["configurations"],
                                                                  labels=meta["labels"]))
     reach = vox.n_reachable > 0
