@@ -247,19 +247,35 @@ def _run(args) -> int:
     return _snakemake(cmd)
 
 
-# Snakemake's scheduling chatter (two lines per job, and its set-up): the job's own capmap line says what ran
+# Snakemake's scheduling chatter (its set-up, two lines per job, its step counts): each job's own capmap line
+# says what ran, and the job table is summed up in one line
 _CHATTER = re.compile(r"^(Select jobs to execute\.\.\.|Execute \d+ jobs\.\.\.|Using shell: .*|Conda environments: ignored|"
                       r"Assuming unrestricted shared filesystem usage\.|Building DAG of jobs\.\.\.|"
-                      r"Using workflow specific profile .*)$")
+                      r"Using workflow specific profile .*|\[\w{3} \w{3} +\d+ [\d:]+ \d{4}\]|Finished jobid: .*|"
+                      r"\d+ of \d+ steps \(\d+%\) done|Provided cores: \d+|Rules claiming more threads .*|"
+                      r"Job stats:|job +count|-+ +-+|)$")
 
 
 def _snakemake(cmd: list[str]) -> int:
     """Run Snakemake, its console without the scheduling chatter (its log under .snakemake/log keeps
     every line); Ctrl-C reaches it as it would from the terminal (same process group)."""
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+    jobs: list[str] | None = None  # inside the job table
     try:
         for line in proc.stdout:
-            if not _CHATTER.match(line.rstrip("\n")):
+            text = line.rstrip("\n")
+            if text == "Job stats:":
+                jobs = []
+            elif jobs is not None and re.match(r"^\w+ +\d+$", text):
+                name, n = text.split()
+                jobs.append(name if n == "1" else f"{name} x{n}")
+                continue
+            elif jobs is not None and text.startswith("total"):
+                print(f"capmap: {text.split()[-1]} jobs to run: {', '.join(j for j in jobs if j != 'all')}",
+                      file=sys.stderr, flush=True)
+                jobs = None
+                continue
+            if not _CHATTER.match(text):
                 sys.stderr.write(line)
                 sys.stderr.flush()
     except KeyboardInterrupt:

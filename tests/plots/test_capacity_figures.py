@@ -212,3 +212,22 @@ def test_the_baseline_and_atlas_figures_state_what_the_failure_cost(figures):
     text = _texts(figures[1])
     assert "most with joint 1 at 100 deg (4,300 m³), least with joint 4 at 130 deg (160 m³)" in text
     assert "plan + direct" in text and "no path" in text
+
+
+def test_the_summary_labels_each_path_with_its_verified_verdict_else_its_planned_moves(tmp_path):
+    from capmap.io import datasets
+    from capmap.stages.capacity_figures import MapView, _map_paths
+
+    view = MapView(np.zeros(3), np.ones(3), (1500.0, 4000.0))
+    wps = []
+    for m in view.payloads_kg:
+        wp = pd.DataFrame({"x_m": [0.0, 0.5, 1.0], "y_m": [0.0, 0.5, 1.0], "z_m": [0.0, 0.5, 1.0],
+                           "move_capacity_kg": [np.nan, 4140.0, 4200.0]})
+        datasets.write(wp, tmp_path / f"wp{m:g}.parquet", {"payload_kg": m, "status": "ok", "cost_m": 1.7})
+        wps.append(str(tmp_path / f"wp{m:g}.parquet"))
+    pd.DataFrame({"payload_kg": [4000.0, 4000.0], "path": ["direct", "planned"], "capacity_kg": [3820.0, 4149.0],
+                  "feasible": [False, True]}).to_csv(tmp_path / "v.csv", index=False)
+    labels = [label for label, _, _ in _map_paths(view, wps, [str(tmp_path / "v.csv")])]
+    assert labels[0] == "direct start-goal line, verified: 4000 kg FAILS (-4.5 %)"
+    assert labels[1] == "planned path, 1500 kg: each move carries ≥ 4,140 kg along its own direction"  # not verified
+    assert labels[2] == "planned path, 4000 kg, verified: holds (+3.7 %), weakest segment 4,149 kg"

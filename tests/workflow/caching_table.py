@@ -3,7 +3,8 @@
 Each row is one change of the default config (or of a file it names); its "reruns" cell is every job
 the dry runs of `all`, `atlas` and `baseline` then plan, counted per rule. The runs need no
 results: every output of the default config is created empty and `snakemake --touch --forceall`
-records the metadata (params, code fingerprints) a real run would, in a throw-away folder.
+records the metadata (params, code fingerprints) a real run would, in a throw-away folder; the temporary
+outputs (per-shard tables, the sample) are then deleted, as a run deletes them.
 
     python -m tests.workflow.caching_table            # print the table
     python -m tests.workflow.caching_table --write    # rewrite it in docs/configuration.md (between the markers)
@@ -109,6 +110,7 @@ def prepare(work: Path) -> Path:
             (work / path).parent.mkdir(parents=True, exist_ok=True)
             (work / path).touch()
     _snakemake(work, config, *TARGETS, "--touch", "--forceall")
+    _snakemake(work, config, *TARGETS, "--delete-temp-output")  # as a run leaves them: the temporary files gone
     return config
 
 

@@ -143,6 +143,7 @@ rule summary:
         configurations=out("voxels/configurations.parquet"),
         points=out("capacity/points.parquet"),
         waypoints=expand(out("plan/payload_{payload}kg/waypoints.parquet"), payload=PAYLOADS),
+        verified=expand(out("verify/payload_{payload}kg/summary.csv"), payload=PAYLOADS),
     output:
         csv=out("summary/capacity_summary.csv"),
         md=out("summary/capacity_summary.md"),

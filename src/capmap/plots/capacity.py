@@ -1,6 +1,5 @@
-"""Figures of the capacity map: the map on the plane of the task, the workspace of one verified task
-(does each path carry its payload, and why it may cross voxels the map says carry less), and the loads
-over time against their limits."""
+"""Figures of the capacity map: the map on the task's plane, one verified task's workspace (does each path carry
+its payload; why it may cross voxels the map says carry less), and the loads over time against their limits."""
 
 from __future__ import annotations
 
@@ -12,12 +11,11 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 
 from capmap.plots.common import plt, save
 
-__all__ = ["capacity_map", "workspace_paths", "load_series", "load_label", "PATH_STYLE", "ZERO_HATCH"]
+__all__ = ["capacity_map", "workspace_paths", "load_series", "load_label", "PATH_STYLE"]
 
 PATH_STYLE = {"direct": {"color": "black", "ls": "--", "label": "direct line"},
               "planned": {"color": "tab:blue", "ls": "-", "label": "planned path"}}
 ENDS = {"start": dict(marker="o", ms=10), "goal": dict(marker="*", ms=15)}  # white, black edge: on any colour
-ZERO_HATCH = "0 kg in some direction (a singular surface crosses the voxel), hatched"
 # the workspace figure's voxel classes for a payload M (least over every direction; best of the 13 grid axes)
 CLASSES = (("carries M in every direction", "#1b7837"), ("carries M along some grid axes only", "#a6dba0"),
            ("carries M along no grid axis", "#d9d9d9"))
@@ -61,7 +59,8 @@ def _hatch_zero(ax, zero: np.ndarray, extent) -> None:
     if np.any(zero):
         ax.contourf(np.where(zero, 1.0, np.nan), levels=[0.5, 1.5], colors="none", hatches=["xxx"], extent=extent,
                     origin="lower")
-        ax.fill([], [], fc="none", ec="0.2", hatch="xxx", label=ZERO_HATCH)
+        ax.fill([], [], fc="none", ec="0.2", hatch="xxx", label="0 kg in some direction (a singular surface crosses "
+                                                                "the voxel), hatched")
 
 
 def _ends(ax, project, start: np.ndarray, goal: np.ndarray) -> None:
@@ -220,7 +219,7 @@ def workspace_paths(main: pd.DataFrame, ts: pd.DataFrame, payload_kg: float, out
     ax.set(xlim=(h.min() - pad, h.max() + pad), ylim=(v.min() - pad, v.max() + pad), aspect="equal",
            xlabel="x [m]" if flat is not None else "horizontal distance from the start towards the goal [m]",
            ylabel="y [m]" if flat is not None else "height z [m]",
-           title=("horizontal voxel layer" if flat is not None else "vertical plane through start and goal") +
+           title=(f"voxel layer at z = {flat:.2f} m" if flat is not None else "vertical plane through start and goal") +
            f", {which}" + (f"\npaths drawn on the plane ({off:.2f} m off it at most)" if off > 0.05 else ""))
     ax.legend(fontsize=8.5, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2)
     for a, (name, p) in zip(axes, paths.items()):
@@ -305,8 +304,7 @@ def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, 
     same = len({limits[k] for k in columns}) == 1
     heads = []
     for ax, name in zip(axes[:, 0], paths):
-        g = ts[ts.path == name]
-        t = g.t_s.to_numpy()
+        t = (g := ts[ts.path == name]).t_s.to_numpy()
         lost = np.flatnonzero(~g.tracked.to_numpy(bool)) if "tracked" in g else np.array([], int)
         t_lost = t[lost[0]] if len(lost) else None
         over = np.zeros(len(g), bool)

@@ -60,6 +60,26 @@ def _carries(moves: np.ndarray) -> str:
         moves).any() else ""
 
 
+def _map_paths(view: MapView, waypoints: list[str], verified: list[str] | None) -> list[tuple]:
+    """The summary figure's paths (label, (n, 3) m, style): the direct line and each payload's planned path,
+    labelled with the verification's verdict (``verified``: the payloads' verify summary.csv files) or,
+    without it, with the least capacity of the planned moves along their own directions."""
+    rows = pd.concat([pd.read_csv(f) for f in verified or []] or [pd.DataFrame(columns=["payload_kg", "path"])])
+    ok = {(float(r.payload_kg), r.path): r for r in rows.itertuples()}
+
+    def verdict(m: float, path: str) -> str:  # e.g. "holds (+3.7 %)": feasible, and the weakest segment's margin
+        r = ok[(m, path)]
+        return f"{'holds' if r.feasible else 'FAILS'} ({100 * (r.capacity_kg / m - 1):+.1f} %)"
+    direct = [f"{m:g} kg {verdict(m, 'direct')}" for m in view.payloads_kg if (m, "direct") in ok]
+    planned, missing = _planned(waypoints)
+    paths = [("direct start-goal line" + (f", verified: {', '.join(direct)}" if direct else ""),
+              np.stack([view.start_m, view.goal_m]), {"color": "black", "ls": "--"})]
+    paths += [(f"planned path, {m:g} kg" + (f", verified: {verdict(m, 'planned')}, weakest segment "
+                                            f"{ok[(m, 'planned')].capacity_kg:,.0f} kg" if (m, "planned") in ok
+                                            else _carries(mv)),
+               p, {"color": PATH_COLOURS[n % len(PATH_COLOURS)], "ls": "-"}) for n, (m, _, p, mv) in enumerate(planned)]
+    return paths + [(f"no planned path for {m}", np.empty((0, 3)), {"color": "none"}) for m in missing]
+
 
 def _summary_rows(vox: pd.DataFrame, pts: pd.DataFrame, op: pd.DataFrame | None, configuration: str):
     """The summary table's rows (quantity, value), the reachable voxels and their median capacity (kg)."""
@@ -90,20 +110,16 @@ def _summary_rows(vox: pd.DataFrame, pts: pd.DataFrame, op: pd.DataFrame | None,
 
 
 def stage_summary(voxels: str, configurations: str, points: str, waypoints: list[str], out: Outputs,
-                  slice_json: str) -> None:
+                  slice_json: str, verified: list[str] | None = None) -> None:
     """Capacity summary table (``out["csv"]``, ``out["md"]``) and the map figure (``out["png"]``: the arm's
-    configuration and the bound for any, the planned paths drawn)."""
+    configuration and the bound for any, the direct line and the planned paths drawn with their verdicts
+    from ``verified``, the payloads' verify summary.csv files, when given)."""
     vox, pts = datasets.read(voxels), datasets.read(points)
     view = MapView.from_slice(slice_json)
     op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
     rows, reach_v, median = _summary_rows(vox, pts, op, view.configuration)
     write_quantities(rows, out["csv"], out["md"])
-    planned, missing = _planned(waypoints)
-    paths = [("direct start-goal line", np.stack([view.start_m, view.goal_m]), {"color": "black", "ls": "--"})]
-    paths += [(f"planned path, {m:g} kg{_carries(mv)}", p, {"color": PATH_COLOURS[n % len(PATH_COLOURS)], "ls": "-"})
-              for n, (m, _, p, mv) in enumerate(planned)]
-    paths += [(f"no planned path for {m}", np.empty((0, 3)), {"color": "none"}) for m in missing]
-    capacity_map(vox, view, out["png"], op, view.configuration, paths)
+    capacity_map(vox, view, out["png"], op, view.configuration, _map_paths(view, waypoints, verified))
     stage_logger(__name__, "summary").info(f"{len(reach_v)} reachable voxels, median capacity {median:.1f} kg "
                                            f"-> {out['csv']}, {out['png']}")
 
