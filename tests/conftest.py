@@ -3,6 +3,8 @@ scenario's constants in tests/scenario.py."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 import yaml
@@ -10,6 +12,9 @@ import yaml
 from capmap.core.reduction import lock
 from capmap.robots import load
 from tests.scenario import SSRMS_YAML
+
+
+os.environ.setdefault("CAPMAP_QUERY_SERVER", "0")  # each query in its own process (tests/io/test_query_service.py: warm)
 
 
 def pytest_configure(config):

@@ -39,7 +39,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-from capmap.config.run import DEFAULT_CONFIG
+from capmap.config.defaults import DEFAULT_CONFIG
 from capmap.errors import CapmapError
 
 # each command imports what it runs when it runs (--help and a usage error answer at once, a query
@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "run":
         return _run(args)
     if args.command == "query":
-        return _query(args)
+        return _query(args, list(sys.argv[1:] if argv is None else argv))
     if args.command == "check-config":
         return _check_config(args.files, args.json)
     if args.command == "arm":
@@ -210,7 +210,23 @@ def _catalogue(run: str, results: str, as_json: bool) -> int:
     return 0
 
 
-def _query(args) -> int:
+def _query(args, argv: list[str]) -> int:
+    from capmap.stages import query_service as service
+
+    if service.enabled():
+        served = service.ask(argv)
+        if served is not None:
+            rc, out, err = served
+            sys.stdout.write(out)
+            sys.stderr.write(err)
+            return rc
+    rc = _answer(args)
+    if service.enabled():
+        service.start(argv)  # the next query is answered by a warm process
+    return rc
+
+
+def _answer(args) -> int:
     try:
         if args.payload is not None and not (args.payload >= 0 and args.payload < float("inf")):
             raise CapmapError(f"--payload {args.payload} must be a finite mass >= 0 kg")
@@ -266,14 +282,14 @@ def _snakemake(cmd: list[str]) -> int:
             text = line.rstrip("\n")
             if text == "Job stats:":
                 jobs = []
-            elif jobs is not None and re.match(r"^\w+ +\d+$", text):
-                name, n = text.split()
-                jobs.append(name if n == "1" else f"{name} x{n}")
-                continue
             elif jobs is not None and text.startswith("total"):
                 print(f"capmap: {text.split()[-1]} jobs to run: {', '.join(j for j in jobs if j != 'all')}",
                       file=sys.stderr, flush=True)
                 jobs = None
+                continue
+            elif jobs is not None and re.match(r"^\w+ +\d+$", text):
+                name, n = text.split()
+                jobs.append(name if n == "1" else f"{name} x{n}")
                 continue
             if not _CHATTER.match(text):
                 sys.stderr.write(line)

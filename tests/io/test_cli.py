@@ -149,3 +149,17 @@ def test_json_answers_parse():
     res = _cli("arm", "config/robots/ssrms7.yaml", "--json")
     doc = json.loads(res.stdout)
     assert res.returncode == 0 and len(doc["joints"]) == 7 and len(doc["locks"]) >= 7
+
+
+def test_capmap_run_shows_one_line_per_job_and_the_job_table_in_one(capfd):
+    """Snakemake's scheduling lines and step counts are left out, each job's capmap line and the rest kept."""
+    from capmap.__main__ import _snakemake
+
+    lines = ["Building DAG of jobs...", "Job stats:", "job      count", "-----  -------", "capacity       4",
+             "voxels         1", "all            1", "total          6", "Select jobs to execute...", "Execute 2 jobs...",
+             "[12:00:01] capacity shard 0 of 4: done (1.6 s, 394 MB)", "[Sun Dec  6 05:10:58 2026]",
+             "Finished jobid: 3 (Rule: capacity)", "1 of 6 steps (17%) done", "capmap: what this run found:"]
+    assert _snakemake(["printf", "%s\\n", *lines]) == 0
+    err = capfd.readouterr().err.splitlines()
+    assert err == ["capmap: 6 jobs to run: capacity x4, voxels", "[12:00:01] capacity shard 0 of 4: done (1.6 s, 394 MB)",
+                   "capmap: what this run found:"]

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from capmap.config.defaults import DEFAULT_CONFIG
 from capmap.config.jobs import PlanTask
 from capmap.config.typed import FILE
 from capmap.config.validation import load_yaml
@@ -36,7 +37,6 @@ if TYPE_CHECKING:  # resolved lazily at run time through SECTION_TYPES
 
 __all__ = ["RunConfig", "SECTION_TYPES", "run_name", "run_document", "config_files", "NAMED_CONFIG", "DEFAULT_CONFIG"]
 
-DEFAULT_CONFIG = "config/config.yaml"  # the config when no --configfile is given
 SECTION_TYPES = {  # a section type's name -> the module defining it (imported when a slice holds it)
     **dict.fromkeys(("DirectionsConfig", "LimitsConfig", "LockConfig", "PlanningConfig", "RefineConfig", "SamplingConfig",
                      "TaskConfig", "VerificationConfig"), "capmap.config.capacity"),

@@ -36,7 +36,7 @@ from pathlib import Path
 
 import capmap
 
-__all__ = ["code_fingerprint", "script_fingerprint", "module_closure", "file_fingerprints", "file_sha256"]
+__all__ = ["code_fingerprint", "script_fingerprint", "module_closure", "file_fingerprints", "file_sha256", "package_hash"]
 
 _SRC = Path(capmap.__file__).resolve().parent
 
@@ -147,6 +147,12 @@ def _source_hash() -> str:
     for f in sorted(_SRC.rglob("*.py")):
         h.update(str(f.relative_to(_SRC)).encode() + b"\0" + f.read_bytes())
     return h.hexdigest()[:16]
+
+
+def package_hash() -> str:
+    """16 hex digits of every capmap source file and the Python version: what a warm process of this
+    code is keyed by."""
+    return _source_hash()
 
 
 def _cache_file() -> Path:

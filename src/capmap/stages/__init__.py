@@ -7,7 +7,8 @@ writes Parquet with provenance, and logs its progress.
 - :mod:`~capmap.stages.following`  follow, follow_plots (one job per case)
 - :mod:`~capmap.stages.refine`     refine (sharded: all branches and each configuration), voxel_map
 - :mod:`~capmap.stages.report`     catalogue, concatenated summaries
-- :mod:`~capmap.stages.query`      ``python -m capmap query``: a point on every configuration, a line on one
+- :mod:`~capmap.stages.query`      ``capmap query``: a point on every configuration, a line on one
+- :mod:`~capmap.stages.query_service` a warm process that answers ``capmap query`` in a third of a second
 """
 
 __all__ = ["capacity", "common", "following", "query", "refine", "report", "verify"]

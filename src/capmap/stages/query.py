@@ -5,6 +5,7 @@ workflow checks it and, when they are of that config, the run's voxel maps."""
 from __future__ import annotations
 
 import json
+import sys
 import textwrap
 from pathlib import Path
 
@@ -21,6 +22,7 @@ from capmap.config.run import RunConfig, run_document
 from capmap.config.slices import stage_slice
 from capmap.errors import CapmapError
 from capmap.io.arrays import read_columns
+from capmap.io.kernel_marker import is_warm, record, run_key
 from capmap.io.datasets import canonical
 
 __all__ = ["load_question", "answer_point", "answer_line"]
@@ -29,6 +31,14 @@ def load_question(configfile: str) -> tuple[RunConfig, CapacityProblem]:
     """The run config of ``configfile`` with its capacity part checked (as the workflow checks it) and the
     capacity problem it asks about (per configuration)."""
     run = check_capacity_config(run_document([configfile]), configfile)
+    key = run_key(run.robot, run.failure.joint, float(np.deg2rad(run.failure.angle_deg)), False)
+    if not any(is_warm(k) for k in (key, f"{key} dualarm", f"{key} query")):
+        print(f"capmap: compiling the kernels a query of {Path(run.robot).name} with joint {run.failure.joint} locked needs: "
+              "once per machine and code version (about a minute on 2 cores)...", file=sys.stderr, flush=True)
+        problem = capacity_problem(run, per_configuration=True)
+        point_query(problem, np.asarray(run.failure.start_m, dtype=float))  # the start: reached by construction
+        record(f"{key} query")
+        return run, problem
     return run, capacity_problem(run, per_configuration=True)
 
 
@@ -63,7 +73,8 @@ def _run_voxels(run: RunConfig, results: Path, point: np.ndarray) -> dict:
     out = {"voxels": idx.tolist(), "map_kg": float(cap.min()) if len(cap) else None, "configurations": {}}  # JSON null
     if conf_path.is_file():
         conf, _ = read_columns(conf_path, ["i", "j", "k", "configuration", "capacity_kg"])
-        mine = np.isin(grid.flat(np.stack([conf["i"], conf["j"], conf["k"]], axis=1)), flat) & np.isfinite(conf["capacity_kg"])
+        ijk = np.stack([conf["i"], conf["j"], conf["k"]], axis=1).astype(np.int64).reshape(-1, 3)
+        mine = np.isin(grid.flat(ijk), flat) & np.isfinite(conf["capacity_kg"].astype(float))
         for c, v in zip(conf["configuration"][mine], conf["capacity_kg"][mine]):
             out["configurations"][str(c)] = min(float(v), out["configurations"].get(str(c), np.inf))
     return out
