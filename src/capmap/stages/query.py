@@ -4,6 +4,8 @@ workflow checks it and, when they are of that config, the run's voxel maps."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import sys
 import textwrap
@@ -22,10 +24,32 @@ from capmap.config.run import RunConfig, run_document
 from capmap.config.slices import stage_slice
 from capmap.errors import CapmapError
 from capmap.io.arrays import read_columns
-from capmap.io.kernel_marker import is_warm, record, run_key
 from capmap.io.datasets import canonical
+from capmap.io.kernel_marker import is_warm, record, run_key
 
-__all__ = ["load_question", "answer_point", "answer_line"]
+__all__ = ["load_question", "answer", "answer_point", "answer_line"]
+
+def answer(request: dict) -> tuple[int, str, str]:
+    """A ``capmap query`` question (``what``: point or line, ``configfile``, ``payload_kg``, ``json``; a point:
+    ``point_m``, ``joints``; a line: ``a_m``, ``b_m``, ``configuration``) answered: (exit status, the text
+    for stdout, the one line for stderr)."""
+    out, err = io.StringIO(), io.StringIO()
+    m = request.get("payload_kg")
+    try:
+        with contextlib.redirect_stderr(err):  # the compile's announcement
+            if m is not None and not (m >= 0 and m < float("inf")):
+                raise CapmapError(f"--payload {m} must be a finite mass >= 0 kg")
+            if request["what"] == "point":
+                text = answer_point(request["configfile"], request["point_m"], m, request["json"],
+                                    joints=request.get("joints", False))
+            else:
+                text = answer_line(request["configfile"], request["a_m"], request["b_m"], m,
+                                   request.get("configuration"), request["json"])
+    except CapmapError as exc:
+        return 1, "", err.getvalue() + f"capmap: {exc}\n"
+    out.write(text + "\n")
+    return 0, out.getvalue(), err.getvalue()
+
 
 def load_question(configfile: str) -> tuple[RunConfig, CapacityProblem]:
     """The run config of ``configfile`` with its capacity part checked (as the workflow checks it) and the
@@ -196,8 +220,15 @@ def answer_line(configfile: str, a, b, payload_kg: float | None, configuration: 
         clean = {k: None if isinstance(v, float) and not np.isfinite(v) else v for k, v in row.items()}
         return json.dumps({"a_m": list(map(float, a)), "b_m": list(map(float, b)), "run": run.name, **clean}, indent=1)
     w = max(map(len, row))
-    lines = [f"capmap: run {run.name!r}, {run.failure.describe()}",
-             f"line [{', '.join(f'{x:g}' for x in a)}] -> [{', '.join(f'{x:g}' for x in b)}] m carrying {payload:g} kg "
-             f"on configuration {ans.configuration} (verified as the verify stage verifies a path):"]
-    lines += [f"  {k:<{w}}  {val:.4g}" if isinstance(val, float) else f"  {k:<{w}}  {val}" for k, val in row.items()]
-    return "\n".join(lines)
+    head = [f"capmap: run {run.name!r}: {run.failure.describe().split(';')[0]}",
+            f"line [{', '.join(f'{x:g}' for x in a)}] -> [{', '.join(f'{x:g}' for x in b)}] m carrying {payload:g} kg "
+            f"on configuration {ans.configuration} (verified as the verify stage verifies a path):"]
+    lines = [f"  {k:<{w}}  {val:.4g}" if isinstance(val, float) else f"  {k:<{w}}  {val}" for k, val in row.items()]
+    mine = "the arm's" if configuration is None else "the one asked"
+    reasons = [f"exceeds {v.limits_exceeded_at_payload}" if v.limits_exceeded_at_payload else "",
+               "" if v.tracking == "ok" else f"tracking: {v.tracking}",
+               "" if v.joint_range == "ok" else f"joint range: {v.joint_range}"]
+    why = "" if v.feasible else f" ({'; '.join(r for r in reasons if r)})"
+    verdict = (f"verdict: the line carries {payload:g} kg on {ans.configuration}, {mine}: "
+               f"{'yes' if v.feasible else 'NO'}, margin {v.min_margin_pct:.0f} %{why}")
+    return "\n".join(_wrap(head) + lines + _wrap([verdict]))
