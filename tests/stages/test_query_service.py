@@ -34,19 +34,16 @@ def _wait_for_socket(folder, timeout_s=120):
 
 
 def test_a_served_answer_is_a_fresh_process_s_and_reads_an_edited_config(served, tmp_path):
-    from capmap.stages import query_service
+    from capmap.stages import query_client
 
     cfg = tmp_path / "tiny.yaml"
     cfg.write_text((ROOT / "tests/data/tiny.yaml").read_text())
     alone = {**os.environ, "CAPMAP_QUERY_SERVER": "0"}
     first = _query(served, cfg, "--payload", "1500")  # answered by its own process, which starts the server
     _wait_for_socket(tmp_path)
-    os.environ["CAPMAP_QUERY_DIR"] = str(tmp_path)
-    try:
-        rc, out, err = query_service.ask(["query", "point", "0.379", "4.8432", "1.8878", "--payload", "1500",
-                                          "--configfile", str(cfg), "--json"])
-    finally:
-        del os.environ["CAPMAP_QUERY_DIR"]
+    sock = next(tmp_path.glob("query-*.sock"))
+    rc, out, err = query_client.ask({"what": "point", "point_m": [0.379, 4.8432, 1.8878], "payload_kg": 1500.0,
+                                     "configfile": str(cfg), "json": True, "joints": False}, path=sock)
     assert rc == 0 and json.loads(out) == first == _query(alone, cfg, "--payload", "1500")
     # the config edited under the server: its next answer is a fresh process's on the new config
     cfg.write_text(cfg.read_text().replace("base_moment_nm: 500}", "base_moment_nm: 400}"))
