@@ -37,8 +37,8 @@ def catalogue(run: str = "default", results: str = "results"):
 
 
 def numba_folder(package, base: str) -> str:
-    """The cache folder under ``base`` for the compiled sources (the files importing numba) of ``package``
-    (a folder): named by their content."""
+    """The cache folder under ``base`` for the compiled sources (the files with ``import numba`` at the start
+    of a line: the kernels' modules) of ``package`` (a folder): named by their content."""
     import hashlib
     import re
     from pathlib import Path
