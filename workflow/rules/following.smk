@@ -24,9 +24,9 @@ rule follow:
 
 
 rule follow_plots:
-    """The follower's duration against TOPP-RA's (path coordinate, speed, lag, deviation); torques before and after
-    limiting; their split into link dynamics, rotor inertia and friction (a robot without drives: the follower's
-    torques against TOPP-RA's)."""
+    """The follower's duration against TOPP-RA's (path coordinate, speed, lag; the gap split into the command's and
+    the torque limits' parts); torques before and after limiting; their split into link dynamics, rotor inertia and
+    friction (a robot without drives: the follower's torques against TOPP-RA's)."""
     input:
         timeseries=out("follow/{case}/timeseries.parquet"),
         toppra=out("follow/{case}/toppra.parquet"),

@@ -7,8 +7,9 @@ import numpy as np
 
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.plots.reconfig import animation, joint_rates, manipulability, passive_joint
+from capmap.plots.reconfig import ReconfigMotion, animation, joint_rates, manipulability, passive_joint
 from capmap.reconfig.build import reconfig_problem
+from capmap.reconfig.law import QuinticLaw
 from capmap.reconfig.multiarm import link_segments, platform_model
 from capmap.reconfig.tables import column
 from capmap.stages.common import Outputs, stage_config
@@ -16,9 +17,19 @@ from capmap.stages.common import Outputs, stage_config
 __all__ = ["stage_reconfig_plots", "stage_reconfig_animation"]
 
 
+def _with_gain_floor(df):
+    """The run's table with the null-space gain's floor kappa0 w(u) beside its gain (``kappa_floor``; w: the law's
+    speed over its peak at the law phase u), when the run's configuration states kappa0: where the gain is above
+    it, the task alone would lower m."""
+    kappa0 = df.attrs["capmap"].get("config", {}).get("run", {}).get("reconfig", {}).get("kappa0")
+    if kappa0 and "law_phase" in df:
+        df["kappa_floor"] = kappa0 * QuinticLaw(0.0, 0.0, 0.0, 0.0, 1.0).speed_weight(df.law_phase.to_numpy())
+    return df
+
+
 def stage_reconfig_plots(tables: list[str], out: Outputs) -> None:
     """m(t), the smallest singular value and dm/dt of both methods; joint rates; the passive joint."""
-    runs = {df.attrs["capmap"]["method"]: df for df in map(datasets.read, tables)}
+    runs = {df.attrs["capmap"]["method"]: _with_gain_floor(df) for df in map(datasets.read, tables)}
     manipulability(runs, out["manipulability"])
     joint_rates(runs, out["rates"])
     passive_joint(runs, out["passive"])
@@ -27,28 +38,32 @@ def stage_reconfig_plots(tables: list[str], out: Outputs) -> None:
 
 def stage_reconfig_animation(tables: list[str], out_html: str, slice_json: str) -> None:
     """MeshCat static HTML: the robot during the null-space reconfiguration (the pseudo-inverse's
-    motion as a translucent ghost), sampled at ``reconfig.animation_fps`` frames per second."""
+    motion as a translucent sheath), sampled at ``reconfig.animation_fps`` frames per second, with each run's
+    manipulability as it plays."""
     cfg = stage_config(slice_json).run.reconfig
     problem = reconfig_problem(cfg)
     model = platform_model(problem.description)
     segments = link_segments(problem.description)
-    links = tuple(sorted({s[0] for s in segments}))
-    frames, words = {}, []
+    capture = problem.description.capture(cfg.capture)
+    links = tuple(sorted({s[0] for s in segments} | {capture.link_a, capture.link_b}))
+    frames, m, words = {}, {}, []
     for df in map(datasets.read, tables):
         meta = df.attrs["capmap"]
-        m = meta.get("summary", {})
-        if "m_final" in m:  # the verdict of each method, over the view
+        s = meta.get("summary", {})
+        if "m_final" in s:  # the verdict of each method, over the view
             name = {"nullspace": "null-space", "pinv": "pseudo-inverse"}.get(meta["method"], meta["method"])
-            words.append(f"{name}: manipulability m {m['m_initial']:.1f} → {m['m_final']:.1f} ({m['m_change_pct']:+.0f} %)")
+            words.append(f"{name}: manipulability m {s['m_initial']:.1f} → {s['m_final']:.1f} ({s['m_change_pct']:+.0f} %)")
         t = np.arange(0.0, df.t_s.iloc[-1] + 1e-9, 1.0 / cfg.animation_fps)
-        rows = np.clip(np.searchsorted(df.t_s.to_numpy(), t), 0, len(df) - 1)
-        sub = df.iloc[rows]
+        sub = df.iloc[np.clip(np.searchsorted(df.t_s.to_numpy(), t), 0, len(df) - 1)]
         names = problem.split.moving.joints
         states = [problem.state.with_values(names, np.deg2rad([r[f"q_{column(j)}_deg"] for j in names]))
                   .with_passive(problem.split.unlocked, np.deg2rad(r.passive_theta_deg), r.passive_d_m)
                   for _, r in sub.iterrows()]
         frames[meta["method"]] = np.array([model.placements(s, links) for s in states])
-    animation(links, segments, frames, cfg.animation_fps, problem.split.unlocked,
-              f"{problem.description.name}: reconfiguration with {problem.split.unlocked} unlocked"
-              + "".join(f"\n{w}" for w in words), out_html)
+        m[meta["method"]] = sub.manipulability.to_numpy()
+    desc, unlocked = problem.description, problem.split.unlocked
+    title = (f"{desc.name}: {len(desc.arms)}-arm platform, {capture.link_a} and {capture.link_b} holding each other; "
+             f"boom joint {unlocked} unlocked and moved" + "".join(f"\n{w}" for w in words))
+    animation(ReconfigMotion(links, frames, m, cfg.animation_fps, unlocked, (capture.link_a, capture.link_b)),
+              segments, title, out_html)
     stage_logger(__name__, "reconfig animation").info(f"{len(next(iter(frames.values())))} frames -> {out_html}")
