@@ -19,9 +19,12 @@ import pytest
 import capmap.plots.atlas as pa
 import capmap.plots.baseline as pb
 import capmap.plots.capacity as pc
+import capmap.plots.capacity_loads as pl
+import capmap.plots.capacity_paths as pp
 from capmap.capacity.directions import GRID_AXES
 from capmap.capacity.tables import AXIS_COLUMNS
 from capmap.plots.capacity_3d import PATH_COLOURS, PlannedPath, capacity_3d_html
+from capmap.plots.capacity_3d_mesh import cube_faces
 from capmap.plots.common import plt
 from capmap.stages.verify_figures import under_path
 
@@ -34,7 +37,7 @@ LIMITS = {"tau_j2_nm": 700.0, "tau_j3_nm": 700.0, "base_fx_n": 200.0, "base_mx_n
 def figures(monkeypatch):
     """The figures the plot functions would save, kept open for reading."""
     kept = []
-    for module in (pc, pa, pb):
+    for module in (pc, pp, pl, pa, pb):
         monkeypatch.setattr(module, "save", lambda fig, out_png, rect=None: kept.append(fig))
     yield kept
     for fig in kept:
@@ -111,26 +114,69 @@ def test_under_path_reads_the_voxel_each_sample_is_in_along_its_axis_of_travel()
     assert planned.distance_m.iloc[0] == 0 and planned.distance_m.iloc[-1] == pytest.approx(3 + 3 * np.sqrt(2))
 
 
-def test_the_workspace_figure_gives_each_path_its_verdict_and_its_own_capacity(figures):
+def _profiles(fig) -> list:
+    return [ax for ax in fig.axes if ax.get_ylabel() == "capacity [kg]"]
+
+
+def test_the_workspace_figure_gives_each_path_its_verdict_and_where_it_fails(figures):
     vox = _map()
     vox["capacity_best_axis_kg"] = vox[AXIS_COLUMNS].max(axis=1)
-    pc.workspace_paths(vox, under_path(vox, _ts()), 4000.0, "w.png", "configuration S-E-W+")
+    ts = _ts()
+    ts.loc[(ts.path == "direct") & (ts.t_s > 8), "state_capacity_kg"] = np.inf  # cruising: unbounded
+    pp.workspace_paths(vox, under_path(vox, ts), 4000.0, "w.png", "configuration S-E-W+", planner="A* moves")
     fig = figures[0]
     text = _texts(fig)
     assert "planned path holds: weakest segment 4149 kg (+3.7 % margin)" in text
     assert "direct line FAILS: weakest segment 3820 kg (-4.5 % margin)" in text
-    assert "planned path holds, direct line fails" in fig._suptitle.get_text()
+    assert "below 4000 kg while it moves (2.80-3.20 m)" in text  # where along the line, from its states
+    title = fig._suptitle.get_text()
+    assert "direct line fails (3,820 kg < 4000 kg), planned path holds (4,149 kg)" in title and "A* moves" in title
     assert "carries 4000 kg in every direction" in text and "along some grid axes only" in text
-    profiles = [ax for ax in fig.axes if ax.get_ylabel() == "capacity [kg]"]
-    assert len(profiles) == 2
-    for ax in profiles:  # the payload drawn on each path's panel
+    direct, planned = _profiles(fig)
+    for ax in (direct, planned):  # the payload drawn on each path's panel, 0 kg above the axis' bottom
         assert any(np.allclose(line.get_ydata(), 4000.0) for line in ax.get_lines())
+        assert ax.get_ylim()[0] < 0
+    own = ts[ts.path == "direct"].state_capacity_kg.to_numpy()
+    thick = next(line for line in direct.get_lines() if line.get_linewidth() == 3)
+    np.testing.assert_allclose(thick.get_ydata(), np.where(np.isfinite(own), own, np.nan))  # each state, not a min
+    assert "∞" in [t.get_text() for t in direct.get_yticklabels()]  # the unbounded states drawn at ∞
+
+
+def test_the_workspace_figure_says_where_tracking_was_lost_and_why_a_path_holds_on_weak_voxels(figures):
+    vox = _map()
+    vox["capacity_best_axis_kg"] = vox[AXIS_COLUMNS].max(axis=1)
+    ts = _ts(planned_kg=5000.0)
+    direct = (ts.path == "direct").to_numpy()
+    lost = direct & (ts.t_s > 6).to_numpy()
+    ts.loc[direct & (ts.t_s > 5).to_numpy(), "state_capacity_kg"] = 0.0
+    ts.loc[lost, ["state_capacity_kg", "tracked"]] = [np.nan, False]
+    path = under_path(vox, ts)
+    path.loc[path.path == "planned", "voxel_kg"] = 0.0  # the voxels under it: 0 kg somewhere inside
+    pp.workspace_paths(vox, path, 4000.0, "w.png", "configuration S-E-W+")
+    text = _texts(figures[0])
+    s_lost = path.distance_m[lost].iloc[0]
+    assert f"direct line FAILS: tracking lost at {s_lost:.2f} m (t = " in text
+    assert "0 kg from 3.20 m" in text and f"tracking lost at {s_lost:.2f} m:" in text
+    assert "through voxels of down to 0 kg" in text and "carry ≥ 5,000 kg" in text
+    marks = [line for line in _profiles(figures[0])[0].get_lines() if line.get_marker() == "X"]
+    assert marks and marks[0].get_ydata()[0] == 0.0  # the 0 kg state marked, above the axis' bottom
+
+
+def test_when_both_paths_hold_the_title_says_which_is_better_and_what_the_planner_seeks(figures):
+    vox = _map()
+    vox["capacity_best_axis_kg"] = vox[AXIS_COLUMNS].max(axis=1)
+    pp.workspace_paths(vox, under_path(vox, _ts(4500.0, 4200.0)), 1500.0, "w.png", "configuration S-E-W+",
+                       planner="the shortest chain of moves")
+    title = figures[0]._suptitle.get_text()
+    assert "both paths hold, and the direct line is the better motion here" in title
+    assert "4,500 vs 4,200 kg, 10 vs 20 s" in title and "the plan is not needed" in title
+    assert "the shortest chain of moves" in title and "does not seek the largest margin" in title
 
 
 def test_each_load_panel_draws_its_limit_and_its_verdict_with_the_legend_beside_it(figures):
     ts = _ts()
-    pc.load_series(ts, ["tau_j2_nm", "tau_j3_nm"], LIMITS, "Joint torques carrying 4000 kg", "t.png")
-    pc.load_series(ts, ["base_mx_nm"], LIMITS, "Base disturbance moment carrying 4000 kg", "m.png")
+    pl.load_series(ts, ["tau_j2_nm", "tau_j3_nm"], LIMITS, "Joint torques carrying 4000 kg", "t.png")
+    pl.load_series(ts, ["base_mx_nm"], LIMITS, "Base disturbance moment carrying 4000 kg", "m.png")
     torques, moment = figures
     direct, planned = (ax for ax in moment.axes if ax.get_title())
     assert direct.get_title().startswith("direct line EXCEEDS a limit: M_x at 105 % of its 500 N m limit")
@@ -145,6 +191,19 @@ def test_each_load_panel_draws_its_limit_and_its_verdict_with_the_legend_beside_
             assert anchor.x0 >= 1.0  # beside the axes, off the curves
 
 
+def test_a_short_stretch_over_a_limit_is_marked_and_the_motion_not_executed_is_named(figures):
+    ts = _ts()
+    direct = (ts.path == "direct").to_numpy()
+    ts.loc[direct, "base_mx_nm"] = 100.0
+    ts.loc[direct & np.isclose(ts.t_s, 5.0), "base_mx_nm"] = 900.0  # one sample over: too short to see
+    ts.loc[direct & (ts.t_s > 6).to_numpy(), ["base_mx_nm", "tracked"]] = [np.nan, False]
+    pl.load_series(ts, ["base_mx_nm"], LIMITS, "Base disturbance moment carrying 4000 kg", "m.png")
+    ax = figures[0].axes[0]
+    texts = [t.get_text() for t in ax.texts]
+    assert "over its limit: t = 5.0-5.0 s" in texts
+    assert any("the rest of the" in t and "its planned end" in t and "6.3-10.0 s" in t for t in texts)
+
+
 def test_the_summary_map_draws_start_goal_and_paths_where_they_are(figures):
     vox = _map()
     start, goal = np.array([1.5, 1.5, 1.5]), np.array([4.5, 5.5, 5.5])
@@ -152,16 +211,24 @@ def test_the_summary_map_draws_start_goal_and_paths_where_they_are(figures):
     path = np.array([start, [2.5, 2.5, 3.5], goal])
     pc.capacity_map(vox, view, "m.png", None, "", [("direct start-goal line", np.stack([start, goal]), {"color": "k"}),
                                                    ("planned path, 3200 kg: each move carries ≥ 4,100 kg", path,
-                                                    {"color": PATH_COLOURS[0]})])
+                                                    {"color": PATH_COLOURS[0]}, "the 3200 kg path holds: why")])
     fig = figures[0]
     text = _texts(fig)
-    assert "tab:" not in text and "9000 kg: nowhere here" in text
-    assert "each move carries ≥ 4,100 kg" in text
+    assert "tab:" not in text and "9000 kg: no voxel here" in text
+    assert "each move carries ≥ 4,100 kg" in text and "the 3200 kg path holds: why" in text  # the note, on the map
+    assert "right panel" in text  # the zoomed box named
     d = np.hypot(*(goal - start)[:2])
     for ax in fig.axes[1:3]:  # both map panels: start and goal at their own place on the plane
         marks = [line for line in ax.get_lines() if line.get_marker() in ("o", "*")]
         xy = {line.get_marker(): (line.get_xdata()[0], line.get_ydata()[0]) for line in marks}
         assert xy["o"] == pytest.approx((0.0, start[2])) and xy["*"] == pytest.approx((d, goal[2]))
+        for label in [t for t in ax.texts if t.get_text().endswith(" kg")]:  # contour labels: inside the view
+            x, y = label.get_position()
+            assert ax.get_xlim()[0] < x < ax.get_xlim()[1] and ax.get_ylim()[0] < y < ax.get_ylim()[1]
+    hatched = [c for c in fig.axes[1].collections if c.get_hatch()]
+    zero_cells = sum(int(np.count_nonzero(~np.ma.getmaskarray(c.get_array()))) for c in hatched)
+    img = fig.axes[1].get_images()[0].get_array()
+    assert zero_cells == int(np.count_nonzero(img.filled(np.nan) == 0))  # every 0 kg cell hatched, whole
 
 
 def _page_traces(page: str) -> list[dict]:
@@ -172,23 +239,50 @@ def test_the_3d_page_opens_readable_with_one_meaning_per_colour():
     vox = _map()
     r = vox[vox.n_reachable > 0]
     path = PlannedPath("planned path, 3200 kg (5.00 m)", np.array([[1.5, 1.5, 1.5], [2.5, 2.5, 2.5]]),
-                       moves_kg=np.array([np.nan, 4100.0]))
+                       moves_kg=np.array([np.nan, 4100.0]), group="main task: starts on S-E-W+")
+    task = PlannedPath("task t: planned path, 3200 kg (4.00 m)", np.array([[0.5, 0.5, 0.5], [0.5, 3.5, 0.5]]), ends="t",
+                       verdict="verified: holds, weakest segment 4,149 kg (+29.7 %)", group="task t: starts on S+E-W-")
+    line = PlannedPath("t: direct line", task.points_m[[0, -1]], ends="t", direct=True, group=task.group,
+                       verdict="verified: FAILS, tracking lost at t = 1.0 s")
     page = capacity_3d_html([("configuration S-E-W+", r[["x_m", "y_m", "z_m"]].to_numpy(), r.capacity_kg.to_numpy())],
-                            EDGE, np.array([1.5, 1.5, 1.5]), np.array([2.5, 2.5, 2.5]), [path], (3200.0,), "t")
+                            EDGE, np.array([1.5, 1.5, 1.5]), np.array([2.5, 2.5, 2.5]), [path, task, line], (3200.0,), "t")
     traces = {t["name"]: t for t in _page_traces(page)}
     zero = next(t for n, t in traces.items() if n.startswith("0 kg"))
     assert zero["visible"] == "legendonly" and len(zero["x"]) == int((r.capacity_kg == 0).sum())
     below = next(t for n, t in traces.items() if n.startswith("voxels below"))
     assert below["visible"] == "legendonly"
-    shown = traces["voxels carrying the payload"]
-    assert shown.get("visible", True) is True and shown["marker"]["opacity"] <= 0.5  # faint: the paths show through
+    cubes = next(t for n, t in traces.items() if n.startswith("voxels carrying the payload: cubes"))
+    assert cubes["type"] == "mesh3d" and cubes.get("visible", True) is True and cubes["opacity"] <= 0.5  # see-through
+    assert min(cubes["intensity"]) >= 3200 and len(cubes["x"]) == 4 * len(cubes["i"]) // 2  # 4 corners, 2 triangles
+    centres = traces["voxels carrying the payload"]  # hover only: the cubes draw them
+    assert len(centres["x"]) == int((r.capacity_kg >= 3200).sum()) and centres["marker"]["opacity"] == 0
     planned = next(t for n, t in traces.items() if n.startswith("planned path, 3200 kg (5.00 m)"))
     assert "each move carries ≥ 4,100 kg" in planned["name"] and planned["line"]["width"] >= 8
+    verified = next(t for n, t in traces.items() if n.startswith("task t: planned path"))
+    assert "weakest segment 4,149 kg" in verified["name"] and "carries ≥" not in verified["name"]  # the verified number
+    assert verified["mode"] == "lines+markers" and verified["legendgrouptitle"]["text"] == "task t: starts on S+E-W-"
+    assert "tracking lost" in traces["t: direct line<br>   verified: FAILS, tracking lost at t = 1.0 s"]["name"]
+    assert {"t: start", "t: goal"} <= set(traces)  # a further task's ends: markers named in the legend, no scene text
     colour = {n: mcolors.to_hex(t.get("line", t.get("marker", {})).get("color", "none")) for n, t in traces.items()
               if not n.startswith("voxels carrying")}
     assert colour[zero["name"]] == mcolors.to_hex("red")
     assert {colour["direct line"], colour["start"], colour["goal"]} == {mcolors.to_hex("black")}
+    assert traces["direct line"]["line"].get("dash", "solid") == "solid"  # as its legend entry draws it
     assert colour[planned["name"]] not in {mcolors.to_hex("red"), mcolors.to_hex("black")}
+    assert colour["t: start"] == colour[verified["name"]] == colour[line.label + "<br>   " + line.verdict]
+    layout = json.loads(re.search(r'\{"template".*?\}(?=,\s*\{"displaylogo")', page, re.S).group(0))
+    assert layout["scene"]["camera"]["projection"]["type"] == "orthographic"
+
+
+def test_the_cubes_are_the_faces_no_neighbour_covers():
+    ijk = np.array([[0, 0, 0], [1, 0, 0], [5, 5, 5]])
+    mesh = cube_faces(ijk, ijk * 0.75, 0.75)
+    assert len(mesh["x"]) == 4 * (10 + 6) and len(mesh["i"]) == 2 * (10 + 6)  # two touching cubes: 10 faces
+    assert sorted(np.bincount(mesh["owner"]).tolist()) == [20, 20, 24]
+    xyz = np.c_[mesh["x"], mesh["y"], mesh["z"]]
+    np.testing.assert_allclose(np.abs(xyz - (ijk * 0.75)[mesh["owner"]]), 0.375)  # corners of each cube
+    quads = xyz.reshape(-1, 4, 3)
+    assert not np.any(np.all(np.isclose(quads[:, :, 0], 0.375), axis=1))  # the face between the two: not drawn
 
 
 def test_the_baseline_and_atlas_figures_state_what_the_failure_cost(figures):
@@ -227,7 +321,7 @@ def test_the_summary_labels_each_path_with_its_verified_verdict_else_its_planned
         wps.append(str(tmp_path / f"wp{m:g}.parquet"))
     pd.DataFrame({"payload_kg": [4000.0, 4000.0], "path": ["direct", "planned"], "capacity_kg": [3820.0, 4149.0],
                   "feasible": [False, True]}).to_csv(tmp_path / "v.csv", index=False)
-    labels = [label for label, _, _ in _map_paths(view, wps, [str(tmp_path / "v.csv")])]
+    labels = [label for label, *_ in _map_paths(view, wps, [str(tmp_path / "v.csv")])]
     assert labels[0] == "direct start-goal line, verified: 4000 kg FAILS (-4.5 %)"
     assert labels[1] == "planned path, 1500 kg: each move carries ≥ 4,140 kg along its own direction"  # not verified
     assert labels[2] == "planned path, 4000 kg, verified: holds (+3.7 %), weakest segment 4,149 kg"

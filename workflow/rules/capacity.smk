@@ -166,6 +166,8 @@ rule capacity_3d:
         configurations=out("voxels/configurations.parquet"),
         waypoints=expand(out("plan/payload_{payload}kg/waypoints.parquet"), payload=PAYLOADS),
         tasks=expand(out("tasks/{task}/waypoints.parquet"), task=TASKS),
+        verified=expand(out("verify/payload_{payload}kg/summary.csv"), payload=PAYLOADS)
+        + expand(out("tasks/{task}/summary.csv"), task=TASKS),
     output:
         report(out("summary/capacity_3d.html"), category="Capacity map", caption="../report/capacity_3d.rst"),
     log:

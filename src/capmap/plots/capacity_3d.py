@@ -1,8 +1,11 @@
-"""Interactive 3D view of the capacity map: one self-contained HTML page (plotly.js inlined, no
-network at view time) with the reachable voxels coloured by capacity (hover: the value and the limit
-that binds it), the 0 kg voxels (singular slabs) as their own trace, a payload slider that hides the
-voxels below it, a height slider that cuts the map at a layer so its inside shows, fixed axes, the
-direct line, the planned paths of the task's payloads and of each further task, the start and the goal."""
+"""Interactive 3D view of the capacity map: one self-contained HTML page (plotly.js inlined, no network at view
+time). The voxels that carry the payload are cubes coloured by capacity (see-through at first, so that the paths
+inside show; a button makes them solid, for the height cut), their centres give each one's value and the limit
+that binds it on hover; the voxels below the payload and the 0 kg voxels (singular slabs) are their own traces;
+a payload slider, a height slider that cuts the map at a layer, buttons for the maps of the tasks'
+configurations and the bound, fixed axes, a camera that fits the whole map; the direct lines, the planned paths
+of the task's payloads and of each further task (each with its verified verdict and the configuration it starts
+on, in the legend), their starts and goals."""
 
 from __future__ import annotations
 
@@ -11,22 +14,31 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from capmap.plots.capacity_3d_mesh import cube_faces, page_script
+
 __all__ = ["PlannedPath", "capacity_3d_html", "slider_levels", "PATH_COLOURS"]
 
 PATH_COLOURS = ("darkorange", "magenta", "saddlebrown", "deepskyblue", "olive", "orchid")  # not in viridis, not red
+SEE_THROUGH = 0.35  # the cubes' opacity as the page opens
+ZOOM = 1.3  # the scene's box, in its units (the orthographic camera's zoom): the whole map fills the view
 
 
 @dataclass(frozen=True)
 class PlannedPath:
-    """A planned path: ``points_m`` (W, 3) waypoints; ``label`` for the legend (e.g. '1500 kg: A*');
-    ``ends``: a name written at its first and last waypoint (a further task's own start and goal);
-    ``moves_kg`` (W,): the capacity of the move arriving at each waypoint along its own direction (NaN
-    at the start; None: not known), in its hover text and the legend (its least)."""
+    """A path: ``points_m`` (W, 3) waypoints; ``label`` for the legend (e.g. 'planned path, 1500 kg (4.99 m)');
+    ``ends``: the name of a further task (its start and goal marked in the path's colour, named in the legend);
+    ``moves_kg`` (W,): the capacity of the move arriving at each waypoint along its own direction (NaN at the
+    start; None: not known), in its hover text and, without a ``verdict``, its least in the legend; ``verdict``:
+    the verification's, for the legend; ``group``: the title of its task's legend group (the main task's also
+    holds the direct line, start and goal); ``direct``: a further task's direct line (thin)."""
 
     label: str
     points_m: np.ndarray
     ends: str = ""
     moves_kg: np.ndarray | None = None
+    verdict: str = ""
+    group: str = ""
+    direct: bool = False
 
 
 def slider_levels(capacity_kg: np.ndarray, payloads_kg: tuple[float, ...], n: int = 20) -> np.ndarray:
@@ -45,155 +57,165 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
     """The page. ``maps``: (name, centres_m (V, 3), capacity_kg (V,)[, binding (V,) str]) of the
     reachable voxels of each map (capacity of the voxel: the least over its points and motion
     directions, on the map's IK branches; binding: the limit that sets it), the first shown, buttons
-    switch between them; ``edge_m`` the voxel edge; ``start_m``, ``goal_m`` (3,); the payload slider
-    starts at the first payload, the height slider at the top (the whole map). It opens on a readable
-    view: the voxels carrying the payload faint (the paths show through them), those below it and the
-    0 kg ones hidden (a click on their legend entry shows them); one meaning per colour: the capacity
-    scale for the voxels, red for 0 kg voxels only, black for the direct line and its start and goal,
-    one colour per planned path (:data:`PATH_COLOURS`), drawn thick."""
+    switch between them; ``edge_m`` the voxel edge; ``start_m``, ``goal_m`` (3,) the main task's; the payload
+    slider starts at the first payload, the height slider at the top (the whole map). It opens on the whole map,
+    the camera fitting it: the voxels carrying the payload as see-through cubes (the paths show through them;
+    a button makes them solid), those below it and the 0 kg ones hidden (a click on their legend entry shows
+    them); one meaning per colour: the capacity scale for the voxels, red for 0 kg voxels only, black for the
+    main task's direct line, start and goal, one colour per planned path (:data:`PATH_COLOURS`, a further
+    task's direct line, start and goal in its path's colour)."""
     import plotly.graph_objects as go
 
     # the binding limits as text, '' where none is given or set (no hover line for it)
-    maps = [(m[0], m[1], m[2], np.array(["" if str(b) in ("nan", "None") else str(b)
-                                         for b in (m[3] if len(m) == 4 else [""] * len(m[2]))], dtype=object))
-            for m in maps]
-    every = np.concatenate([np.asarray(m[2], float) for m in maps])
-    allxyz = np.concatenate([np.asarray(m[1], float).reshape(-1, 3) for m in maps] + [np.vstack([start_m, goal_m])])
+    maps = [(m[0], np.asarray(m[1], float).reshape(-1, 3), np.asarray(m[2], float),
+             np.array(["" if str(b) in ("nan", "None") else str(b)
+                       for b in (m[3] if len(m) == 4 else [""] * len(m[2]))], dtype=object)) for m in maps]
+    every = np.concatenate([m[2] for m in maps])
+    allxyz = np.concatenate([m[1] for m in maps] + [np.vstack([start_m, goal_m])])
     around = np.concatenate([allxyz] + [np.asarray(p.points_m, float).reshape(-1, 3) for p in paths])
     levels = slider_levels(every, payloads_kg)
     first = float(payloads_kg[0]) if payloads_kg else 0.0
     heights = np.unique(np.round(allxyz[:-2, 2], 4)) if len(allxyz) > 2 else np.array([0.0])
     lo, hi = around.min(axis=0) - edge_m, around.max(axis=0) + edge_m
     names = sorted({str(b) for m in maps for b in m[3]} - {""})
+    origin = np.concatenate([m[1] for m in maps]).min(axis=0) if every.size else np.zeros(3)  # the voxel grid's
     fig = go.Figure()
-    _add_voxels(fig, go, maps[0], first, float(np.nanmax(every)) if every.size else 1.0)
+    _add_voxels(fig, go, maps[0], first, float(np.nanmax(every)) if every.size else 1.0, (edge_m, origin))
     _add_paths(fig, go, start_m, goal_m, paths)
-    steps = [dict(method="skip", label=f"{v:g}", args=[None]) for v in levels]
-    cuts = [dict(method="skip", label=f"{z:.2f}", args=[None]) for z in heights]
-    active = int(np.searchsorted(levels, first))
-    buttons = [dict(method="skip", label=m[0], args=[None]) for m in maps]
-    span = hi - lo
-    fig.update_layout(
-        title=dict(text=f"{title}<br><sub>shown: {maps[0][0]} (buttons: the other maps); voxel edge {edge_m:g} m; the "
-                        "payload slider hides the voxels below a payload,<br>the height slider cuts the map above a layer; "
-                        "hover: capacity and the limit that binds it; x, y, z in m (base frame): scroll out for the "
-                        "whole map</sub>"),
-        scene=dict(xaxis=dict(title="x [m]", range=[lo[0], hi[0]], autorange=False),
-                   yaxis=dict(title="y [m]", range=[lo[1], hi[1]], autorange=False),
-                   zaxis=dict(title="z [m]", range=[lo[2], hi[2]], autorange=False),
-                   aspectmode="manual", aspectratio=dict(x=1.0, y=span[1] / span[0], z=span[2] / span[0]),
-                   domain=dict(x=[0.3, 1.0], y=[0.0, 1.0]), camera=_camera(start_m, goal_m, paths, lo, span)),
-        uirevision="capmap",  # the camera stays where the user put it while the sliders redraw
-        sliders=[dict(active=active, steps=steps, currentvalue=dict(prefix="payload [kg] >= "), pad=dict(t=30),
-                      len=0.48, x=0.0),
-                 dict(active=len(cuts) - 1, steps=cuts, currentvalue=dict(prefix="show z [m] <= "), pad=dict(t=30),
-                      len=0.48, x=0.52)],
-        updatemenus=[dict(type="buttons", direction="right", buttons=buttons, active=0, x=0.0, y=1.0,
-                          xanchor="left", yanchor="top", showactive=True)] if len(maps) > 1 else [],
-        legend=dict(x=0.0, y=0.88, xanchor="left", font=dict(size=11), title=dict(text="click to show or hide:")),
-        margin=dict(l=0, r=0, t=110, b=0), height=800)
-    data = json.dumps([{"x": np.asarray(m[1])[:, 0].round(4).tolist(), "y": np.asarray(m[1])[:, 1].round(4).tolist(),
-                        "z": np.asarray(m[1])[:, 2].round(4).tolist(), "c": np.asarray(m[2], float).round(2).tolist(),
-                        "b": [names.index(str(b)) if str(b) in names else -1 for b in m[3]]}
-                       for m in maps])
-    script = _script(data, levels, heights, names, active)
+    _layout(fig, maps, levels, heights, first, (lo, hi), title, edge_m)
+    data = json.dumps([{"x": m[1][:, 0].round(4).tolist(), "y": m[1][:, 1].round(4).tolist(),
+                        "z": m[1][:, 2].round(4).tolist(), "c": m[2].round(2).tolist(),
+                        "b": [names.index(str(b)) if str(b) in names else -1 for b in m[3]],
+                        **dict(zip("ijk", _grid_index(m[1], edge_m, origin).T.tolist()))} for m in maps])
+    script = page_script(data, levels, heights, names, int(np.searchsorted(levels, first)), edge_m)
     return fig.to_html(include_plotlyjs=True, full_html=True, post_script=script, div_id="capmap-3d",
                        config={"displaylogo": False})
 
 
-def _camera(start_m: np.ndarray, goal_m: np.ndarray, paths: list[PlannedPath], lo: np.ndarray, span: np.ndarray):
-    """The opening camera: looking at the middle of the task (start, goal, the paths) from above one side,
-    close enough that the paths read (scroll to zoom out to the whole map)."""
-    pts = np.vstack([start_m, goal_m] + [np.asarray(p.points_m, float).reshape(-1, 3) for p in paths])
-    scale = span / span[0]  # the scene's normalised units: the x extent is 1
-    mid = 2 * ((pts.min(axis=0) + pts.max(axis=0)) / 2 - (lo + span / 2)) / span * scale  # the box: -scale..scale
-    eye = mid + np.array([0.6, 0.6, 0.42])
-    return dict(center=dict(zip("xyz", mid.round(4).tolist())), eye=dict(zip("xyz", eye.round(4).tolist())))
+def _grid_index(xyz: np.ndarray, edge_m: float, origin: np.ndarray) -> np.ndarray:
+    """(V, 3) integer indices of voxel centres on the grid of edge ``edge_m`` through ``origin``."""
+    return np.round((np.asarray(xyz, float).reshape(-1, 3) - origin) / edge_m).astype(int)
 
 
-def _add_voxels(fig, go, shown: tuple, first: float, cmax: float) -> None:
-    """The shown map's voxels (name, centres (V, 3), capacity (V,), binding (V,)) as the script's three
-    traces: carrying ``first`` kg (faint, by capacity), below it (grey, hidden), 0 kg (red, hidden)."""
+def _layout(fig, maps, levels: np.ndarray, heights: np.ndarray, first: float, box, title: str, edge_m: float) -> None:
+    """Title, fixed axes in metres, a camera that fits the whole map, the sliders, the map and cube buttons and
+    the legend (grouped by task, each entry its own toggle) beside the scene."""
+    lo, hi = box
+    span = hi - lo
+    steps = [dict(method="skip", label=f"{v:g}", args=[None]) for v in levels]
+    cuts = [dict(method="skip", label=f"{z:.2f}", args=[None]) for z in heights]
+    mesh = [n for n, t in enumerate(fig.data) if t.type == "mesh3d"]
+    style = [dict(method="restyle", label=label, args=[{"opacity": o}, mesh])
+             for label, o in (("see-through cubes", SEE_THROUGH), ("solid cubes (for the height cut)", 1.0))]
+    menus = [dict(type="buttons", direction="right", buttons=style, active=0, x=0.3, y=0.93, xanchor="left",
+                  yanchor="top", showactive=True)]
+    if len(maps) > 1:
+        menus.insert(0, dict(type="buttons", direction="right", active=0, x=0.3, y=1.0, xanchor="left",
+                             yanchor="top", showactive=True,
+                             buttons=[dict(method="skip", label=m[0], args=[None]) for m in maps]))
+    fig.update_layout(
+        title=dict(text=f"{title}<br><sub>shown: {maps[0][0]}; voxel edge {edge_m:g} m; cubes: the voxels carrying "
+                        "the payload of the left slider, see-through so that the paths show (a button: solid)<br>the "
+                        "height slider cuts the map above a layer; hover: capacity and the limit that binds it; drag to "
+                        "turn, scroll to zoom; x, y, z in m (base frame)</sub>"),
+        scene=dict(xaxis=dict(title="x [m]", range=[lo[0], hi[0]], autorange=False),
+                   yaxis=dict(title="y [m]", range=[lo[1], hi[1]], autorange=False),
+                   zaxis=dict(title="z [m]", range=[lo[2], hi[2]], autorange=False),
+                   aspectmode="manual", aspectratio=dict(zip("xyz", (ZOOM * span / span[0]).tolist())),
+                   domain=dict(x=[0.3, 1.0], y=[0.0, 0.86]), camera=_camera(span)),
+        uirevision="capmap",  # the camera stays where the user put it while the sliders redraw
+        sliders=[dict(active=int(np.searchsorted(levels, first)), steps=steps, len=0.48, x=0.0, pad=dict(t=30),
+                      currentvalue=dict(prefix="payload [kg] >= ")),
+                 dict(active=len(cuts) - 1, steps=cuts, currentvalue=dict(prefix="show z [m] <= "), pad=dict(t=30),
+                      len=0.48, x=0.52)],
+        updatemenus=menus,
+        legend=dict(x=0.0, y=0.86, xanchor="left", yanchor="top", font=dict(size=11), groupclick="toggleitem",
+                    title=dict(text="click to show or hide:"), tracegroupgap=12),
+        margin=dict(l=0, r=0, t=120, b=0), height=860)
+
+
+def _camera(span: np.ndarray) -> dict:
+    """The opening camera: the whole map (its box, in the scene's units) seen whole from above its -x side,
+    where the default task's paths lie across the view (not along it) and their ends apart."""
+    scale = ZOOM * float(np.max(span / span[0]))  # the scene's largest side in its units
+    return dict(center=dict(x=0.0, y=0.0, z=-0.05), eye=dict(x=-1.6 * scale, y=0.45 * scale, z=0.95 * scale),
+                projection=dict(type="orthographic"))
+
+
+def _add_voxels(fig, go, shown: tuple, first: float, cmax: float, grid: tuple) -> None:
+    """The shown map's voxels (name, centres (V, 3), capacity (V,), binding (V,)) as the script's four
+    traces: the centres of those carrying ``first`` kg (tiny dots, for hover), below it (grey, hidden), 0 kg
+    (red, hidden) and the cubes of those carrying it (their exposed faces, coloured by capacity, see-through);
+    ``grid``: the voxel edge and the grid's origin."""
     _, xyz, c, bind = shown
-    c, xyz = np.asarray(c, float), np.asarray(xyz, float)
     hov = "(%{x:.2f}, %{y:.2f}, %{z:.2f}) m<br>%{text}<extra></extra>"
-
-    def text(sel):
-        return [f"{x:.0f} kg" + (f", bound by {y}" if y else "") for x, y in zip(c[sel], bind[sel])]
-
+    text = np.array([f"{x:.0f} kg" + (f", bound by {y}" if y else "") for x, y in zip(c, bind)], dtype=object)
     keep, zero = c >= first, c == 0
-    fig.add_trace(go.Scatter3d(
-        x=xyz[keep, 0].tolist(), y=xyz[keep, 1].tolist(), z=xyz[keep, 2].tolist(), mode="markers",
-        name="voxels carrying the payload",
-        marker=dict(size=3, color=c[keep].tolist(), cmin=0.0, cmax=cmax, colorscale="Viridis", opacity=0.3,
-                    colorbar=dict(title=dict(text="voxel capacity [kg]<br><sub>least over its points<br>and every "
-                                                  "direction</sub>"), x=1.02)),
-        text=text(keep), hovertemplate=hov))
-    fig.add_trace(go.Scatter3d(
-        x=xyz[~keep, 0].tolist(), y=xyz[~keep, 1].tolist(), z=xyz[~keep, 2].tolist(), mode="markers",
-        name="voxels below the payload (grey)", marker=dict(size=2, color="lightgrey", opacity=0.25),
-        visible="legendonly", text=text(~keep), hovertemplate=hov))
-    fig.add_trace(go.Scatter3d(
-        x=xyz[zero, 0].tolist(), y=xyz[zero, 1].tolist(), z=xyz[zero, 2].tolist(), mode="markers",
-        name="0 kg voxels (red): a singular surface crosses them", marker=dict(size=2.5, color="red", opacity=0.35),
-        visible="legendonly", text=text(zero), hovertemplate=hov))
+    for sel, name, marker, extra in (
+            (keep, "voxels carrying the payload", dict(size=3, color=c[keep].tolist(), cmin=0.0, cmax=cmax,
+                                                         colorscale="Viridis", opacity=0.0),  # hover only: the
+             dict(legendgroup="voxels", showlegend=False)),  # cubes draw them (dots would make a moiré lattice)
+            (~keep, "voxels below the payload (grey)", dict(size=2, color="lightgrey", opacity=0.4),
+             dict(visible="legendonly")),
+            (zero, "0 kg voxels (red): a singular surface crosses them", dict(size=2.5, color="red", opacity=0.5),
+             dict(visible="legendonly"))):
+        fig.add_trace(go.Scatter3d(x=xyz[sel, 0].tolist(), y=xyz[sel, 1].tolist(), z=xyz[sel, 2].tolist(),
+                                   mode="markers", name=name, marker=marker, text=text[sel].tolist(),
+                                   hovertemplate=hov, **extra))
+    mesh = cube_faces(_grid_index(xyz[keep], grid[0], grid[1]), xyz[keep], grid[0])
+    fig.add_trace(go.Mesh3d(
+        x=mesh["x"].tolist(), y=mesh["y"].tolist(), z=mesh["z"].tolist(), i=mesh["i"].tolist(),
+        j=mesh["j"].tolist(), k=mesh["k"].tolist(), intensity=c[keep][mesh["owner"]].tolist(),
+        name="voxels carrying the payload: cubes by capacity",
+        hovertext=text[keep][mesh["owner"]].tolist(), hovertemplate="%{hovertext}<extra></extra>",
+        colorscale="Viridis", cmin=0.0, cmax=cmax, opacity=SEE_THROUGH, flatshading=True, legendgroup="voxels",
+        showlegend=True, legendrank=1, lighting=dict(ambient=0.8, diffuse=0.35, specular=0.05, roughness=1.0, fresnel=0.0),
+        colorbar=dict(title=dict(text="voxel capacity [kg]<br><sub>least over its points<br>and every "
+                                      "direction</sub>"), x=1.0)))
 
 
 def _add_paths(fig, go, start_m: np.ndarray, goal_m: np.ndarray, paths: list[PlannedPath]) -> None:
-    """The direct line with its start and goal (black), each planned path (its own colour, thick; its ends
-    named, the capacity of each move along its own direction in its hover text and its least in the legend)."""
+    """The main task's direct line with its start and goal (black) and each path (its own colour, thick; a further
+    task's direct line thin, its start and goal marked in its colour), in its task's legend group; each path's
+    verdict (else the least capacity of its moves along their own directions) in the legend, each move's in its
+    hover text."""
+    main = next((p.group for p in paths if not p.ends and p.group), "")
     line = np.vstack([start_m, goal_m])
     fig.add_trace(go.Scatter3d(x=line[:, 0].tolist(), y=line[:, 1].tolist(), z=line[:, 2].tolist(), mode="lines",
-                               name="direct line", line=dict(color="black", width=7, dash="dash"), hoverinfo="skip"))
-    for k, p in enumerate(paths):
-        pts = np.asarray(p.points_m, float)
-        colour = PATH_COLOURS[k % len(PATH_COLOURS)]
-        moves = np.full(len(pts), np.nan) if p.moves_kg is None else np.asarray(p.moves_kg, float)
-        hover = [f"waypoint {i}" + (f": the move here carries {m:,.0f} kg along its own direction"
-                                    if np.isfinite(m) else "") for i, m in enumerate(moves)]
-        text = [""] * len(pts)
-        if p.ends:
-            text[0], text[-1] = f"{p.ends}: start", f"{p.ends}: goal"
-            if len(pts) == 1:
-                text[0] = f"{p.ends}: start and goal"
-        least = f"<br>   each move carries ≥ {np.nanmin(moves):,.0f} kg along its direction" if np.isfinite(
-            moves).any() else ""
-        fig.add_trace(go.Scatter3d(x=pts[:, 0].tolist(), y=pts[:, 1].tolist(), z=pts[:, 2].tolist(),
-                                   mode="lines+markers+text" if p.ends else "lines+markers", name=p.label + least,
-                                   text=text if p.ends else None, textfont=dict(color=colour), hovertext=hover,
-                                   hovertemplate="%{hovertext}<extra></extra>",
-                                   line=dict(width=11, color=colour), marker=dict(size=4, color=colour)))
-    for pos, name, symbol in ((start_m, "start", "circle"), (goal_m, "goal", "diamond")):
+                               name="direct line", line=dict(color="black", width=6), hoverinfo="skip",
+                               legendgroup="main", legendgrouptitle_text=main))
+    colours = {}
+    for p in paths:
+        colour = colours.setdefault(p.ends or p.label, PATH_COLOURS[len(colours) % len(PATH_COLOURS)])
+        fig.add_trace(_path_trace(go, p, colour))
+    for pos, name, symbol, where in ((start_m, "start", "circle", "middle left"),
+                                     (goal_m, "goal", "diamond", "top center")):  # apart from the paths between them
         fig.add_trace(go.Scatter3d(x=[float(pos[0])], y=[float(pos[1])], z=[float(pos[2])], mode="markers+text",
-                                   name=name, text=[name], textfont=dict(size=14, color="black"),
-                                   marker=dict(size=8, color="black", symbol=symbol)))
+                                   name=name, text=[name], textfont=dict(size=14, color="black"), legendgroup="main",
+                                   textposition=where, marker=dict(size=8, color="black", symbol=symbol)))
+    for p in [p for p in paths if p.ends and not p.direct]:
+        pts = np.asarray(p.points_m, float).reshape(-1, 3)
+        for pos, end, symbol in ((pts[0], "start", "circle"), (pts[-1], "goal", "diamond")):
+            fig.add_trace(go.Scatter3d(x=[float(pos[0])], y=[float(pos[1])], z=[float(pos[2])], mode="markers",
+                                       name=f"{p.ends}: {end}", legendgroup=p.ends, hovertemplate=f"{p.ends}: {end}"
+                                       "<extra></extra>", marker=dict(size=7, color=colours[p.ends], symbol=symbol,
+                                                                      line=dict(color="black", width=1))))
 
 
-def _script(data: str, levels: np.ndarray, heights: np.ndarray, names: list[str], active: int) -> str:
-    """The page's script: on a slider step or a map button, the shown map's voxels up to the height cut,
-    >= the payload level in trace 0, the others in trace 1, its 0 kg voxels in trace 2."""
-    return ("const M = " + data + ", L = " + json.dumps(levels.tolist()) + ", H = " + json.dumps(heights.tolist())
-              + ", B = " + json.dumps(names) + ";\n"
-              "const gd = document.getElementById('{plot_id}');\n"
-              "let level = L[" + str(active) + "], zmax = H[H.length - 1], shown = 0;\n"
-              "function draw() {\n"
-              "  const V = M[shown], a = {x: [], y: [], z: [], c: [], t: []}, b = {x: [], y: [], z: [], t: []},\n"
-              "        o = {x: [], y: [], z: [], t: []};\n"
-              "  for (let i = 0; i < V.c.length; i++) {\n"
-              "    if (V.z[i] > zmax + 1e-6) continue;\n"
-              "    const t = V.c[i].toFixed(0) + ' kg' + (V.b[i] >= 0 ? ', bound by ' + B[V.b[i]] : '');\n"
-              "    const s = V.c[i] >= level ? a : b;\n"
-              "    s.x.push(V.x[i]); s.y.push(V.y[i]); s.z.push(V.z[i]); s.t.push(t);\n"
-              "    if (s === a) { a.c.push(V.c[i]); }\n"
-              "    if (V.c[i] === 0) { o.x.push(V.x[i]); o.y.push(V.y[i]); o.z.push(V.z[i]); o.t.push(t); }\n"
-              "  }\n"
-              "  Plotly.restyle(gd, {x: [a.x, b.x, o.x], y: [a.y, b.y, o.y], z: [a.z, b.z, o.z], text: [a.t, b.t, o.t]},\n"
-              "                 [0, 1, 2]);\n"
-              "  Plotly.restyle(gd, {'marker.color': [a.c]}, [0]);\n"
-              "}\n"
-              "gd.on('plotly_sliderchange', function (ev) {  // which slider: by its label\n"
-              "  if (ev.slider.currentvalue.prefix.startsWith('payload')) { level = L[ev.step._index]; }\n"
-              "  else { zmax = H[ev.step._index]; }\n"
-              "  draw();\n"
-              "});\n"
-              "gd.on('plotly_buttonclicked', function (ev) { shown = ev.active; draw(); });\n")
+def _path_trace(go, p: PlannedPath, colour: str):
+    """One path's trace: its line (thin for a direct line), its verdict or its moves' least in its legend name."""
+    pts = np.asarray(p.points_m, float).reshape(-1, 3)
+    moves = np.full(len(pts), np.nan) if p.moves_kg is None else np.asarray(p.moves_kg, float)
+    hover = [f"waypoint {i}" + (f": the move here carries {m:,.0f} kg along its own direction"
+                                if np.isfinite(m) else "") for i, m in enumerate(moves)]
+    text = [""] * len(pts)
+    if p.ends:  # a further task's ends named (hover), marked in the scene by their own traces
+        text[0], text[-1] = f"{p.ends}: start", f"{p.ends}: goal"
+    least = f"each move carries ≥ {np.nanmin(moves):,.0f} kg along its direction" if np.isfinite(moves).any() else ""
+    extra = p.verdict or least
+    return go.Scatter3d(x=pts[:, 0].tolist(), y=pts[:, 1].tolist(), z=pts[:, 2].tolist(),
+                        mode="lines" if p.direct else "lines+markers", name=p.label + (f"<br>   {extra}" if extra else ""),
+                        text=text if p.ends else None, hovertext=hover,
+                        hovertemplate=("%{text}<br>" if p.ends else "") + "%{hovertext}<extra></extra>",
+                        legendgroup=p.ends or "main", legendgrouptitle_text=p.group if p.ends else None,
+                        line=dict(width=4 if p.direct else 11, color=colour), marker=dict(size=4, color=colour))

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from capmap.capacity.build import configuration_name
-from capmap.capacity.tables import configuration_voxels
+from capmap.capacity.tables import configuration_voxels, grid_of
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
@@ -60,25 +60,57 @@ def _carries(moves: np.ndarray) -> str:
         moves).any() else ""
 
 
-def _map_paths(view: MapView, waypoints: list[str], verified: list[str] | None) -> list[tuple]:
-    """The summary figure's paths (label, (n, 3) m, style): the direct line and each payload's planned path,
-    labelled with the verification's verdict (``verified``: the payloads' verify summary.csv files) or,
-    without it, with the least capacity of the planned moves along their own directions."""
-    rows = pd.concat([pd.read_csv(f) for f in verified or []] or [pd.DataFrame(columns=["payload_kg", "path"])])
-    ok = {(float(r.payload_kg), r.path): r for r in rows.itertuples()}
+def crossed_kg(main: pd.DataFrame, xyz: np.ndarray) -> np.ndarray:
+    """The values of the reached voxels of the map ``main`` that the polyline ``xyz`` (n, 3) m crosses (sampled
+    every eighth of a voxel edge)."""
+    grid = grid_of(main)
+    xyz = np.asarray(xyz, float).reshape(-1, 3)
+    pts = np.vstack([xyz[:1]] + [a + np.linspace(0, 1, max(2, int(np.ceil(8 * np.linalg.norm(b - a) / grid.edge_m))))
+                                 [:, None] * (b - a) for a, b in zip(xyz[:-1], xyz[1:])])
+    idx = grid.index(pts)
+    rows = grid.flat(idx[idx[:, 0] >= 0])
+    rows = np.unique(rows[main.n_reachable.to_numpy()[rows] > 0])
+    return main.capacity_kg.to_numpy(float)[rows]
 
-    def verdict(m: float, path: str) -> str:  # e.g. "holds (+3.7 %)": feasible, and the weakest segment's margin
-        r = ok[(m, path)]
-        return f"{'holds' if r.feasible else 'FAILS'} ({100 * (r.capacity_kg / m - 1):+.1f} %)"
-    direct = [f"{m:g} kg {verdict(m, 'direct')}" for m in view.payloads_kg if (m, "direct") in ok]
+
+def _verdicts(verified: list[str] | None) -> dict:
+    """The verification's rows by (payload kg, path: 'direct' / 'planned' / '<task>: planned')."""
+    rows = pd.concat([pd.read_csv(f) for f in verified or []] or [pd.DataFrame(columns=["payload_kg", "path"])])
+    return {(float(r.payload_kg), r.path): r for r in rows.itertuples()}
+
+
+def _verdict(r, m: float) -> str:
+    """e.g. 'holds (+3.7 %)': feasible, and the weakest segment's margin."""
+    return f"{'holds' if r.feasible else 'FAILS'} ({100 * (r.capacity_kg / m - 1):+.1f} %)"
+
+
+def _note(m: float, own_kg: float, verified: bool, crossed: np.ndarray) -> str:
+    """Why a path holds across voxels below its payload ('' when it does not need saying)."""
+    if not len(crossed) or crossed.min() >= m or own_kg < m:
+        return ""
+    return (f"the {m:g} kg path holds: {own_kg:,.0f} kg along its own moves ({'verified' if verified else 'planned'}),\n"
+            f"though the voxels it crosses carry {crossed.min():,.0f}-{crossed.max():,.0f} kg in every direction")
+
+
+def _map_paths(view: MapView, waypoints: list[str], verified: list[str] | None, main: pd.DataFrame | None = None
+               ) -> list[tuple]:
+    """The summary figure's paths (label, (n, 3) m, style, note): the direct line and each payload's planned path,
+    labelled with the verification's verdict (``verified``: the payloads' verify summary.csv files) or,
+    without it, with the least capacity of the planned moves along their own directions; the note (with the map
+    ``main``) says why a path holds across voxels below its payload."""
+    ok = _verdicts(verified)
+    direct = [f"{m:g} kg {_verdict(ok[(m, 'direct')], m)}" for m in view.payloads_kg if (m, "direct") in ok]
     planned, missing = _planned(waypoints)
     paths = [("direct start-goal line" + (f", verified: {', '.join(direct)}" if direct else ""),
-              np.stack([view.start_m, view.goal_m]), {"color": "black", "ls": "--"})]
-    paths += [(f"planned path, {m:g} kg" + (f", verified: {verdict(m, 'planned')}, weakest segment "
-                                            f"{ok[(m, 'planned')].capacity_kg:,.0f} kg" if (m, "planned") in ok
-                                            else _carries(mv)),
-               p, {"color": PATH_COLOURS[n % len(PATH_COLOURS)], "ls": "-"}) for n, (m, _, p, mv) in enumerate(planned)]
-    return paths + [(f"no planned path for {m}", np.empty((0, 3)), {"color": "none"}) for m in missing]
+              np.stack([view.start_m, view.goal_m]), {"color": "black", "ls": "--"}, "")]
+    for n, (m, _, p, mv) in enumerate(planned):
+        r = ok.get((m, "planned"))
+        own = r.capacity_kg if r is not None else (np.nanmin(mv) if np.isfinite(mv).any() else 0.0)
+        label = (f"planned path, {m:g} kg" + (f", verified: {_verdict(r, m)}, weakest segment {r.capacity_kg:,.0f} kg"
+                                              if r is not None else _carries(mv)))
+        note = _note(m, own, r is not None and bool(r.feasible), crossed_kg(main, p)) if main is not None else ""
+        paths.append((label, p, {"color": PATH_COLOURS[n % len(PATH_COLOURS)], "ls": "-"}, note))
+    return paths + [(f"no planned path for {m}", np.empty((0, 3)), {"color": "none"}, "") for m in missing]
 
 
 def _summary_rows(vox: pd.DataFrame, pts: pd.DataFrame, op: pd.DataFrame | None, configuration: str):
@@ -119,40 +151,78 @@ def stage_summary(voxels: str, configurations: str, points: str, waypoints: list
     op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
     rows, reach_v, median = _summary_rows(vox, pts, op, view.configuration)
     write_quantities(rows, out["csv"], out["md"])
-    capacity_map(vox, view, out["png"], op, view.configuration, _map_paths(view, waypoints, verified))
+    capacity_map(vox, view, out["png"], op, view.configuration,
+                 _map_paths(view, waypoints, verified, vox if op is None else op))
     stage_logger(__name__, "summary").info(f"{len(reach_v)} reachable voxels, median capacity {median:.1f} kg "
                                            f"-> {out['csv']}, {out['png']}")
 
 
+def _verified_3d(r, m: float) -> str:
+    """A verified path's verdict for the 3D page's legend (e.g. 'verified: holds, weakest segment 4,149 kg
+    (+3.7 %)'; where its tracking was lost)."""
+    tracking = str(getattr(r, "tracking", "ok"))
+    if tracking != "ok":
+        return "verified: FAILS, " + tracking.split(":")[0].replace("failed", "tracking lost")
+    return (f"verified: {'holds' if r.feasible else 'FAILS'}, weakest segment {r.capacity_kg:,.0f} kg "
+            f"({100 * (r.capacity_kg / m - 1):+.1f} %)")
+
+
+def _task_3d(name: str, path: str, ok: dict, arm) -> tuple[list[PlannedPath], list[str], str]:
+    """A further task's paths for the 3D page (its planned path and direct line, in its legend group, with
+    their verdicts from the verification's rows ``ok``), the payloads without a path and the configuration it
+    starts on (from its plan's provenance; '' when not recorded)."""
+    wp = datasets.read(path)
+    q = wp.attrs["capmap"].get("config", {}).get("job", {}).get("q_start_deg")
+    conf = configuration_name(arm, q) if q is not None else ""
+    group = f"task {name}: starts on {conf} (its own map: the buttons)" if conf else f"task {name}"
+    found, none = _planned([path])
+    paths = []
+    for m, cost, p, mv in found:
+        r, d = ok.get((m, f"{name}: planned")), ok.get((m, f"{name}: direct"))
+        paths += [PlannedPath(f"task {name}: planned path, {m:g} kg ({cost:.2f} m)", p, ends=name, moves_kg=mv,
+                              verdict=_verified_3d(r, m) if r is not None else "", group=group),
+                  PlannedPath(f"{name}: direct line", p[[0, -1]], ends=name, group=group, direct=True,
+                              verdict=_verified_3d(d, m) if d is not None else "")]
+    return paths, [f"task {name} ({m})" for m in none], conf
+
+
 def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], out_html: str, slice_json: str,
-                      task_waypoints: dict[str, str] | None = None) -> None:
-    """The interactive 3D view (self-contained HTML): reachable voxels by capacity on the arm's
-    configuration (a button shows the bound for any configuration), a payload slider, the direct line,
-    each payload's planned path and each further task's (``task_waypoints``: name -> its waypoints;
-    a missing path is named in the title), start and goal."""
-    vox = datasets.read(voxels)
+                      task_waypoints: dict[str, str] | None = None, verified: list[str] | None = None) -> None:
+    """The interactive 3D view (self-contained HTML): reachable voxels by capacity on the arm's configuration
+    (buttons: the map of each further task's start configuration, the bound for any configuration), a payload
+    slider, the direct line, each payload's planned path and each further task's (``task_waypoints``: name ->
+    its waypoints; a missing path is named in the title), start and goal; each path's verdict from ``verified``
+    (the verify summary.csv files of the payloads and tasks; without them, its planned moves' least)."""
+    vox, conf = datasets.read(voxels), datasets.read(configurations)
     view = MapView.from_slice(slice_json)
-    op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
+    ok = _verdicts(verified)
     planned, missing = _planned(waypoints)
-    paths = [PlannedPath(f"planned path, {m:g} kg ({cost:.2f} m)", p, moves_kg=mv) for m, cost, p, mv in planned]
-    for name, path in (task_waypoints or {}).items():
-        found, none = _planned([path])
-        paths += [PlannedPath(f"task {name}: planned path, {m:g} kg ({cost:.2f} m)", p, ends=name, moves_kg=mv)
-                  for m, cost, p, mv in found]
-        missing += [f"task {name} ({m})" for m in none]
-    edge = vox.attrs["capmap"]["grid"]["edge_m"]
+    direct = [f"{m:g} kg {'holds' if r.feasible else 'FAILS'} ({r.capacity_kg:,.0f} kg)"
+              for m, r in ((m, ok.get((m, "direct"))) for m in view.payloads_kg) if r is not None]
+    group = (f"main task: starts on {view.configuration} (the first map)" if view.configuration else "main task") + (
+        f"<br>direct line, verified: {', '.join(direct)}" if direct else "")
+    paths = [PlannedPath(f"planned path, {m:g} kg ({cost:.2f} m)", p, moves_kg=mv, group=group,
+                         verdict=_verified_3d(ok[(m, "planned")], m) if (m, "planned") in ok else "")
+             for m, cost, p, mv in planned]
+    arm = run_arm(stage_config(slice_json).run) if task_waypoints else None
+    tasks = [_task_3d(name, path, ok, arm) for name, path in (task_waypoints or {}).items()]
+    paths += [p for t in tasks for p in t[0]]
+    missing += [m for t in tasks for m in t[1]]
+    names = {view.configuration: "the main task's"} | {c: f"task {n}'s" for n, (_, _, c) in
+                                                     zip(task_waypoints or {}, tasks) if c}
+    maps = [(f"configuration {c} ({who})", configuration_voxels(vox, conf, c)) for c, who in names.items() if c]
+    maps = [(n, m[m.n_reachable > 0]) for n, m in maps if m is not None]
+    maps.append(("any configuration (the bound: every IK branch)", vox[vox.n_reachable > 0]))
     title = "Capacity map: reachable voxels by dynamic load-carrying capacity" + (
         f"; no path for {', '.join(missing)}" if missing else "")
-    maps = [] if op is None else [(f"configuration {view.configuration} (the arm's)", op[op.n_reachable > 0])]
-    maps.append(("any configuration (the bound: every IK branch)", vox[vox.n_reachable > 0]))
     html = capacity_3d_html([(name, m[["x_m", "y_m", "z_m"]].to_numpy(), m.capacity_kg.to_numpy(),
                               m.binding.astype(str).to_numpy()) for name, m in maps],
-                            edge, view.start_m, view.goal_m, paths, view.payloads_kg, title)
+                            vox.attrs["capmap"]["grid"]["edge_m"], view.start_m, view.goal_m, paths, view.payloads_kg,
+                            title)
     Path(out_html).parent.mkdir(parents=True, exist_ok=True)
     Path(out_html).write_text(html)
-    shown = ", ".join(f"{n}: {len(m)} voxels" for n, m in maps)
-    stage_logger(__name__, "capacity 3d").info(f"{shown}, {len(paths)} planned paths -> {out_html} "
-                                               f"({len(html) / 1e6:.1f} MB, offline)")
+    stage_logger(__name__, "capacity 3d").info(f"{', '.join(f'{n}: {len(m)} voxels' for n, m in maps)}, "
+                                               f"{len(paths)} paths -> {out_html} ({len(html) / 1e6:.1f} MB, offline)")
 
 
 def stage_baseline_figure(voxels: str, convergence: str, out_png: str, slice_json: str) -> None:

@@ -11,11 +11,18 @@ from capmap.capacity.directions import GRID_AXES
 from capmap.capacity.tables import AXIS_COLUMNS, configuration_voxels, grid_of
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.plots.capacity import load_series, workspace_paths
+from capmap.plots.capacity_loads import load_series
+from capmap.plots.capacity_paths import workspace_paths
 from capmap.robots import run_arm
 from capmap.stages.common import Outputs, stage_config
 
-__all__ = ["stage_verify_plots", "under_path"]
+__all__ = ["stage_verify_plots", "under_path", "PLANNERS"]
+
+# what the planner of each ``planning.moves`` looks for, in words (the workspace figure's title)
+PLANNERS = {"branch": "the shortest chain of moves between voxel centres that each carry the payload along their "
+                      "own line, on the arm's IK branch",
+            "axis": "the shortest chain of moves between voxels that carry the payload along the move's grid axis",
+            "isotropic": "the shortest chain of moves between voxels that carry the payload in every direction"}
 
 
 def under_path(main: pd.DataFrame, ts: pd.DataFrame) -> pd.DataFrame:
@@ -63,7 +70,8 @@ def stage_verify_plots(voxels: str, configurations: str, timeseries: str, out: O
     payload, limits = meta["payload_kg"], meta["limits"]
     no_path = "" if meta.get("plan_status", "ok") == "ok" else meta.get("plan_reason", "")
     which = f"configuration {name} (the arm's at the start)" if op is not None else "every IK branch"
-    workspace_paths(main, under_path(main, ts.reset_index(drop=True)), payload, out["workspace"], which, no_path)
+    workspace_paths(main, under_path(main, ts.reset_index(drop=True)), payload, out["workspace"], which, no_path,
+                    PLANNERS.get(sc.run.planning.moves, ""))
     for prefix, what, key in (("tau_", "Joint torques", "torques"), ("base_f", "Base disturbance force", "force"),
                               ("base_m", "Base disturbance moment", "moment")):
         load_series(ts, [c for c in limits if c.startswith(prefix)], limits, f"{what} carrying {payload:g} kg", out[key])
