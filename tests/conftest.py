@@ -13,7 +13,6 @@ from capmap.core.reduction import lock
 from capmap.robots import load
 from tests.scenario import SSRMS_YAML
 
-
 os.environ.setdefault("CAPMAP_QUERY_SERVER", "0")  # each query in its own process (tests/io/test_query_service.py: warm)
 
 

@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "run":
         return _run(args)
     if args.command == "query":
-        return _query(args, list(sys.argv[1:] if argv is None else argv))
+        return _query(args)
     if args.command == "check-config":
         return _check_config(args.files, args.json)
     if args.command == "arm":
@@ -210,38 +210,26 @@ def _catalogue(run: str, results: str, as_json: bool) -> int:
     return 0
 
 
-def _query(args, argv: list[str]) -> int:
-    from capmap.stages import query_service as service
+def _query(args) -> int:
+    """Answered by the warm process when one runs (:mod:`capmap.stages.query_client`), else here (and one is
+    started for the next question)."""
+    from capmap.stages import query_client as client
 
-    if service.enabled():
-        served = service.ask(argv)
-        if served is not None:
-            rc, out, err = served
-            sys.stdout.write(out)
-            sys.stderr.write(err)
-            return rc
-    rc = _answer(args)
-    if service.enabled():
-        service.start(argv)  # the next query is answered by a warm process
+    request = {"what": args.what, "configfile": args.configfile, "payload_kg": args.payload, "json": args.json,
+               **({"point_m": [args.x, args.y, args.z], "joints": args.joints} if args.what == "point" else
+                  {"a_m": [args.ax, args.ay, args.az], "b_m": [args.bx, args.by, args.bz],
+                   "configuration": args.configuration})}
+    answered = client.ask(request) if client.enabled() else None
+    if answered is None:
+        from capmap.stages.query import answer
+
+        answered = answer(request)
+        if client.enabled():
+            client.start(request)  # the next question is answered by a warm process
+    rc, out, err = answered
+    sys.stdout.write(out)
+    sys.stderr.write(err)
     return rc
-
-
-def _answer(args) -> int:
-    try:
-        if args.payload is not None and not (args.payload >= 0 and args.payload < float("inf")):
-            raise CapmapError(f"--payload {args.payload} must be a finite mass >= 0 kg")
-        from capmap.stages.query import answer_line, answer_point
-
-        if args.what == "point":
-            text = answer_point(args.configfile, [args.x, args.y, args.z], args.payload, args.json, joints=args.joints)
-        else:
-            text = answer_line(args.configfile, [args.ax, args.ay, args.az], [args.bx, args.by, args.bz], args.payload,
-                               args.configuration, args.json)
-    except CapmapError as exc:
-        print(f"capmap: {exc}", file=sys.stderr)
-        return 1
-    print(text)
-    return 0
 
 
 def _run(args) -> int:

@@ -6,11 +6,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["plt", "save", "not_done_figure", "legend_beside"]
+__all__ = ["plt", "save", "not_done_figure", "legend_beside", "on_top", "limit_gauge"]
 
 
 def save(fig, out_png: str | Path, rect: tuple[float, float, float, float] | None = None) -> None:
@@ -39,3 +40,20 @@ def legend_beside(ax, **kw):
     """The axes' legend to their right, outside them (never on a curve or a limit line); ``kw`` to ``ax.legend``."""
     return ax.legend(**{"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0.0, "fontsize": 8,
                         "frameon": False, **kw})
+
+
+def on_top(values, i: int) -> float:
+    """Column i's curve's zorder (2 to 2.5) among the columns of ``values`` (n, k): the smaller its peak |value|, the
+    higher, so that no small curve hides under a larger one."""
+    rank = np.argsort(np.argsort(-np.abs(values).max(axis=0)))
+    return 2 + rank[i] / (2 * len(rank))
+
+
+def limit_gauge(ax, values, limit: float = 100.0, unit: str = "% of the limit") -> None:
+    """A narrow full-scale axis beside a plot zoomed to its data: the limits ±``limit`` (red dashed) and the band
+    the ``values`` fill (blue), in ``unit``."""
+    for y in (-limit, limit):
+        ax.axhline(y, color="tab:red", ls="--", lw=1.2)
+    ax.axhspan(float(values.min()), float(values.max()), color="tab:blue", alpha=0.6)
+    ax.set(xlim=(0, 1), ylim=(-1.15 * limit, 1.15 * limit), xticks=[], ylabel=f"full scale [{unit}]")
+    ax.set_title("full\nscale", fontsize=8)

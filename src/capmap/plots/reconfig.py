@@ -273,7 +273,7 @@ def animation(motion: ReconfigMotion, segments: list[tuple[str, np.ndarray, np.n
                 vis[f"{root}/{link}/piece{k}"].set_object(geom, material(colour, look["opacity"]))
                 vis[f"{root}/{link}/piece{k}"].set_transform(pose)
         if held in mine:
-            vis[f"{root}/{held}/capture"].set_object(g.Box([0.22 if sheath else 0.18] * 3), material(CAPTURE, look["opacity"]))
+            vis[f"{root}/{held}/capture"].set_object(g.Box([0.36 if sheath else 0.3] * 3), material(CAPTURE, look["opacity"]))
     vis["platform/disc"].set_object(g.Cylinder(0.5, 1.25), material(PLATFORM))
     Rx = np.eye(4)
     Rx[1:3, 1:3] = [[0, -1], [1, 0]]  # the cylinder's axis (y) to z
@@ -294,7 +294,7 @@ def animation(motion: ReconfigMotion, segments: list[tuple[str, np.ndarray, np.n
     pts = np.array([T[i, :3, :3] @ e + T[i, :3, 3] for p in motion.poses.values() for T in p[::10] for i, e in ends])
     hide_helpers(vis)  # a space robot: no floor
     aim(vis, (*runs, "shared", "platform"), (pts.min(axis=0) + pts.max(axis=0)) / 2,
-        0.4 * np.linalg.norm(np.ptp(pts, axis=0)) * np.array([1.0, -1.0, 0.55]), right=0.1)
+        0.36 * np.linalg.norm(np.ptp(pts, axis=0)) * np.array([1.0, -1.0, 0.55]), right=0.12)
     write_html(vis, out_html)
 
 
@@ -304,8 +304,9 @@ def _readout(motion: ReconfigMotion, moving: list[int]) -> tuple[str, ...]:
     texts = []
     for f in range(max(len(p) for p in motion.poses.values())):
         m = {r: v[min(f, len(v) - 1)] for r, v in motion.m.items()}
-        words = ", ".join(f"{RUN_NAME.get(r, r)} {x:.1f} ({100 * (x / motion.m[r][0] - 1):+.0f} %)" for r, x in m.items())
+        words = ", ".join(f"{RUN_NAME.get(r, r)} {x:.1f} ({round(100 * (x / motion.m[r][0] - 1)):+d} %)" for r, x in m.items())
         at = [p[min(f, len(p) - 1), moving, :3, 3] for p in motion.poses.values()]
-        gap = f"; the runs' joints up to {np.linalg.norm(at[0] - at[1], axis=1).max():.2f} m apart" if len(at) == 2 and moving else ""
+        apart = np.linalg.norm(at[0] - at[1], axis=1).max() if len(at) == 2 and moving else None
+        gap = "" if apart is None else f"; the runs' joints up to {apart:.2f} m apart"
         texts.append(f"manipulability m: {words}{gap}")
     return tuple(texts)

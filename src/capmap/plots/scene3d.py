@@ -22,7 +22,8 @@ import umsgpack
 from meshcat.servers.tree import SceneTree, find_node, walk
 from meshcat.servers.zmqserver import VIEWER_ROOT, create_command
 
-__all__ = ["RecordingWindow", "Overlay", "new_scene", "write_html", "segment_pose", "cylinder", "material", "aim", "g"]
+__all__ = ["RecordingWindow", "Overlay", "new_scene", "write_html", "segment_pose", "cylinder", "capsule", "material", "aim",
+           "hide_helpers", "facing", "g"]
 
 _TEMPLATE = """<!DOCTYPE html>
 <html>
@@ -182,17 +183,47 @@ def cylinder(a: np.ndarray, b: np.ndarray, radius: float) -> tuple[g.Cylinder, n
     return g.Cylinder(float(np.linalg.norm(np.asarray(b) - np.asarray(a))), float(radius)), segment_pose(a, b)
 
 
+def capsule(node, a: np.ndarray, b: np.ndarray, radius: float, look) -> None:
+    """A capsule (the segment a -> b (3,) m swept by a sphere of ``radius`` m) under ``node``: its cylinder and its
+    two end spheres, in material ``look``."""
+    geom, pose = cylinder(a, b, radius)
+    node["core"].set_object(geom, look)
+    node["core"].set_transform(pose)
+    for k, end in enumerate((a, b)):
+        node[f"cap{k}"].set_object(g.Sphere(float(radius)), look)
+        T = np.eye(4)
+        T[:3, 3] = end
+        node[f"cap{k}"].set_transform(T)
+
+
+def facing(tri: np.ndarray, labels: np.ndarray, centre: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """(T,) bool: the triangles ``tri`` (T, 3, 3) m whose solid (``labels`` (T,): the solid of each) has its centre on
+    the camera's side of ``centre`` (``eye``: the camera from the centre), those a cutaway drawing leaves out."""
+    side = {lab: float((tri[labels == lab].reshape(-1, 3).mean(axis=0) - centre) @ eye) > 0 for lab in np.unique(labels)}
+    return np.array([side[lab] for lab in labels], dtype=bool)
+
+
 def material(color: int, opacity: float = 1.0) -> g.MeshLambertMaterial:
     """A flat-shaded material of colour 0xRRGGBB."""
     return g.MeshLambertMaterial(color=color, opacity=opacity, transparent=opacity < 1.0)
 
 
-def aim(vis: meshcat.Visualizer, roots: tuple[str, ...], centre: np.ndarray, eye: np.ndarray) -> None:
-    """Look at ``centre`` (m, world frame) from ``eye`` (m, from the centre; z up). MeshCat's camera orbits the
-    world's origin: the scene's ``roots`` (every top-level node), the grid and the axes are moved by -centre."""
+def aim(vis: meshcat.Visualizer, roots: tuple[str, ...], centre: np.ndarray, eye: np.ndarray, right: float = 0.0) -> None:
+    """Look at ``centre`` (m, world frame) from ``eye`` (m, from the centre; z up), the centre ``right`` x |eye| m right
+    of the view's middle (clear of the words over its top left). MeshCat's camera orbits the world's origin: the
+    scene's ``roots`` (every top-level node), the grid and the axes are moved by -(the point looked at)."""
+    eye = np.asarray(eye, float)
+    side = np.cross(-eye, [0.0, 0.0, 1.0])  # the view's right
+    side = side / max(np.linalg.norm(side), 1e-12)
     shift = np.eye(4)
-    shift[:3, 3] = -np.asarray(centre, float)
+    shift[:3, 3] = -(np.asarray(centre, float) - right * np.linalg.norm(eye) * side)
     for root in (*roots, "/Grid", "/Axes"):
         vis[root].set_transform(shift)
-    x, y, z = np.asarray(eye, float)
+    x, y, z = eye
     vis["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])  # the camera's frame: y up
+
+
+def hide_helpers(vis: meshcat.Visualizer) -> None:
+    """Hide MeshCat's floor grid and world axes (unexplained in a scene that has its own ground, or none)."""
+    for helper in ("/Grid", "/Axes"):
+        vis[helper].set_property("visible", False)

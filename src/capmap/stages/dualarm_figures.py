@@ -14,6 +14,7 @@ from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.common import not_done_figure
 from capmap.plots.dualarm import (
+    Held,
     Surroundings,
     animation,
     constraint_errors,
@@ -42,20 +43,24 @@ def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: st
         for key, png in out.items():
             not_done_figure(f"Dual-arm assembly, {FIGURES.get(key, key)}: no motion could be planned", meta["reason"], png)
         return stage_logger(__name__, "dualarm plots").info("infeasible -> " + ", ".join(out.values()))
-    constraint_errors(traj, out["errors"])
-    distances(traj, fine_df, meta["margin_m"], meta["active"], out["distances"])
+    solver = outer_df.attrs["capmap"]["config"]["run"]["dualarm"]["solver"]  # the run's, in its provenance
+    tolerance = al_settings(SolverConfig(**solver)).tolerance
+    constraint_errors(traj, out["errors"], tolerance)
+    distances(traj, fine_df, meta["margin_m"], meta["active"], tolerance, out["distances"])
     joints(traj, meta, "q", out["joints"])
     joints(traj, meta, "qd", out["velocities"])
     t_pre = float(traj.t_s[traj.phase == "pre_insertion"].iloc[0])
     torques(tq, tq.attrs["capmap"], t_pre, out["torques"])
-    solver = outer_df.attrs["capmap"]["config"]["run"]["dualarm"]["solver"]  # the run's, in its provenance
-    convergence(outer_df, out["convergence"], al_settings(SolverConfig(**solver)).tolerance)
+    node_errors = tuple(float(traj[cols].max().max()) for cols in (["closed_chain_pos_err_m", "path_err_m"],
+                                                                   ["closed_chain_rot_err_rad", "path_err_rad"]))
+    convergence(outer_df, out["convergence"], tolerance, node_errors)
     stage_logger(__name__, "dualarm plots").info("-> " + ", ".join(out.values()))
 
 
 def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, out_html: str, slice_json: str) -> None:
-    """MeshCat static HTML of the motion (capsules, the panel, the fitted environment), with its title, the
-    verdict, a legend and the simulated time, phase and closest pair as it plays."""
+    """MeshCat static HTML of the motion (capsules, the panel with its holes and final pose, the pins, the fitted
+    environment), with its title, the verdict, a legend and, as it plays, the simulated time, phase, closest pair
+    and how far the panel is from its final pose."""
     da = stage_config(slice_json).run.dualarm
     caps, env_df = datasets.read(capsules), datasets.read(environment)
     robot, asm = job_setup(da, env_df, caps, da.horizon)
@@ -73,32 +78,48 @@ def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, ou
         frames.append([M.homogeneous for M in data.oMi])
     jid = {name: model.getJointId(name) for name in robot.joint_names}
     capsules_at = [(c.name, jid.get(c.joint, 0), c.a, c.b, c.r) for c in robot.capsules]
-    fp = model.frames[asm.task.panel]
+    held = _held(scene, model.frames[asm.task.panel])
     env, (tri_label, _) = envelope_from(env_df)
-    panel = (fp.parentJoint, fp.placement.homogeneous, scene.panel.size)
-    animation(capsules_at, np.array(frames), panel,
+    to_go = [np.linalg.norm(f[held.body][:3, :3] @ held.in_body[:3, 3] + f[held.body][:3, 3] - scene.final[:3, 3])
+             for f in frames]  # the panel's centre from its final pose, m
+    title = f"{robot.description.name.capitalize()} carries a panel in both grippers onto {len(held.pins)} pins"
+    depth = float(np.linalg.norm(scene.final[:3, 3] - scene.pre_insertion[:3, 3]))
+    animation(capsules_at, np.array(frames), held,
               Surroundings(env.tri, [(a, b, r) for (a, b), r in zip(env.seg, env.seg_radius)], tri_label),
-              1.0 / (step * asm.task.dt), _caption(traj, step, f"{robot.description.name}: {scene.name}"), out_html)
+              1.0 / (step * asm.task.dt), _caption(traj, step, title, depth, to_go), out_html)
     stage_logger(__name__, "dualarm animation").info(f"{len(frames)} frames -> {out_html}")
+
+
+def _held(scene, panel_frame) -> Held:
+    """The panel (on the body the model's panel frame hangs from), its holes, final pose and the pins: the scene's
+    cylinders inside its pin zone."""
+    lo, hi = scene.pin_zone
+    pins = tuple((c.p0, c.p1, c.radius) for c in scene.cylinders
+                 if all(((lo <= p) & (p <= hi)).all() for p in (c.p0, c.p1)))
+    p = scene.panel
+    return Held(panel_frame.parentJoint, panel_frame.placement.homogeneous, p.size, p.holes, p.hole_radius,
+                scene.final, pins)
 
 
 PHASES = {"transfer": "transfer", "pre_insertion": "pre-insertion pose", "insertion": "insertion along the pin axis",
           "final": "final pose"}
 
 
-def _caption(traj: pd.DataFrame, step: int, name: str) -> Overlay:
-    """The animation's words: its title, the verdict (the smallest safety distance at the nodes against the
-    margin), and per frame (every ``step``-th node) the phase and the closest pair; or why there is no motion."""
+def _caption(traj: pd.DataFrame, step: int, title: str, depth_m: float, to_go: list[float]) -> Overlay:
+    """The animation's words: its ``title``, the phases (``depth_m``: the insertion's length), the verdict (the
+    smallest safety distance at the nodes against the margin), and per frame (every ``step``-th node) the phase, the
+    panel's distance ``to_go`` (m) from its final pose and the closest pair; or why there is no motion."""
     meta = traj.attrs["capmap"]
     if traj.empty:
-        return Overlay(f"{name}: no motion planned", (f"no motion: {meta['reason']}",),
+        return Overlay(f"{title}: no motion planned", (f"no motion: {meta['reason']}",),
                        frame_text=("t = 0 s: the scene at the start pose (no motion)",))
     t_pre = traj.t_s[traj.phase == "pre_insertion"]
     d, margin = 1e3 * float(traj.min_distance_m.min()), 1e3 * meta["margin_m"]
-    lines = (f"transfer 0–{t_pre.iloc[0]:.1f} s, then insertion along the pin axis to {traj.t_s.iloc[-1]:.1f} s"
-             if len(t_pre) else f"{traj.t_s.iloc[-1]:.1f} s of motion",
+    lines = (f"transfer 0–{t_pre.iloc[0]:.1f} s, then {100 * depth_m:.1f} cm of insertion along the pin axis to "
+             f"{traj.t_s.iloc[-1]:.1f} s" if len(t_pre) else f"{traj.t_s.iloc[-1]:.1f} s of motion",
              f"smallest safety distance at the nodes {d:.2f} mm (margin {margin:g} mm): "
              + ("collision-free" if d > 0 else "IN COLLISION"))
-    texts = tuple(f"{PHASES.get(r.phase, r.phase)}; closest pair {r.min_distance_pair}, {1e3 * r.min_distance_m:.2f} mm"
-                  for r in traj.iloc[::step].itertuples())
-    return Overlay(f"{name}: dual-arm panel assembly", lines, frame_text=texts)
+    texts = tuple(f"{PHASES.get(r.phase, r.phase)}; panel {100 * g:.1f} cm from its final pose; closest pair "
+                  f"{r.min_distance_pair}, {1e3 * r.min_distance_m:.2f} mm"
+                  for r, g in zip(traj.iloc[::step].itertuples(), to_go))
+    return Overlay(title, lines, frame_text=texts)
