@@ -73,8 +73,8 @@ def test_the_3d_page_is_offline_and_holds_every_voxel_and_path():
     data = json.loads(re.search(r"const M = (\[.*?\]), L = ", page).group(1))
     levels = json.loads(re.search(r", L = (\[.*?\]), H = ", page).group(1))
     for m, (x, c) in zip(data, ((xyz, cap), (xyz[:250], bound))):
-        np.testing.assert_allclose(np.c_[m["x"], m["y"], m["z"]], x, atol=1e-4)
-        np.testing.assert_allclose(m["c"], c, atol=0.01)
+        np.testing.assert_allclose(np.c_[m["x"], m["y"], m["z"]], x, atol=5e-4)  # the page's mm
+        np.testing.assert_allclose(m["c"], c, atol=0.05)  # and 0.1 kg
     assert 1500.0 in levels
     fig = _traces(page)
     shown = next(t for t in fig if t.get("name") == "voxels carrying the payload")

@@ -83,13 +83,28 @@ def capacity_3d_html(maps: list[tuple], edge_m: float, start_m: np.ndarray,
     _add_voxels(fig, go, maps[0], first, float(np.nanmax(every)) if every.size else 1.0, (edge_m, origin))
     _add_paths(fig, go, start_m, goal_m, paths)
     _layout(fig, maps, levels, heights, first, (lo, hi), title, edge_m)
-    data = json.dumps([{"x": m[1][:, 0].round(4).tolist(), "y": m[1][:, 1].round(4).tolist(),
-                        "z": m[1][:, 2].round(4).tolist(), "c": m[2].round(2).tolist(),
+    data = json.dumps([{"x": m[1][:, 0].round(3).tolist(), "y": m[1][:, 1].round(3).tolist(),
+                        "z": m[1][:, 2].round(3).tolist(), "c": m[2].round(1).tolist(),
                         "b": [names.index(str(b)) if str(b) in names else -1 for b in m[3]],
                         **dict(zip("ijk", _grid_index(m[1], edge_m, origin).T.tolist()))} for m in maps])
     script = page_script(data, levels, heights, names, int(np.searchsorted(levels, first)), edge_m)
+    _compact(fig)
     return fig.to_html(include_plotlyjs=True, full_html=True, post_script=script, div_id="capmap-3d",
                        config={"displaylogo": False})
+
+
+def _compact(fig) -> None:
+    """The page's numbers as it shows them: positions to the millimetre, capacities to 0.1 kg (the page's
+    size is mostly these numbers written out in full)."""
+    for tr in fig.data:
+        for axis in ("x", "y", "z"):
+            v = getattr(tr, axis, None)
+            if v is not None and np.asarray(v).dtype.kind == "f":
+                setattr(tr, axis, np.round(np.asarray(v, dtype=float), 3).tolist())
+        for owner, name in ((getattr(tr, "marker", None), "color"), (tr, "intensity")):
+            v = getattr(owner, name, None) if owner is not None else None
+            if v is not None and not isinstance(v, str) and np.asarray(v).dtype.kind == "f" and np.ndim(v) == 1:
+                setattr(owner, name, np.round(np.asarray(v, dtype=float), 1).tolist())
 
 
 def _grid_index(xyz: np.ndarray, edge_m: float, origin: np.ndarray) -> np.ndarray:
