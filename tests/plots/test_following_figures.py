@@ -1,8 +1,9 @@
-"""The following figures tell their result from the data: the follower's gap to TOPP-RA split into its
-command's part and the torque limits' part (the same in the progress and the split figure), the binding joint
-on its own limit and the others in % of theirs, where the limits come from, the follower's stops marked, no
-panel for a joint the path does not load, a drive split only for a robot with drives, and a readable figure
-for a path that cannot be followed. Synthetic tables; the figures' texts read from the figure objects."""
+"""The following figures tell their result from the data in one-line headlines: the case's payload and path, the
+follower's gap to TOPP-RA and where it comes from (split only when both parts add time; TOPP-RA's own need of a limit
+when it exceeds one), the binding joint on its own limit and the others in % of theirs, which limits were tightened
+for the case, the follower's stops marked, no panel for a joint that carries next to nothing (named instead), a
+drive split only for a robot with drives, and a readable figure for a path that cannot be followed. Numbers rounded
+to what a reader needs. Synthetic tables; the figures' texts read from the figure objects."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import pandas as pd
 import pytest
 
 import capmap.plots.following as fp
+import capmap.plots.following_limits as fl
 from capmap.plots.common import plt
 
 LIMITS = {"tau_j1_nm": 10.0, "tau_j2_nm": 100.0, "tau_j3_nm": 50.0}
@@ -20,7 +22,8 @@ LIMITS = {"tau_j1_nm": 10.0, "tau_j2_nm": 100.0, "tau_j3_nm": 50.0}
 def figures(monkeypatch):
     """The figures the plot functions would save, kept open for reading."""
     kept = []
-    monkeypatch.setattr(fp, "save", lambda fig, out_png, rect=None: kept.append(fig))
+    for module in (fp, fl):
+        monkeypatch.setattr(module, "save", lambda fig, out_png, rect=None: kept.append(fig))
     yield kept
     for fig in kept:
         plt.close(fig)
@@ -67,46 +70,64 @@ def _config(ts, **run):
     return ts
 
 
-def test_progress_splits_the_gap_to_toppra_into_the_command_and_the_torque_limits(figures, tmp_path):
+def test_progress_says_what_is_followed_and_splits_the_gap_to_toppra(figures, tmp_path):
     ts, tp = _tables()
     _config(ts, follow={"ground": {"v_max_mps": 0.2, "joint_torque_nm": [10, 100, 50]}})
-    fp.follow_progress(ts, tp, LIMITS, "ground", tmp_path / "p.png", {"command_duration_s": 11.0})
+    summary = {"command_duration_s": 10.97, "payload_kg": 2.0, "path": "straight line"}
+    fp.follow_progress(ts, tp, LIMITS, "ground", tmp_path / "p.png", summary)
     title, text = figures[0]._suptitle.get_text(), _texts(figures[0])
-    assert "the follower takes 20 % longer than TOPP-RA" in title
-    assert "+1.00 s from its jerk-limited command, +1.00 s from the torque limits" in title
-    assert "S-curve command, jerk-limited (11.00 s): ignores the torque limits\n(needs 150 % of joint 1's)" in text
-    assert "speed limit 0.2 m/s (follow.ground.v_max_mps)" in text  # the limit both speeds plateau at, drawn
+    assert "\n" not in title  # one line
+    assert title == ("ground, 2 kg on the straight line: follower 12.0 s, 20 % longer than TOPP-RA (10.0 s): "
+                     "0.97 s from its jerk limit, 1.0 s from the torque limits")
+    assert "jerk limit: +0.97 s" in text and "torque limits: +1.0 s" in text  # the brackets: both parts add time
+    assert "S-curve command, jerk-limited (11.0 s): needs 150 % of joint 1's limit" in text
+    assert "speed limit 0.2 m/s" in text and "v_max_mps" not in text  # the config key: in the caption
     assert any(ln.get_ydata()[0] == 0.2 and len(set(ln.get_ydata())) == 1 for ln in figures[0].axes[1].lines)
-    assert "within 0.001 µm" in text and " um" not in text and "[um]" not in text  # the deviation: a line of text
+    assert "never off it" in text and "µm" not in text and "arcsec" not in text
     assert len(figures[0].axes) == 3
+
+
+def test_progress_says_almost_all_and_a_negative_part_in_words(figures, tmp_path):
+    ts, tp = _tables()
+    fp.follow_progress(ts, tp, LIMITS, "space", tmp_path / "p.png", {"command_duration_s": 11.95})
+    assert figures[0]._suptitle.get_text().endswith("almost all from its jerk limit")
+    fp.follow_progress(ts, tp, LIMITS, "space", tmp_path / "q.png", {"command_duration_s": 9.99})
+    title, top = figures[1]._suptitle.get_text(), figures[1].axes[0]
+    assert "from its" not in title and not top.texts  # no split with a negative part: in words over the panel
+    assert top.get_title() == ("its command alone would finish 0.01 s before TOPP-RA (it ignores the torque limits); "
+                               "the torque limits add 2.0 s")
 
 
 def test_progress_says_when_toppra_exceeds_a_limit_under_the_full_model(figures, tmp_path):
     ts, tp = _tables()
-    tp["tau_j1_nm"] *= 1.2  # TOPP-RA's torques measured with a term its own model lacks
+    tp["tau_j1_nm"] *= 1.15  # TOPP-RA's torques measured with a term its own model lacks
     fp.follow_progress(ts, tp, LIMITS, "ground", tmp_path / "p.png",
                        {"follower_terms": "links+armature+coulomb+viscous", "toppra_terms": "links+armature+coulomb"})
-    assert "its model lacks viscous friction; with the full model it needs 120 % of joint 1's limit" in _texts(figures[0])
+    assert figures[0]._suptitle.get_text().endswith(
+        "than TOPP-RA (10.0 s), which ignores viscous friction and would need 115 % of joint 1's limit")
     fp.follow_progress(ts, tp, LIMITS, "ground", tmp_path / "q.png")  # no summary row: the command's time from the rows
-    assert "from its jerk-limited command" in figures[1]._suptitle.get_text()
+    assert "would need 115 % of joint 1's limit" in figures[1]._suptitle.get_text()
 
 
 def test_torques_draw_the_binding_joint_on_its_own_limit_and_the_rest_in_percent(figures, tmp_path):
     ts, _ = _tables()
-    _config(ts, follow={"space": {"joint_torque_nm": 100}}, limits={"joint_torque_nm": 700},
-            failure={"joint": 7, "angle_deg": 100})
-    fp.follow_torques(ts, LIMITS, "space", tmp_path / "t.png")
+    ts["tau_j3_nm"] = ts["tau_cmd_j3_nm"] = 4.0 * np.sin(ts.t_s)  # joint 3 under 10 % of its limit: named, not drawn
+    _config(ts, failure={"joint": 7, "angle_deg": 100})
+    fl.follow_torques(ts, LIMITS, "space", tmp_path / "t.png", {c: 2 * v for c, v in LIMITS.items()})
     fig = figures[0]
     joint1, rest = fig.axes[0], fig.axes[1]
-    assert joint1.get_title().startswith("joint 1 (±10 N m)") and len(joint1.collections) == 1  # at its limit: shaded
+    assert joint1.get_title().startswith("joint 1 (±10 N m, derated on purpose from 20 N m so the follower must limit it)")
+    assert len(joint1.collections) == 1  # at its limit: shaded
     flat = lambda ax: sorted(ln.get_ydata()[0] for ln in ax.lines if len(set(ln.get_ydata())) == 1)  # noqa: E731
     assert flat(joint1) == [-10.0, 10.0] and flat(rest) == [-100.0, 100.0]  # its limit; the others' in %
-    assert "the other joints, each in % of its own limit: follower peaks joint 2 30 %" in rest.get_title()
-    assert rest.get_ylabel() == "torque [% of the joint's limit]" and len(rest.collections) == 0
+    assert rest.get_title() == ("the other joints, in % of their limits "
+                                "(not drawn: joint 7 locked, joint 3 below 10 % of its limit)")
+    assert [t.get_text() for t in rest.get_legend().get_texts()] == ["joint 2 (±100 N m)"]
     title = fig._suptitle.get_text()
-    assert "keeps every torque limit (peak 100 % of joint 1's)" in title and "150 % of joint 1's (15 N m)" in title
-    assert "limits: config follow.space.joint_torque_nm = 100 N m, tighter than" in title and "= 700 N m" in title
-    assert "not drawn: joint 7 (locked at 100°), joint 3 (no load on this path)" in title
+    assert title == "space: the follower keeps every torque limit; its command would need 150 % of joint 1's"
+    fl.follow_torques(ts, {c: 10.0 for c in LIMITS}, "space", tmp_path / "u.png", {c: 700.0 for c in LIMITS})
+    assert figures[1]._suptitle.get_text().endswith("; limits 10 N m (tightened for this case)")
+    assert "derated" not in _texts(figures[1])
 
 
 def test_the_followers_stops_at_the_waypoints_are_marked_and_explained(figures, tmp_path):
@@ -115,29 +136,33 @@ def test_the_followers_stops_at_the_waypoints_are_marked_and_explained(figures, 
     ts.loc[k - 5:k, "sd_mps"], ts.loc[k + 1:k + 3, "sd_mps"] = 1e-6, 0.0
     ts.loc[k - 5:k, "sdd_mps2"], ts.loc[k, "sdd_mps2"] = 1e-5, -1e-3
     ts.loc[k, "tau_j1_nm"] = -9.0  # its torque pulse
-    fp.follow_torques(ts, LIMITS, "ground", tmp_path / "t.png")
+    fl.follow_torques(ts, LIMITS, "ground", tmp_path / "t.png")
     marks = [ln for ln in figures[0].axes[0].lines if ln.get_marker() == "o"]
     assert len(marks) == 1 and marks[0].get_ydata()[0] == -9.0
-    assert "the follower's stop at a waypoint: its last ≤ 0.001 mm/s braked within ≤ 1 ms" in _texts(figures[0])
+    assert "stop at a waypoint: braking pulse ≤ 1 ms, within the limit" in _texts(figures[0])
+    ts.loc[k, "tau_j1_nm"] = -10.0  # a pulse at the limit: said so, in the same one line
+    fl.follow_torques(ts, LIMITS, "ground", tmp_path / "u.png")
+    assert "stop at a waypoint: braking pulse ≤ 1 ms, never beyond the limit" in _texts(figures[1])
 
 
-def test_the_split_needs_drives_else_the_figure_compares_with_toppra(figures, tmp_path):
+def test_the_split_draws_the_joints_that_carry_torque_and_needs_drives(figures, tmp_path):
     ts, tp = _tables()
-    fp.follow_torque_split(ts, tp, LIMITS, "ground", "links+armature+coulomb+viscous", tmp_path / "a.png")
-    assert "drives (rotor inertia, friction) take up to 30 % of joint 1's" in figures[0]._suptitle.get_text()
-    assert {ax.get_xlabel() for ax in figures[0].axes if ax.get_xlabel()} == {"time t [s]"}  # as torques.png
+    ts["tau_j2_nm"] *= 0.1  # under 10 % of its limit with its drive terms: named, not drawn
+    fl.follow_torque_split(ts, tp, LIMITS, "ground", "links+armature+coulomb+viscous", tmp_path / "a.png")
+    fig = figures[0]
+    assert fig._suptitle.get_text() == ("ground: the drives (rotor inertia, friction) take up to 30 % of joint 1's "
+                                        "torque limit, the rest moves the links")
+    assert [ax.get_title() for ax in fig.axes if ax.axison] == ["joint 1 (±10 N m): drives up to 30 %"]
+    assert "not drawn: joint 3 unloaded, joint 2 below 10 % of its limit" in _texts(fig)
+    assert {ax.get_xlabel() for ax in fig.axes if ax.get_xlabel()} == {"time t [s]"}  # as torques.png
     ts, tp = _tables("links")
     summary = {"command_duration_s": 11.0}
-    fp.follow_torque_split(ts, tp, LIMITS, "space", "links", tmp_path / "b.png", summary)
-    fp.follow_progress(ts, tp, LIMITS, "space", tmp_path / "p.png", summary)
+    fl.follow_torque_split(ts, tp, LIMITS, "space", "links", tmp_path / "b.png", summary)
     text = _texts(figures[1])
-    assert "nothing to split" in text and "rotor" not in text
-    assert "TOPP-RA rides the torque limit" in figures[1]._suptitle.get_text()
-    assert "at the limit 100 % of its time" in text  # TOPP-RA's joint 1
+    assert "rotor" not in text and figures[1].texts == [figures[1]._suptitle]  # no footnote: the caption says why
+    assert figures[1]._suptitle.get_text() == ("space, joint 1: TOPP-RA rides its torque limit 100 % of the time, "
+                                               "the follower 25 %: it ramps up with its jerk-limited command")
     assert [ax.get_ylabel() for ax in figures[1].axes] == ["joint 1 torque [N m]"]  # the joint at its limit only
-    # the same cause as the progress figure's: the command's part and the torque limits' part of the gap
-    assert "its command's jerk limit takes +1.00 s, the torque limit +1.00 s" in text
-    assert "+1.00 s from its jerk-limited command, +1.00 s from the torque limits" in figures[2]._suptitle.get_text()
 
 
 def test_an_infeasible_path_names_the_joint_and_its_need(figures, tmp_path):

@@ -5,11 +5,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.plots.following import follow_infeasible, follow_progress, follow_torque_split, follow_torques
+from capmap.plots.following import follow_infeasible, follow_progress
+from capmap.plots.following_limits import follow_torque_split, follow_torques
+from capmap.robots import load
 from capmap.stages.common import Outputs
 
 __all__ = ["stage_follow_plots"]
@@ -22,6 +25,21 @@ def _summary_beside(timeseries: str, case: str) -> dict:
     rows = pd.read_csv(path) if path.exists() else pd.DataFrame()
     rows = rows[rows["case"] == case] if "case" in rows else rows.iloc[:0]
     return rows.iloc[0].to_dict() if len(rows) else {}
+
+
+def _limits_elsewhere(meta: dict) -> dict:
+    """The torque limits the arm has outside this case, per limited joint's column (N m), to tell which the case
+    tightened: a case with its own robot file (ground), its URDF's effort limits (the robot's rating); else the
+    capacity map's ``limits.joint_torque_nm``. Empty when the run's configuration gives neither."""
+    run = meta.get("config", {}).get("run", {})
+    own = run.get("follow", {}).get(meta["case"], {}).get("robot")
+    given = (load(own).effort_limit_nm if own and Path(own).exists() else None) if own else \
+        run.get("limits", {}).get("joint_torque_nm")
+    if given is None:
+        return {}
+    v = np.atleast_1d(np.asarray(given, dtype=float))
+    at = {c: int(c.split("_")[1][1:]) - 1 for c in meta["torque_limits_nm"]}  # 'tau_j2_nm' -> 1
+    return {c: float(v[0] if len(v) == 1 else v[i]) for c, i in at.items() if len(v) == 1 or i < len(v)}
 
 
 def stage_follow_plots(timeseries: str, toppra: str, out: Outputs, slice_json: str) -> None:
@@ -38,6 +56,6 @@ def stage_follow_plots(timeseries: str, toppra: str, out: Outputs, slice_json: s
         return
     case, limits, summary = meta["case"], meta["torque_limits_nm"], _summary_beside(timeseries, meta["case"])
     follow_progress(ts, tp, limits, case, out["s"], summary)
-    follow_torques(ts, limits, case, out["torques"])
+    follow_torques(ts, limits, case, out["torques"], _limits_elsewhere(meta))
     follow_torque_split(ts, tp, limits, case, meta["terms"], out["split"], summary)
     stage_logger(__name__, f"follow plots {case}").info(f"-> {', '.join(out.values())}")
