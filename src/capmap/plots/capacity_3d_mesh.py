@@ -48,16 +48,21 @@ def cube_faces(ijk: np.ndarray, centres: np.ndarray, edge_m: float) -> dict:
             "owner": np.concatenate(owner) if owner else np.empty(0, int)}
 
 
-def page_script(data: str, levels: np.ndarray, heights: np.ndarray, names: list[str], active: int,
+def page_script(data: str, levels: np.ndarray, heights: np.ndarray, names: list[str], start: dict,
                 edge_m: float) -> str:
     """The page's script: on a slider step or a map button, the shown map's voxels up to the height cut,
     >= the payload level in trace 0 (their centres, for hover) and as cubes in trace 3 (the exposed faces, as
-    :func:`cube_faces`), the others in trace 1, its 0 kg voxels in trace 2. Runs once as the page opens."""
+    :func:`cube_faces`, on the map's colour scale: 0 to its ``cmax``), the others in trace 1, its 0 kg voxels in
+    trace 2; on a map button, the paths planned on that map shown, the others hidden. ``start``: the steps of
+    the payload and height sliders the page opens on ("level", "height") and the path traces with the maps they
+    show on ("paths": [[trace, [map, ...] or null], ...]). Runs once as the page opens."""
     return ("const M = " + data + ", L = " + json.dumps(levels.tolist()) + ", H = " + json.dumps(heights.tolist())
             + ", B = " + json.dumps(names) + ", E = " + json.dumps(float(edge_m)) + ";\n"
             "const F = " + json.dumps([[*d, c] for d, c in FACES]) + ", K = " + str(_KEY) + ";\n"
+            "const P = " + json.dumps(start.get("paths", [])) + ";\n"
             "const gd = document.getElementById('{plot_id}');\n"
-            "let level = L[" + str(active) + "], zmax = H[H.length - 1], shown = 0;\n"
+            "let level = L[" + str(int(start.get("level", 0))) + "], zmax = H["
+            + str(int(start.get("height", len(heights) - 1)) % max(len(heights), 1)) + "], shown = 0;\n"
             "const key = (i, j, k) => ((i + 1) * K + j + 1) * K + k + 1;\n"
             "function draw() {\n"
             "  const V = M[shown], a = {x: [], y: [], z: [], c: [], t: []}, b = {x: [], y: [], z: [], t: []},\n"
@@ -86,7 +91,12 @@ def page_script(data: str, levels: np.ndarray, heights: np.ndarray, names: list[
             "                 [0, 1, 2]);\n"
             "  Plotly.restyle(gd, {'marker.color': [a.c]}, [0]);\n"
             "  Plotly.restyle(gd, {x: [m.x], y: [m.y], z: [m.z], i: [m.i], j: [m.j], k: [m.k], intensity: [m.v],\n"
-            "                      hovertext: [m.t]}, [3]);\n"
+            "                      hovertext: [m.t], cmax: [V.cmax]}, [3]);\n"
+            "}\n"
+            "function paths() {  // the paths planned on the shown map; the others a click away\n"
+            "  if (!P.length) return;\n"
+            "  Plotly.restyle(gd, {visible: P.map(([t, ms]) => ms === null || ms.includes(shown) ? true : 'legendonly')},\n"
+            "                 P.map(p => p[0]));\n"
             "}\n"
             "gd.on('plotly_sliderchange', function (ev) {  // which slider: by its label\n"
             "  if (ev.slider.currentvalue.prefix.startsWith('payload')) { level = L[ev.step._index]; }\n"
@@ -94,6 +104,6 @@ def page_script(data: str, levels: np.ndarray, heights: np.ndarray, names: list[
             "  draw();\n"
             "});\n"
             "gd.on('plotly_buttonclicked', function (ev) {  // the map buttons (the others restyle the cubes)\n"
-            "  if (ev.button.method === 'skip') { shown = ev.active; draw(); }\n"
+            "  if (ev.button.method === 'skip') { shown = ev.active; draw(); paths(); }\n"
             "});\n"
             "draw();\n")

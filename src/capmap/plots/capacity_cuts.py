@@ -1,16 +1,23 @@
 """Planes through the capacity map, shared by its figures: a voxel map as a volume, its cut on the vertical
-plane through two points (or on a horizontal layer), the 0 kg cells hatched cell by cell, and a task's start
-and goal marked."""
+plane through two points (or on a horizontal layer), the 0 kg cells hatched cell by cell, a task's start
+and goal marked, and a path drawn in its own colour around a core coloured by its own capacity."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from matplotlib import colormaps, patheffects
+from matplotlib.collections import LineCollection
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
-__all__ = ["volume", "plane_cut", "hatch_zero", "mark_ends", "ENDS", "ZERO_LABEL"]
+__all__ = ["volume", "plane_cut", "hatch_zero", "mark_ends", "cased_path", "unreached_handle", "ENDS", "ZERO_LABEL",
+           "CMAP"]
 
 ENDS = {"start": dict(marker="o", ms=10), "goal": dict(marker="*", ms=15)}  # white, black edge: on any colour
-ZERO_LABEL = "0 kg in some direction (a singular surface crosses the voxel), hatched"
+ZERO_LABEL = "0 kg voxel (singular surface), hatched"
+CMAP = "viridis"  # capacity, voxels and paths alike
+CASING, CORE = 6.5, 3.0  # a path's line widths: its own colour around, its capacity inside
 
 
 def volume(m: pd.DataFrame, values: np.ndarray) -> np.ndarray:
@@ -67,3 +74,27 @@ def mark_ends(ax, project, start: np.ndarray, goal: np.ndarray) -> None:
         ax.plot(h, v, ls="none", mfc="white", mec="black", mew=1.5, zorder=12, **ENDS[name])
         ax.annotate(name, (h[0], v[0]), xytext=(7, 7), textcoords="offset points", fontsize=9, weight="bold",
                     bbox=dict(fc="white", ec="none", alpha=0.8, pad=1), zorder=12)
+
+
+def cased_path(ax, h: np.ndarray, v: np.ndarray, kg: np.ndarray | None, norm, casing: str,
+               label: str | None = None) -> Line2D:
+    """A path (h, v) drawn thick in its own ``casing`` colour with a core coloured by its own capacity ``kg`` (one
+    value per piece i -> i + 1, n - 1 of them; NaN: casing only) on the capacity scale ``norm``; without ``kg``,
+    the casing alone (thinner). Returns its legend handle (its least capacity's colour inside its colour)."""
+    ax.plot(h, v, color=casing, lw=CASING if kg is not None else 3.0, solid_capstyle="round", zorder=10)
+    if kg is None:
+        return Line2D([], [], color=casing, lw=3.0, label=label)
+    kg = np.asarray(kg, float)
+    pts = np.column_stack([h, v])
+    ok = np.isfinite(kg)
+    segs = np.stack([pts[:-1], pts[1:]], axis=1)[ok]
+    ax.add_collection(LineCollection(segs, array=kg[ok], cmap=CMAP, norm=norm, lw=CORE, capstyle="round",
+                                     zorder=10.2))
+    colour = colormaps[CMAP](norm(np.nanmin(kg))) if ok.any() else casing
+    return Line2D([], [], color=colour, lw=CORE, label=label,
+                  path_effects=[patheffects.Stroke(linewidth=CASING, foreground=casing), patheffects.Normal()])
+
+
+def unreached_handle() -> Patch:
+    """The legend entry of a map's white cells."""
+    return Patch(fc="white", ec="0.5", label="not reached (white)")

@@ -1,5 +1,5 @@
 """The loads of a verified task over time against their limits: joint torques, base force and base moment,
-one panel per path, its verdict in its title."""
+one panel per path (its verdict in one line), one legend for both; the load that binds a path's capacity marked."""
 
 from __future__ import annotations
 
@@ -7,14 +7,17 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from capmap.plots.common import plt, save
 
-__all__ = ["load_series", "load_label", "PATH_LABELS", "QUANTITY"]
+__all__ = ["load_series", "load_label", "PATH_LABELS", "QUANTITY", "MINOR"]
 
 PATH_LABELS = {"direct": "direct line", "planned": "planned path"}
 QUANTITY = {"tau": ("joint torque", "N m"), "base_f": ("base disturbance force", "N"),
             "base_m": ("base disturbance moment", "N m")}
+MINOR = 0.15  # a load whose peak stays under this share of its limit on every path: grey, one legend entry
 
 
 def load_label(column: str) -> str:
@@ -35,12 +38,37 @@ def _peak(g: pd.DataFrame, columns: list[str], limits: dict) -> tuple[float, str
     return best
 
 
-def _also(g: pd.DataFrame, columns: list[str], limits: dict) -> tuple[list[str], str]:
-    """The other loads of ``limits`` that the path exceeds (their names) and, in words, with their figures."""
-    figs = {"tau": "torques.png", "base_f": "base_force.png", "base_m": "base_moment.png"}
-    over = [k for k in limits if k not in columns and _peak(g, [k], limits)[0] > 1]
-    groups = [(f, [load_label(k) for k in over if k.startswith(p)]) for p, f in figs.items()]
-    return [load_label(k) for k in over], "; ".join(f"{', '.join(n)} ({f})" for f, n in groups if n)
+def _also(g: pd.DataFrame, columns: list[str], limits: dict) -> list[str]:
+    """The other loads of ``limits`` that the path exceeds (their names)."""
+    return [load_label(k) for k in limits if k not in columns and _peak(g, [k], limits)[0] > 1]
+
+
+def _names(columns: list[str]) -> str:
+    """'τ joints 5, 6, 7' for torques, else 'F_x, F_z'."""
+    if len(columns) > 1 and all(c.startswith("tau_j") for c in columns):
+        return "τ joints " + ", ".join(c.split("_")[1][1:] for c in columns)
+    return ", ".join(load_label(c) for c in columns)
+
+
+def _binding(g: pd.DataFrame, limits: dict) -> str:
+    """The load that binds a path's capacity: the one binding its weakest tracked state ('' when not known)."""
+    if "binding" not in g or "state_capacity_kg" not in g:
+        return ""
+    ok = g.tracked.to_numpy(bool) if "tracked" in g else np.ones(len(g), bool)
+    cap = np.where(ok, g.state_capacity_kg.to_numpy(float), np.nan)
+    b = str(g.binding.iloc[int(np.nanargmin(cap))]) if np.isfinite(cap).any() else ""
+    return b if b in limits else ""
+
+
+def _minor(ts: pd.DataFrame, columns: list[str], limits: dict) -> tuple[list[str], float]:
+    """The loads whose peak stays under :data:`MINOR` of their limit on every path (drawn grey, one legend entry;
+    only when there are two or more and others) and their largest peak as a share of the limit."""
+    ok = ts.tracked.to_numpy(bool) if "tracked" in ts else np.ones(len(ts), bool)
+    share = {c: float(np.nanmax(np.abs(ts[c].to_numpy(float)[ok]), initial=0.0)) / limits[c] for c in columns}
+    small = [c for c in columns if share[c] < MINOR]
+    if len(small) < 2 or len(small) == len(columns):
+        return [], 0.0
+    return small, max(share[c] for c in small)
 
 
 def _spans(t: np.ndarray, over: np.ndarray) -> list[tuple[float, float]]:
@@ -49,56 +77,72 @@ def _spans(t: np.ndarray, over: np.ndarray) -> list[tuple[float, float]]:
     return [(float(t[a]), float(t[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
 
 
-def _mark_over(ax, t: np.ndarray, over: np.ndarray, top: float) -> None:
-    """Shade where a load is over its limit; a stretch too short to see (under 2 % of the time axis) gets a
-    red mark at the top and its times written, with an arrow."""
-    if not over.any():
-        return
-    ax.fill_between(t, -top, top, where=over, color="tab:red", alpha=0.15, step="mid", lw=0, label="over its limit")
+def _mark_over(ax, t: np.ndarray, over: np.ndarray, lim: float, top: float) -> None:
+    """Shade where a load is over its limit, each stretch at least 1.5 % of the time axis wide; a stretch too
+    short to read (under 2 %) gets its times written beside it, between the limit line and the edge."""
     span = float(np.ptp(t)) or 1.0
     for a, b in _spans(t, over):
+        w, c = max(b - a, 0.015 * span), (a + b) / 2
+        ax.axvspan(c - w / 2, c + w / 2, color="tab:red", alpha=0.25, lw=0, zorder=1.5)
         if b - a < 0.02 * span:
-            ax.plot((a + b) / 2, 0.96 * top, "v", ms=11, color="tab:red", zorder=6)
-            ax.annotate(f"over its limit: t = {a:.1f}-{b:.1f} s", xy=((a + b) / 2, 0.93 * top), xytext=(18, -58),
-                        textcoords="offset points", ha="left", fontsize=9, color="tab:red", zorder=6,
-                        bbox=dict(fc="white", ec="none", alpha=0.85, pad=1),
-                        arrowprops=dict(arrowstyle="->", color="tab:red"))
+            ax.annotate(f"over its limit: t = {a:.1f}-{b:.1f} s", xy=(c + w / 2, (lim + top) / 2), xytext=(4, 0),
+                        textcoords="offset points", ha="left", va="center", fontsize=9, color="tab:red", zorder=6,
+                        bbox=dict(fc="white", ec="none", alpha=0.85, pad=1))
+
+
+def _mark_off(ax, g: pd.DataFrame, columns: list[str], limits: dict, top: float) -> None:
+    """A load that leaves the plot: a red arrowhead on the edge it leaves by, where it first does, the loads that
+    leave there and how far they go (as a share of the limit, signed)."""
+    t = g.t_s.to_numpy()
+    for sign in (1, -1):
+        cols = [c for c in columns if np.nanmax(sign * g[c].to_numpy(float), initial=-np.inf) > top]
+        if not cols:
+            continue
+        first = min(t[np.argmax(sign * g[c].to_numpy(float) > top)] for c in cols)
+        far = max(np.nanmax(sign * g[c].to_numpy(float)) / limits[c] for c in cols)
+        ax.plot(first, sign * 0.965 * top, "^" if sign > 0 else "v", ms=11, color="tab:red", zorder=6)
+        ax.annotate(f"{_names(cols)}: off scale, {'up' if sign > 0 else 'down'} to {sign * 100 * far:+.0f} % of the "
+                    "limit", (first, sign * 0.965 * top), xytext=(12, -9 * sign), textcoords="offset points", va="center",
+                    fontsize=9, color="tab:red", zorder=6, bbox=dict(fc="white", ec="none", alpha=0.85, pad=1))
 
 
 def _mark_lost(ax, t: np.ndarray, t_lost: float, top: float) -> None:
     """Tracking lost at ``t_lost``: a black line and, grey to the line's planned end, the motion not executed."""
     ax.axvline(t_lost, color="black", lw=1.5)
     ax.axvspan(t_lost, t[-1], color="0.85", alpha=0.6, lw=0)
-    ax.text(t_lost, -0.55 * top, f"  tracking lost at {t_lost:.1f} s: the rest of the\n  planned line "
-            f"({t_lost:.1f}-{t[-1]:.1f} s, its planned end)\n  is not executed", fontsize=9, va="center")
+    ax.text(t_lost, -0.5 * top, f"  tracking lost at {t_lost:.1f} s: the rest ({t_lost:.1f}-{t[-1]:.1f} s) not "
+            "executed", fontsize=9, va="center")
 
 
-def _panel(ax, g: pd.DataFrame, columns: list[str], limits: dict, name: str) -> str:
-    """One path's loads against their limits, its verdict as the panel's title; returns its head line."""
+def _panel(ax, g: pd.DataFrame, columns: list[str], limits: dict, name: str, minor: list[str], binds: str) -> str:
+    """One path's loads against their limits (``minor`` loads grey, the load that ``binds`` its capacity thick,
+    its weakest state marked on it), its verdict as the panel's one-line title; returns its head line."""
     quantity, unit = next(v for k, v in QUANTITY.items() if columns[0].startswith(k))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    same = len({limits[k] for k in columns}) == 1
     t = g.t_s.to_numpy()
     lost = np.flatnonzero(~g.tracked.to_numpy(bool)) if "tracked" in g else np.array([], int)
     t_lost = t[lost[0]] if len(lost) else None
     over = np.zeros(len(g), bool)
     for n, col in enumerate(columns):
-        c, y = colors[n % len(colors)], g[col].to_numpy(dtype=float)
-        ax.plot(t, y, color=c, lw=1.2, label=load_label(col) + ("" if same else f" (limit ±{limits[col]:g} {unit})"))
+        y = g[col].to_numpy(dtype=float)
+        ax.plot(t, y, **(dict(color="0.6", lw=1.0, zorder=1.8) if col in minor else
+                         dict(color=colors[n % len(colors)], lw=2.6 if col == binds else 1.2)))
         over |= np.abs(np.nan_to_num(y)) > limits[col]
-    for n, col in enumerate(columns[:1] if same else columns):  # after the loads: the legend lists them first
+    same = len({limits[k] for k in columns}) == 1
+    for n, col in enumerate(columns[:1] if same else columns):
         for sign in (1, -1):
-            ax.axhline(sign * limits[col], color="0.3" if same else colors[n % len(colors)], ls=":", lw=1.4,
-                       label=f"limit ±{limits[col]:g} {unit}" if same and sign > 0 else None)
+            ax.axhline(sign * limits[col], color="0.3" if same else colors[n % len(colors)], ls=":", lw=1.4)
     peak, at, t_peak = _peak(g, columns, limits)
     big = max((np.nanmax(np.abs(g[c])) for c in columns if np.isfinite(g[c]).any()), default=0.0)
     lim = max(limits[c] for c in columns)
     top = 1.3 * max(lim, big) if big <= 3 * lim else 2.5 * lim  # a spike beyond 3x the limit: off scale
     ax.set_ylim(-top, top)
-    _mark_over(ax, t, over, top)
-    if big > top:
-        ax.annotate(f"off scale: {100 * peak:.0f} % of its limit at t = {t_peak:.1f} s", xy=(t_peak, 0.9 * top),
-                    xytext=(10, 0), textcoords="offset points", fontsize=8.5, color="tab:red", va="center")
+    _mark_over(ax, t, over, lim, top)
+    _mark_off(ax, g, columns, limits, top)
+    if binds in columns:
+        k = int(np.nanargmin(np.where(g.tracked.to_numpy(bool) if "tracked" in g else True,
+                                      g.state_capacity_kg.to_numpy(float), np.nan)))
+        ax.plot(t[k], g[binds].to_numpy(float)[k], "X", ms=11, mfc="white", mec="black", zorder=7)
     if t_lost is not None:
         _mark_lost(ax, t, t_lost, top)
     label = PATH_LABELS.get(name, name)
@@ -106,28 +150,60 @@ def _panel(ax, g: pd.DataFrame, columns: list[str], limits: dict, name: str) -> 
     verdict = (f"FAILS: tracking lost at {t_lost:.1f} s (singular); before it {worst}" if t_lost is not None
                else f"EXCEEDS a limit: {worst}" if peak > 1 else f"within limits: peak {worst}")
     ok = peak <= 1 and t_lost is None
-    names, also = _also(g, columns, limits)
     ax.set(ylabel=f"{quantity} [{unit}]")
-    ax.set_title(f"{label} {verdict}" + (f"\n{'but' if ok else 'it also'} exceeds {also}" if also else ""),
-                 fontsize=10.5, color="black" if ok else "tab:red")
+    ax.set_title(f"{label} {verdict}", fontsize=10.5, color="black" if ok else "tab:red")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    names = _also(g, columns, limits)
     return (f"{label} {'within limits' if ok else 'FAILS'} ({100 * peak:.0f} %)"
             + (f" but fails on {', '.join(names)}" if ok and names else ""))
 
 
+def _legend(fig, ts: pd.DataFrame, columns: list[str], limits: dict, minor: tuple, binds: set[str]) -> None:
+    """One legend for the panels, beside them: each load (the one that binds marked), the minor loads as one
+    entry, the limit, and the marks the panels use."""
+    quantity, unit = next(v for k, v in QUANTITY.items() if columns[0].startswith(k))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    same = len({limits[k] for k in columns}) == 1
+    handles = [Line2D([], [], color=colors[n % len(colors)], lw=2.6 if c in binds else 1.2,
+                      label=load_label(c) + (" (binds)" if c in binds else "")
+                      + ("" if same else f" (limit ±{limits[c]:g} {unit})"))
+               for n, c in enumerate(columns) if c not in minor[0]]
+    if minor[0]:
+        handles.append(Line2D([], [], color="0.6", lw=1.0, label=f"{_names(minor[0])}: under {100 * minor[1]:.0f} % "
+                                                                  "of the limit"))
+    if same:
+        handles.append(Line2D([], [], color="0.3", ls=":", lw=1.4, label=f"limit ±{limits[columns[0]]:g} {unit}"))
+    if any(_peak(ts[ts.path == p], [c], limits)[0] > 1 for p in ts.path.unique() for c in columns):
+        handles.append(Patch(color="tab:red", alpha=0.25, lw=0, label="over its limit"))
+    if binds & set(columns):
+        handles.append(Line2D([], [], ls="none", marker="X", ms=9, mfc="white", mec="black",
+                              label="weakest state (binds)"))
+    if "tracked" in ts and not ts.tracked.all():
+        handles.append(Line2D([], [], color="black", lw=1.5, label="tracking lost"))
+    fig.legend(handles=handles, loc="outside right center", fontsize=9, frameon=False)
+
+
 def load_series(ts: pd.DataFrame, columns: list[str], limits: dict, title: str, out_png: str | Path) -> None:
     """One panel per path: the given loads over time against their ±limits (dotted: one grey pair when all
-    share one limit, else in the colour of its load), the verdict in the panel's and the figure's title (the
-    peak as % of its limit, the load that reaches it; the other limits of ``limits`` a path exceeds named),
-    what breaks a limit shaded red (a stretch too short to see also barred and its times written), the time
-    tracking was lost marked (the rest of the planned motion, to its planned end, not executed), a spike far
-    above the limits drawn off scale with its peak written; legends beside the panels, off the curves."""
+    share one limit, else in the colour of its load), the verdict in one line in the panel's title and the
+    figure's (the peak as % of its limit, the load that reaches it; in the headline, the other limits of
+    ``limits`` a path exceeds and the load that binds its capacity, at its weakest state: that load drawn
+    thick and its weakest state marked where this figure shows it); loads far under their limits on every path
+    grey, one legend entry; what breaks a limit shaded red (at least a visible width; a short stretch's times
+    written), the time tracking was lost marked (the rest of the planned motion, to its planned end, not
+    executed), a spike far beyond the limits drawn off scale with an arrowhead on the edge it leaves by; one
+    legend beside the panels."""
     paths = list(ts.path.cat.categories if hasattr(ts.path, "cat") else ts.path.unique())
-    fig, axes = plt.subplots(len(paths), 1, figsize=(12.5, 3.4 * len(paths) + 0.8), squeeze=False, sharex=True,
+    minor = _minor(ts, columns, limits)
+    binds = {name: _binding(ts[ts.path == name], limits) for name in paths}
+    fig, axes = plt.subplots(len(paths), 1, figsize=(12.5, 3.3 * len(paths) + 0.6), squeeze=False, sharex=True,
                              layout="constrained")
-    heads = [_panel(ax, ts[ts.path == name], columns, limits, name) for ax, name in zip(axes[:, 0], paths)]
+    heads = [_panel(ax, ts[ts.path == name], columns, limits, name, minor[0], binds[name])
+             for ax, name in zip(axes[:, 0], paths)]
     axes[-1, 0].set_xlabel("time t [s]")
-    fig.suptitle(f"{title}: " + "; ".join(heads) + ("" if "planned" in paths else " (no planned path at this payload)"),
-                 fontsize=12)
+    _legend(fig, ts, columns, limits, minor, {b for b in binds.values() if b})
+    bound = list(dict.fromkeys(b for b in binds.values() if b))
+    fig.suptitle(f"{title}: " + "; ".join(heads) + ("" if "planned" in paths else " (no planned path)")
+                 + (f"; capacity bound by {', '.join(('base ' if b.startswith('base') else '') + load_label(b) for b in bound)}"
+                    if bound else ""), fontsize=12)
     save(fig, out_png)

@@ -3,14 +3,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from capmap.capacity.build import configuration_name
-from capmap.capacity.tables import configuration_voxels, grid_of
+from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
@@ -54,63 +54,41 @@ def _planned(waypoints: list[str]) -> tuple[list[tuple[float, float, np.ndarray,
     return paths, missing
 
 
-def _carries(moves: np.ndarray) -> str:
-    """What a planned path's moves carry along their own directions, for its label ('' if unknown)."""
-    return f": each move carries ≥ {np.nanmin(moves):,.0f} kg along its own direction" if np.isfinite(
-        moves).any() else ""
-
-
-def crossed_kg(main: pd.DataFrame, xyz: np.ndarray) -> np.ndarray:
-    """The values of the reached voxels of the map ``main`` that the polyline ``xyz`` (n, 3) m crosses (sampled
-    every eighth of a voxel edge)."""
-    grid = grid_of(main)
-    xyz = np.asarray(xyz, float).reshape(-1, 3)
-    pts = np.vstack([xyz[:1]] + [a + np.linspace(0, 1, max(2, int(np.ceil(8 * np.linalg.norm(b - a) / grid.edge_m))))
-                                 [:, None] * (b - a) for a, b in zip(xyz[:-1], xyz[1:])])
-    idx = grid.index(pts)
-    rows = grid.flat(idx[idx[:, 0] >= 0])
-    rows = np.unique(rows[main.n_reachable.to_numpy()[rows] > 0])
-    return main.capacity_kg.to_numpy(float)[rows]
-
-
 def _verdicts(verified: list[str] | None) -> dict:
     """The verification's rows by (payload kg, path: 'direct' / 'planned' / '<task>: planned')."""
     rows = pd.concat([pd.read_csv(f) for f in verified or []] or [pd.DataFrame(columns=["payload_kg", "path"])])
     return {(float(r.payload_kg), r.path): r for r in rows.itertuples()}
 
 
-def _verdict(r, m: float) -> str:
-    """e.g. 'holds (+3.7 %)': feasible, and the weakest segment's margin."""
-    return f"{'holds' if r.feasible else 'FAILS'} ({100 * (r.capacity_kg / m - 1):+.1f} %)"
-
-
-def _note(m: float, own_kg: float, verified: bool, crossed: np.ndarray) -> str:
-    """Why a path holds across voxels below its payload ('' when it does not need saying)."""
-    if not len(crossed) or crossed.min() >= m or own_kg < m:
-        return ""
-    return (f"the {m:g} kg path holds: {own_kg:,.0f} kg along its own moves ({'verified' if verified else 'planned'}),\n"
-            f"though the voxels it crosses carry {crossed.min():,.0f}-{crossed.max():,.0f} kg in every direction")
-
-
-def _map_paths(view: MapView, waypoints: list[str], verified: list[str] | None, main: pd.DataFrame | None = None
-               ) -> list[tuple]:
-    """The summary figure's paths (label, (n, 3) m, style, note): the direct line and each payload's planned path,
-    labelled with the verification's verdict (``verified``: the payloads' verify summary.csv files) or,
-    without it, with the least capacity of the planned moves along their own directions; the note (with the map
-    ``main``) says why a path holds across voxels below its payload."""
+def _map_paths(view: MapView, waypoints: list[str], verified: list[str] | None) -> tuple[list[tuple], str]:
+    """The summary figure's paths (label, (n, 3) m, style, the capacity of each of its pieces along its own
+    direction kg or None): the direct line (its verified capacity) and each payload's planned path (its planned
+    moves'), labelled with the verification's verdict (``verified``: the payloads' verify summary.csv files) or,
+    without it, with its planned moves' least; and the paths' verdict in words for the headline."""
     ok = _verdicts(verified)
-    direct = [f"{m:g} kg {_verdict(ok[(m, 'direct')], m)}" for m in view.payloads_kg if (m, "direct") in ok]
+    rows = [(m, ok[(m, "direct")]) for m in view.payloads_kg if (m, "direct") in ok]
+    label = "direct line" + (f": {rows[0][1].capacity_kg:,.0f} kg, " + ", ".join(
+        f"{m:g} kg {'holds' if r.feasible else 'FAILS'}" for m, r in rows) if rows else "")
+    paths = [(label, np.stack([view.start_m, view.goal_m]), {"color": "black"},
+              np.array([rows[0][1].capacity_kg]) if rows else None)]
     planned, missing = _planned(waypoints)
-    paths = [("direct start-goal line" + (f", verified: {', '.join(direct)}" if direct else ""),
-              np.stack([view.start_m, view.goal_m]), {"color": "black", "ls": "--"}, "")]
     for n, (m, _, p, mv) in enumerate(planned):
         r = ok.get((m, "planned"))
-        own = r.capacity_kg if r is not None else (np.nanmin(mv) if np.isfinite(mv).any() else 0.0)
-        label = (f"planned path, {m:g} kg" + (f", verified: {_verdict(r, m)}, weakest segment {r.capacity_kg:,.0f} kg"
-                                              if r is not None else _carries(mv)))
-        note = _note(m, own, r is not None and bool(r.feasible), crossed_kg(main, p)) if main is not None else ""
-        paths.append((label, p, {"color": PATH_COLOURS[n % len(PATH_COLOURS)], "ls": "-"}, note))
-    return paths + [(f"no planned path for {m}", np.empty((0, 3)), {"color": "none"}, "") for m in missing]
+        what = (f"{'holds' if r.feasible else 'FAILS'} ({r.capacity_kg:,.0f} kg)" if r is not None else
+                f"moves ≥ {np.nanmin(mv):,.0f} kg (not verified)" if np.isfinite(mv).any() else "not verified")
+        paths.append((f"A* plan for {m:g} kg: {what}", p, {"color": PATH_COLOURS[n % len(PATH_COLOURS)]}, mv[1:]))
+    return paths, _paths_verdict(view, ok, missing)
+
+
+def _paths_verdict(view: MapView, ok: dict, missing: list[str]) -> str:
+    """The paths' verdict for the summary's headline, from the verification's rows ``ok``: the payloads that hold
+    only on their plan, or on no path; those without a plan ('' when nothing of the kind)."""
+    words = []
+    for m in view.payloads_kg:
+        d, q = ok.get((m, "direct")), ok.get((m, "planned"))
+        if d is not None and q is not None and not d.feasible:
+            words.append(f"{m:g} kg holds only on its A* plan" if q.feasible else f"{m:g} kg holds on no path")
+    return "; ".join(words + [f"no plan for {', '.join(missing)}"] * bool(missing))
 
 
 def _summary_rows(vox: pd.DataFrame, pts: pd.DataFrame, op: pd.DataFrame | None, configuration: str):
@@ -151,8 +129,7 @@ def stage_summary(voxels: str, configurations: str, points: str, waypoints: list
     op = configuration_voxels(vox, datasets.read(configurations), view.configuration)
     rows, reach_v, median = _summary_rows(vox, pts, op, view.configuration)
     write_quantities(rows, out["csv"], out["md"])
-    capacity_map(vox, view, out["png"], op, view.configuration,
-                 _map_paths(view, waypoints, verified, vox if op is None else op))
+    capacity_map(vox, view, out["png"], op, view.configuration, *_map_paths(view, waypoints, verified))
     stage_logger(__name__, "summary").info(f"{len(reach_v)} reachable voxels, median capacity {median:.1f} kg "
                                            f"-> {out['csv']}, {out['png']}")
 
@@ -174,7 +151,7 @@ def _task_3d(name: str, path: str, ok: dict, arm) -> tuple[list[PlannedPath], li
     wp = datasets.read(path)
     q = wp.attrs["capmap"].get("config", {}).get("job", {}).get("q_start_deg")
     conf = configuration_name(arm, q) if q is not None else ""
-    group = f"task {name}: starts on {conf} (its own map: the buttons)" if conf else f"task {name}"
+    group = f"task {name}, on {conf}" if conf else f"task {name}"
     found, none = _planned([path])
     paths = []
     for m, cost, p, mv in found:
@@ -186,42 +163,68 @@ def _task_3d(name: str, path: str, ok: dict, arm) -> tuple[list[PlannedPath], li
     return paths, [f"task {name} ({m})" for m in none], conf
 
 
+def _main_3d(view: MapView, waypoints: list[str], ok: dict) -> tuple[list[PlannedPath], list[str]]:
+    """The main task's paths for the 3D page (its direct line with its verdicts at every payload, each payload's
+    planned path with its own) and the payloads without a plan."""
+    planned, missing = _planned(waypoints)
+    rows = [(m, ok[(m, "direct")]) for m in view.payloads_kg if (m, "direct") in ok]
+    group = f"main task, on {view.configuration}" if view.configuration else "main task"
+    direct = [PlannedPath("direct line", np.stack([view.start_m, view.goal_m]), group=group, direct=True,
+                          verdict=(f"verified: {', '.join(f'{m:g} kg ' + ('holds' if r.feasible else 'FAILS') for m, r in rows)}"
+                                   f" ({rows[0][1].capacity_kg:,.0f} kg)") if rows else "")]
+    return direct + [PlannedPath(f"planned path, {m:g} kg ({cost:.2f} m)", p, moves_kg=mv, group=group,
+                                 verdict=_verified_3d(ok[(m, "planned")], m) if (m, "planned") in ok else "")
+                     for m, cost, p, mv in planned], missing
+
+
+def _maps_3d(vox: pd.DataFrame, conf: pd.DataFrame, shown: dict[str, str]) -> list[tuple[str, str, pd.DataFrame]]:
+    """The 3D page's maps (configuration, button label, reached voxels): each configuration of ``shown`` (name ->
+    whose) that has a map, then the bound for any configuration (configuration '')."""
+    maps = [(c, f"configuration {c} ({who})", configuration_voxels(vox, conf, c)) for c, who in shown.items() if c]
+    return [(c, n, m[m.n_reachable > 0]) for c, n, m in maps if m is not None] + [
+        ("", "any configuration (the bound: every IK branch)", vox[vox.n_reachable > 0])]
+
+
+def _title_3d(maps: list[tuple], payload_kg: float, paths: list[PlannedPath], missing: list[str]) -> str:
+    """The 3D page's headline, one line: the share of the first map's voxels carrying the first payload, how
+    many verified planned paths hold, the paths missing."""
+    c = maps[0][2].capacity_kg.to_numpy()
+    verdicts = [p.verdict for p in paths if not p.direct and p.verdict]
+    held = sum(v.startswith("verified: holds") for v in verdicts)
+    return (f"{maps[0][1][0].upper() + maps[0][1][1:]}: {100 * np.mean(c >= payload_kg) if len(c) else 0:.0f} % of "
+            f"the reachable voxels carry {payload_kg:g} kg"
+            + (f"; {'every' if held == len(verdicts) else f'{held} of {len(verdicts)}'} verified planned path"
+               f"{'' if held == len(verdicts) else 's'} hold{'s' if held == len(verdicts) else ''}" if verdicts else "")
+            + (f"; no path for {', '.join(missing)}" if missing else ""))
+
+
 def stage_capacity_3d(voxels: str, configurations: str, waypoints: list[str], out_html: str, slice_json: str,
                       task_waypoints: dict[str, str] | None = None, verified: list[str] | None = None) -> None:
     """The interactive 3D view (self-contained HTML): reachable voxels by capacity on the arm's configuration
     (buttons: the map of each further task's start configuration, the bound for any configuration), a payload
     slider, the direct line, each payload's planned path and each further task's (``task_waypoints``: name ->
-    its waypoints; a missing path is named in the title), start and goal; each path's verdict from ``verified``
-    (the verify summary.csv files of the payloads and tasks; without them, its planned moves' least)."""
+    its waypoints; a missing path is named in the title), start and goal, each shown on the map it was planned
+    on and on the bound; each path's verdict from ``verified`` (the verify summary.csv files of the payloads and
+    tasks; without them, its planned moves' least)."""
     vox, conf = datasets.read(voxels), datasets.read(configurations)
     view = MapView.from_slice(slice_json)
     ok = _verdicts(verified)
-    planned, missing = _planned(waypoints)
-    direct = [f"{m:g} kg {'holds' if r.feasible else 'FAILS'} ({r.capacity_kg:,.0f} kg)"
-              for m, r in ((m, ok.get((m, "direct"))) for m in view.payloads_kg) if r is not None]
-    group = (f"main task: starts on {view.configuration} (the first map)" if view.configuration else "main task") + (
-        f"<br>direct line, verified: {', '.join(direct)}" if direct else "")
-    paths = [PlannedPath(f"planned path, {m:g} kg ({cost:.2f} m)", p, moves_kg=mv, group=group,
-                         verdict=_verified_3d(ok[(m, "planned")], m) if (m, "planned") in ok else "")
-             for m, cost, p, mv in planned]
+    paths, missing = _main_3d(view, waypoints, ok)
     arm = run_arm(stage_config(slice_json).run) if task_waypoints else None
     tasks = [_task_3d(name, path, ok, arm) for name, path in (task_waypoints or {}).items()]
-    paths += [p for t in tasks for p in t[0]]
+    maps = _maps_3d(vox, conf, {view.configuration: "the main task's"} | {
+        c: f"task {n}'s" for n, (_, _, c) in zip(task_waypoints or {}, tasks) if c and c != view.configuration})
+    at = {c: (n, len(maps) - 1) for n, (c, *_) in enumerate(maps[:-1])}
+    paths = [replace(p, on_map=at.get(view.configuration)) for p in paths] + [
+        replace(p, on_map=at.get(c)) for ps, _, c in tasks for p in ps]
     missing += [m for t in tasks for m in t[1]]
-    names = {view.configuration: "the main task's"} | {c: f"task {n}'s" for n, (_, _, c) in
-                                                     zip(task_waypoints or {}, tasks) if c}
-    maps = [(f"configuration {c} ({who})", configuration_voxels(vox, conf, c)) for c, who in names.items() if c]
-    maps = [(n, m[m.n_reachable > 0]) for n, m in maps if m is not None]
-    maps.append(("any configuration (the bound: every IK branch)", vox[vox.n_reachable > 0]))
-    title = "Capacity map: reachable voxels by dynamic load-carrying capacity" + (
-        f"; no path for {', '.join(missing)}" if missing else "")
     html = capacity_3d_html([(name, m[["x_m", "y_m", "z_m"]].to_numpy(), m.capacity_kg.to_numpy(),
-                              m.binding.astype(str).to_numpy()) for name, m in maps],
+                              m.binding.astype(str).to_numpy()) for _, name, m in maps],
                             vox.attrs["capmap"]["grid"]["edge_m"], view.start_m, view.goal_m, paths, view.payloads_kg,
-                            title)
+                            _title_3d(maps, view.payloads_kg[0] if view.payloads_kg else 0.0, paths, missing))
     Path(out_html).parent.mkdir(parents=True, exist_ok=True)
     Path(out_html).write_text(html)
-    stage_logger(__name__, "capacity 3d").info(f"{', '.join(f'{n}: {len(m)} voxels' for n, m in maps)}, "
+    stage_logger(__name__, "capacity 3d").info(f"{', '.join(f'{n}: {len(m)} voxels' for _, n, m in maps)}, "
                                                f"{len(paths)} paths -> {out_html} ({len(html) / 1e6:.1f} MB, offline)")
 
 

@@ -11,19 +11,13 @@ from capmap.capacity.directions import GRID_AXES
 from capmap.capacity.tables import AXIS_COLUMNS, configuration_voxels, grid_of
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
+from capmap.plots.capacity_3d import PATH_COLOURS
 from capmap.plots.capacity_loads import load_series
 from capmap.plots.capacity_paths import workspace_paths
 from capmap.robots import run_arm
 from capmap.stages.common import Outputs, stage_config
 
-__all__ = ["stage_verify_plots", "under_path", "PLANNERS"]
-
-# what the planner of each ``planning.moves`` looks for, in words (the workspace figure's title)
-PLANNERS = {"branch": "the shortest chain of moves between voxel centres that each carry the payload along their "
-                      "own line, on the arm's IK branch",
-            "axis": "the shortest chain of moves between voxels that carry the payload along the move's grid axis",
-            "isotropic": "the shortest chain of moves between voxels that carry the payload in every direction"}
-
+__all__ = ["stage_verify_plots", "under_path", "path_colour"]
 
 def under_path(main: pd.DataFrame, ts: pd.DataFrame) -> pd.DataFrame:
     """``ts`` (index 0..n-1) with, per sample, ``distance_m`` travelled along its path, its segment's
@@ -56,6 +50,13 @@ def under_path(main: pd.DataFrame, ts: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def path_colour(payloads_kg, job) -> str:
+    """The planned path's colour, as on the summary map and the 3D page: the main task's payload's (by its place
+    among the task payloads), a further task's after them (the first further task's)."""
+    n = len(payloads_kg) if job.name else list(payloads_kg).index(job.payload_kg) if job.payload_kg in payloads_kg else 0
+    return PATH_COLOURS[n % len(PATH_COLOURS)]
+
+
 def stage_verify_plots(voxels: str, configurations: str, timeseries: str, out: Outputs, slice_json: str) -> None:
     """The workspace of the verified task on the map of the start's configuration (``out["workspace"]``:
     does each path carry the payload, its own capacity against the map's voxels under it); torques, base
@@ -69,9 +70,8 @@ def stage_verify_plots(voxels: str, configurations: str, timeseries: str, out: O
     meta = ts.attrs["capmap"]
     payload, limits = meta["payload_kg"], meta["limits"]
     no_path = "" if meta.get("plan_status", "ok") == "ok" else meta.get("plan_reason", "")
-    which = f"configuration {name} (the arm's at the start)" if op is not None else "every IK branch"
-    workspace_paths(main, under_path(main, ts.reset_index(drop=True)), payload, out["workspace"], which, no_path,
-                    PLANNERS.get(sc.run.planning.moves, ""))
+    workspace_paths(main, under_path(main, ts.reset_index(drop=True)), payload, out["workspace"],
+                    name if op is not None else "every IK branch", no_path, path_colour(sc.run.task.payload_kg, sc.job))
     for prefix, what, key in (("tau_", "Joint torques", "torques"), ("base_f", "Base disturbance force", "force"),
                               ("base_m", "Base disturbance moment", "moment")):
         load_series(ts, [c for c in limits if c.startswith(prefix)], limits, f"{what} carrying {payload:g} kg", out[key])
