@@ -1,6 +1,6 @@
 """The dual-arm figures and both MeshCat animations, on small synthetic tables: every legend beside its axes
-(never on a curve or a limit line), the verdicts in the titles, µm not "um", and the animations' title, legend and
-simulated-time readout in the HTML."""
+(never on a curve or a limit line), each verdict in a one-line title free of file names and config keys, µm not "um",
+and the animations' title, foldable legend, simulated-time readout and live inset in the HTML."""
 
 from __future__ import annotations
 
@@ -9,8 +9,10 @@ import pandas as pd
 import pytest
 
 import capmap.plots.dualarm as da
+import capmap.plots.dualarm_motion as dm
+import capmap.plots.dualarm_scene as ds
 from capmap.plots import reconfig
-from capmap.plots.scene3d import Overlay, facing
+from capmap.plots.scene3d import Inset, Overlay, facing
 
 ARMS = [f"{s}_{j}" for s in ("left", "right") for j in ("s0", "s1", "e0", "e1", "w0", "w1", "w2")]
 
@@ -19,7 +21,8 @@ ARMS = [f"{s}_{j}" for s in ("left", "right") for j in ("s0", "s1", "e0", "e1", 
 def figures(monkeypatch):
     """The figures the plotting functions make (kept open instead of saved)."""
     made = []
-    monkeypatch.setattr(da, "save", lambda fig, out, rect=None: made.append(fig))
+    for module in (da, dm):
+        monkeypatch.setattr(module, "save", lambda fig, out, rect=None: made.append(fig))
     yield made
     for fig in made:
         da.plt.close(fig)
@@ -56,6 +59,7 @@ def _beside(fig) -> None:
 def test_every_figure_keeps_its_legend_off_the_curves_and_says_its_verdict(figures, traj):
     fine = traj[["t_s", "node", "min_distance_m"]].copy()
     fine.loc[50, "min_distance_m"] = 0.005 - 6.6e-7  # between the nodes, 0.66 µm under the margin
+    fine.loc[80, "min_distance_m"] = 0.005 + 2e-7  # a second touch of the margin, at 8 s
     tq = pd.DataFrame({"t_s": traj.t_s} | {f"tau_{n}_nm": 20 * np.cos(traj.t_s / 10 + k) for k, n in enumerate(ARMS)}
                       | {f"tau_best_{n}_nm": 10 + 0 * traj.t_s for n in ARMS})
     outer = pd.DataFrame({"outer": range(4), "eq_violation": [1e-2, 1e-4, 1e-6, 2e-8],
@@ -63,49 +67,67 @@ def test_every_figure_keeps_its_legend_off_the_curves_and_says_its_verdict(figur
                           "inner_iterations": [5, 4, 3, 2]})
     da.constraint_errors(traj, "x.png", 5e-8)
     da.distances(traj, fine, 0.005, traj.attrs["capmap"]["active"], 5e-8, "x.png")
-    da.joints(traj, traj.attrs["capmap"], "q", "x.png")
-    da.joints(traj, traj.attrs["capmap"], "qd", "x.png")
-    da.torques(tq, {"joints": ARMS, "effort_nm": [50.0] * 14, "panel_kg": 1.8}, 7.0, "x.png")
+    dm.joints(traj, traj.attrs["capmap"], "x.png")
+    dm.velocities(traj, traj.attrs["capmap"], "x.png")
+    dm.torques(tq, {"joints": ARMS, "effort_nm": [50.0] * 14, "panel_kg": 1.8}, 7.0, "x.png")
     da.convergence(outer, "x.png", 5e-8, (2.1e-8, 1.5e-8))
     titles = [fig._suptitle.get_text() for fig in figures]
     for fig in figures:
         _beside(fig)
     errors, distance, joints, velocities, torques, convergence = titles
-    # one tolerance decides (the solver's, as in convergence.png), the spec's 7e-7 m named with its source
-    assert "held at every node, within the solver's tolerance 5e-08" in errors and "the spec's 7e-7 m" in errors
-    legend = [t.get_text() for t in figures[0].axes[0].get_legend().get_texts()]
-    assert any("docs/spec/dual-arm-assembly.md" in t for t in legend) and not any("1e-6" in t for t in legend)
-    assert "collision-free" in distance and "0.66 µm under it" in distance and " um" not in distance
+    # each headline one verdict line; no file names or config keys in titles and legends
+    words = titles + [t.get_text() for fig in figures for ax in fig.axes if ax.get_legend()
+                      for t in ax.get_legend().get_texts()]
+    assert not any("\n" in t for t in titles)
+    assert not any(w in t for t in words for w in (".png", ".csv", ".md", "dualarm.solver", "config"))
+    # one tolerance decides (the solver's, as in convergence.png), the spec's 7e-7 m beside it
+    assert "held at every node" in errors and "≤ tolerance 5e-08" in errors and "the spec's 7e-7 m" in errors
+    ticks = [t.get_text() for t in figures[0].axes[0].get_yticklabels()]
+    assert "0" in ticks  # an exact zero, at the axis' foot
+    assert "collision-free" in distance.lower() and " um" not in distance
+    assert "0.66 µm under the margin" in figures[1].axes[1].get_title(loc="left")
+    # every touch of the margin marked, the second one of a pair too (named with both times)
+    legend = [t.get_text() for t in figures[1].axes[0].get_legend().get_texts()]
+    assert any("a vs b" in t and "5.00, 8.00 s" in t for t in legend)
     assert "all within their limits" in joints and "all within their limits" in velocities
-    assert "within the effort limits" in torques and "peak" in torques and "best internal force" in torques
-    assert "converged" in convergence and "≤ tolerance 5e-08" in convergence and "feasibility-driven DDP" in convergence
-    assert "m or rad]" not in figures[5].axes[0].get_ylabel()
-    # the velocities are zoomed to the data, their limits drawn on a full-scale gauge beside them
-    ax, gauge = figures[3].axes[:2]
-    assert any(np.allclose(line.get_ydata(), 100) for line in gauge.get_lines()) and gauge.get_ylim()[1] > 100
-    assert ax.get_ylim()[1] < 10  # 3 % of the limit at most: zoomed
-    # the marker sits on the curve it names
+    assert "within the effort limits" in torques and "peak" in torques
+    assert "converged" in convergence and "≤ tolerance 5e-08" in convergence and "FDDP" not in convergence
+    # the result's node errors on a tick of their own, on the iteration grid
+    ax = figures[5].axes[0]
+    result = next(line for line in ax.get_lines() if line.get_label().startswith("result"))
+    assert np.allclose(result.get_xdata(), 4) and "result" in [t.get_text() for t in figures[5].axes[1].get_xticklabels()]
+    # the velocities at their scale, the ±100 % limits beyond a break, in thin strips above and below
+    strips = [a for a in figures[3].axes if any(np.allclose(line.get_ydata(), 100) for line in a.get_lines())]
+    assert strips and all(a.get_ylim()[0] > 50 for a in strips)
     ax = next(a for a in figures[3].axes if "closest to a limit" in [line.get_label() for line in a.get_lines()])
+    assert ax.get_ylim()[1] < 10  # 3 % of the limit at most: at the data's scale
+    # the marker sits on the curve it names
     marker = next(line for line in ax.get_lines() if line.get_label() == "closest to a limit")
     name = next(t.get_text() for t in ax.texts if t.get_text() in ARMS)
     named = next(line for line in ax.get_lines() if line.get_label().startswith(name + ":"))
     assert name in velocities
     assert np.isclose(marker.get_ydata()[0], np.interp(marker.get_xdata()[0], named.get_xdata(), named.get_ydata()))
+    # the best internal force, alike for both arms, said once
+    labels = [line.get_label() for a in figures[4].axes for line in a.get_lines() if line.get_linestyle() == ":"]
+    assert "both arms alike" in labels[0] and labels[1] == "best internal force (as above)"
 
 
 def test_a_limit_passed_is_said_so(figures, traj):
     traj.loc[30, "q_left_s0_rad"] = 1.8  # beyond its upper limit (1.7 rad)
-    da.joints(traj, traj.attrs["capmap"], "q", "x.png")
+    dm.joints(traj, traj.attrs["capmap"], "x.png")
     assert "LIMIT IS EXCEEDED" in figures[0]._suptitle.get_text()
     traj.loc[80, "path_err_m"] = 1e-6  # beyond the solver's tolerance and the spec's 7e-7 m
     da.constraint_errors(traj, "x.png", 5e-8)
     assert "NOT HELD" in figures[1]._suptitle.get_text()
+    traj.loc[40, "qd_left_s0_rad_s"] = 1.6  # beyond its velocity limit (1.5 rad/s): one axis to the limits, no break
+    dm.velocities(traj, traj.attrs["capmap"], "x.png")
+    assert "LIMIT IS EXCEEDED" in figures[2]._suptitle.get_text() and len(figures[2].axes) == 2
 
 
 def test_no_curve_hides_under_a_larger_one(figures, traj):
     tq = pd.DataFrame({"t_s": traj.t_s} | {f"tau_{n}_nm": (k + 1) * (1 + 0 * traj.t_s) for k, n in enumerate(ARMS)}
                       | {f"tau_best_{n}_nm": 1 + 0 * traj.t_s for n in ARMS})
-    da.torques(tq, {"joints": ARMS, "effort_nm": [50.0] * 14, "panel_kg": 1.8}, 7.0, "x.png")
+    dm.torques(tq, {"joints": ARMS, "effort_nm": [50.0] * 14, "panel_kg": 1.8}, 7.0, "x.png")
     curves = [line for line in figures[0].axes[0].get_lines() if line.get_label().startswith("left_")]
     peaks = [line.get_ydata().max() for line in curves]
     assert np.argsort([line.get_zorder() for line in curves]).tolist() == np.argsort(peaks)[::-1].tolist()
@@ -118,25 +140,30 @@ def test_the_walls_facing_the_camera_are_cut_away():
 
 
 def test_the_overlay_escapes_its_words_and_reads_the_animation_time():
-    html = Overlay("a <b> & c", ("line",), ((0x3070C0, 0.25, "ghost"),), ("frame </script>",), 25.0).markup()
-    assert "a &lt;b&gt; &amp; c" in html and "rgba(48,112,192,0.25)" in html and "ghost" in html
+    inset = Inset("m <x>", (("run", 0x3070C0, (1.0, 2.0, 3.0)),), 1.0)
+    html = Overlay("a <b> & c", ("line",), ((0x3070C0, 0.25, "ghost"),), ("frame </script>",), 25.0, inset, 12.5).markup()
+    assert "a &lt;b&gt; &amp; c" in html and "rgba(48,112,192,0.50)" in html and "ghost" in html
     assert "viewer.animator" in html and "simulated time t = " in html and "</script>\"" not in html
+    assert '<details id="capmap-legend" open>' in html  # a click folds the legend
+    assert "m &lt;x&gt;" in html and "capmap-cursor" in html and "<polyline" in html and "start = 12.5" in html
 
 
 def test_the_dual_arm_animation_carries_title_legend_and_time(tmp_path):
     poses = np.tile(np.eye(4), (3, 3, 1, 1))
     poses[:, 1, 0, 3] = [0.0, 0.1, 0.2]
-    tri = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 0, 1], [1, 0, 1], [0, 1, 1]]], float)
-    env = da.Surroundings(tri, [(np.zeros(3), np.ones(3), 0.01)], np.array(["floor", "box"], dtype=object))
+    tri = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0.2, 0.2, 1], [0.3, 0.2, 1], [0.2, 0.3, 1]]], float)
+    env = ds.Surroundings(tri, [(np.zeros(3), np.ones(3), 0.01)], np.array(["floor", "box"], dtype=object))
     caps = [("torso", 0, np.zeros(3), np.array([0, 0, 0.5]), 0.1), ("arm", 1, np.zeros(3), np.array([0.3, 0, 0]), 0.05)]
     caption = Overlay("Baxter carries a panel", ("smallest safety distance 5.00 mm",), frame_text=("f0", "f1", "f2"))
-    held = da.Held(1, np.eye(4), np.array([0.01, 0.2, 0.1]), np.array([[0.05, 0.0]]), 0.01, np.eye(4),
+    held = ds.Held(1, np.eye(4), np.array([0.01, 0.2, 0.1]), np.array([[0.05, 0.0]]), 0.01, np.eye(4),
                    ((np.array([0.1, 0.05, 0]), np.array([0.0, 0.05, 0]), 0.008),))
-    da.animation(caps, poses, held, env, 25.0, caption, tmp_path / "a.html")
+    ds.animation(caps, poses, held, env, 25.0, caption, tmp_path / "a.html")
     html = (tmp_path / "a.html").read_text()
     assert "Baxter carries a panel" in html and "smallest safety distance 5.00 mm" in html
-    assert "Baxter&#x27;s arms" in html and "held by both grippers" in html and "the 1 pins" in html
+    assert "Baxter&#x27;s arms" in html and "held by both grippers" in html and "1 pins" in html
     assert "final pose on the pins" in html and "capmap-time" in html and '["f0", "f1", "f2"]' in html
+    # each solid of the envelope in its own colour, named: the box an obstacle, the floor part of the cabin
+    assert "rgba(46,158,90," in html and "box</div>" in html and "cabin</div>" in html
 
 
 def test_the_reconfiguration_animation_carries_title_legend_and_time(tmp_path):
@@ -147,10 +174,15 @@ def test_the_reconfiguration_animation_carries_title_legend_and_time(tmp_path):
                 ("a3.link", np.zeros(3), np.array([0, 1.0, 0]))]
     m = {"nullspace": np.array([1.0, 1.5, 2.0, 2.0]), "pinv": np.array([1.0, 0.9, 0.8, 0.8])}
     motion = reconfig.ReconfigMotion(links, frames, m, 2.0, "a1.boom", ("a1.ee", "a2.ee"))
-    reconfig.animation(motion, segments, "robot: boom unlocked\nnull-space: m 1 → 2", tmp_path / "r.html")
+    reconfig.animation(motion, segments, "Robot: m +100 % (null-space) vs −20 % (pseudo-inverse)", tmp_path / "r.html")
     html = (tmp_path / "r.html").read_text()
-    assert "robot: boom unlocked" in html and "null-space: m 1 → 2" in html and "capmap-time" in html
+    assert "Robot: m +100 % (null-space) vs −20 % (pseudo-inverse)" in html and "capmap-time" in html
     assert "pseudo-inverse run, 1.5 s" in html and "capture: a1.ee held by a2.ee" in html and "a3: not in the loop" in html
-    # the live readout: each run's manipulability per frame, and how far apart the runs are
-    assert "manipulability m: null-space 1.0 (+0 %), pseudo-inverse 1.0 (+0 %); the runs&#x27; joints up to 0.00" not in html
-    assert "null-space 2.0 (+100 %), pseudo-inverse 0.8 (-20 %); the runs' joints up to 0.50 m apart" in html
+    # what to watch, from when the runs part; the view opens where they are half their widest apart
+    assert "Watch the red sheath (pseudo-inverse) leave the blue arms from 1 s (opens at 1 s)" in html
+    assert "start = 1.0" in html
+    # the live readout: each run's manipulability per frame, and which joint of the two runs is how far apart
+    assert ("null-space 2.0 (+100 %), pseudo-inverse 0.8 (\\u221220 %)\\n"
+            "farthest joint: a2.link of the two runs 0.50 m apart") in html
+    # and a live plot of m(t), both runs
+    assert "manipulability m" in html and html.count("<polyline") == 2

@@ -11,7 +11,7 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["plt", "save", "not_done_figure", "legend_beside", "on_top", "limit_gauge"]
+__all__ = ["plt", "save", "not_done_figure", "legend_beside", "on_top"]
 
 
 def save(fig, out_png: str | Path, rect: tuple[float, float, float, float] | None = None) -> None:
@@ -47,13 +47,3 @@ def on_top(values, i: int) -> float:
     higher, so that no small curve hides under a larger one."""
     rank = np.argsort(np.argsort(-np.abs(values).max(axis=0)))
     return 2 + rank[i] / (2 * len(rank))
-
-
-def limit_gauge(ax, values, limit: float = 100.0, unit: str = "% of the limit") -> None:
-    """A narrow full-scale axis beside a plot zoomed to its data: the limits ±``limit`` (red dashed) and the band
-    the ``values`` fill (blue), in ``unit``."""
-    for y in (-limit, limit):
-        ax.axhline(y, color="tab:red", ls="--", lw=1.2)
-    ax.axhspan(float(values.min()), float(values.max()), color="tab:blue", alpha=0.6)
-    ax.set(xlim=(0, 1), ylim=(-1.15 * limit, 1.15 * limit), xticks=[], ylabel=f"full scale [{unit}]")
-    ax.set_title("full\nscale", fontsize=8)

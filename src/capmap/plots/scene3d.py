@@ -22,8 +22,8 @@ import umsgpack
 from meshcat.servers.tree import SceneTree, find_node, walk
 from meshcat.servers.zmqserver import VIEWER_ROOT, create_command
 
-__all__ = ["RecordingWindow", "Overlay", "new_scene", "write_html", "segment_pose", "cylinder", "capsule", "material", "aim",
-           "hide_helpers", "facing", "g"]
+__all__ = ["RecordingWindow", "Overlay", "Inset", "new_scene", "write_html", "segment_pose", "cylinder", "capsule",
+           "material", "aim", "hide_helpers", "facing", "g"]
 
 _TEMPLATE = """<!DOCTYPE html>
 <html>
@@ -54,53 +54,110 @@ _TEMPLATE = """<!DOCTYPE html>
 
 
 @dataclass(frozen=True)
+class Inset:
+    """A small live plot over the view: each of ``series`` (name, colour 0xRRGGBB, value per frame) against the
+    frames' time (``seconds``: the last frame's), with a cursor at the current frame; ``label``: what the values are."""
+
+    label: str
+    series: tuple[tuple[str, int, tuple[float, ...]], ...]
+    seconds: float
+
+    def markup(self) -> tuple[str, str]:
+        """The inset's SVG (the cursor ``capmap-cursor``, the current values ``capmap-dot<k>``) and its frames'
+        y coordinates (for the script)."""
+        w, h, x0, y0 = 300, 84, 34, 6  # the plot's box in the SVG, px
+        vals = np.concatenate([np.asarray(v, float) for _, _, v in self.series])
+        lo, hi = float(vals.min()), float(vals.max())
+        ys = [[round(y0 + h * (hi - v) / ((hi - lo) or 1.0), 1) for v in vals_] for _, _, vals_ in self.series]
+        n = max(len(v) for _, _, v in self.series)
+        xs = [round(x0 + w * k / max(n - 1, 1), 1) for k in range(n)]
+        rgb = [f"#{c:06x}" for _, c, _ in self.series]
+        lines = "".join(f'<polyline fill="none" stroke="{c}" stroke-width="2" points="'
+                        + " ".join(f"{x},{y}" for x, y in zip(xs, y)) + f'"/><circle id="capmap-dot{k}" r="4" fill="{c}"/>'
+                        for k, (c, y) in enumerate(zip(rgb, ys)))
+        ticks = "".join(f'<text x="{x0 - 4}" y="{y + 4}" text-anchor="end">{v:.3g}</text>' for v, y in ((hi, y0), (lo, y0 + h)))
+        ticks += "".join(f'<text x="{x}" y="{y0 + h + 14}" text-anchor="middle">{t}</text>'
+                         for x, t in ((x0, "0 s"), (x0 + w, f"{self.seconds:.0f} s")))
+        key = " ".join(f'<span style="color:{c}">&#9644; {html.escape(name)}</span>' for c, (name, _, _) in zip(rgb, self.series))
+        svg = (f'<svg width="{x0 + w + 22}" height="{y0 + h + 18}" font-size="11"><rect x="{x0}" y="{y0}" width="{w}" '
+               f'height="{h}" fill="none" stroke="#999"/>{ticks}{lines}<line id="capmap-cursor" y1="{y0}" y2="{y0 + h}" '
+               'stroke="#111" stroke-dasharray="3,2"/></svg>')
+        return f'<div id="capmap-inset"><div>{html.escape(self.label)}: {key}</div>{svg}</div>', json.dumps([xs, ys])
+
+
+@dataclass(frozen=True)
 class Overlay:
-    """Words over an animation's 3D view (top left, clicks pass through to the view): the ``title``, ``lines``
-    under it (settings, verdicts), a ``legend`` of (colour 0xRRGGBB, opacity, what it is), and the simulated
-    time as the animation plays (the clip's time in s: the frames must be sampled at their simulated times),
-    with ``frame_text[k]`` next to it at frame k (``fps`` frames per second)."""
+    """Words over an animation's 3D view (top left, clicks pass through to the view but for the legend, which a click
+    folds): the ``title``, ``lines`` under it (verdicts), the simulated time as the animation plays (the clip's time
+    in s: the frames must be sampled at their simulated times) with ``frame_text[k]`` under it at frame k (``fps``
+    frames per second), an ``inset`` plot with a cursor at the current frame, and a ``legend`` of (colour 0xRRGGBB,
+    opacity, what it is; its swatch drawn at the opacity's square root: a faint colour's hue stays legible). The view
+    opens at the simulated time ``start`` s (then loops from 0)."""
 
     title: str
     lines: tuple[str, ...] = ()
     legend: tuple[tuple[int, float, str], ...] = ()
     frame_text: tuple[str, ...] = ()
     fps: float = 1.0
+    inset: Inset | None = None
+    start: float = 0.0
 
     def markup(self) -> str:
         """The overlay's HTML, its style and the script that updates the time readout."""
         esc = html.escape
         rows = "".join(f'<div class="capmap-key"><span style="background:rgba({c >> 16},{(c >> 8) & 255},{c & 255},'
-                       f'{max(o, 0.25):.2f})"></span>{esc(text)}</div>' for c, o, text in self.legend)
+                       f'{max(o, 0.09) ** 0.5:.2f})"></span>{esc(text)}</div>' for c, o, text in self.legend)
+        legend = f'<details id="capmap-legend" open><summary>legend</summary>{rows}</details>' if rows else ""
         lines = "".join(f'<div class="capmap-line">{esc(line)}</div>' for line in self.lines)
+        inset, series = self.inset.markup() if self.inset else ("", "[[], []]")
         texts = json.dumps(list(self.frame_text)).replace("</", "<\\/")
-        return _OVERLAY.format(title=esc(self.title), lines=lines, legend=rows, texts=texts, fps=float(self.fps))
+        return _OVERLAY.format(title=esc(self.title), lines=lines, legend=legend, texts=texts, fps=float(self.fps),
+                               inset=inset, series=series, start=float(self.start))
 
 
-_OVERLAY = """<div id="capmap-overlay"><div id="capmap-title">{title}</div>{lines}{legend}
-<div id="capmap-time"></div><div id="capmap-frame"></div></div>
+_OVERLAY = """<div id="capmap-overlay"><div id="capmap-title">{title}</div>{lines}
+<div id="capmap-time"></div><div id="capmap-frame"></div>{inset}{legend}</div>
 <style>
-#capmap-overlay {{position: absolute; top: 8px; left: 8px; width: min(40em, 46vw); padding: 8px 12px; pointer-events: none;
-  background: rgba(255, 255, 255, 0.85); border-radius: 6px; font: 13px/1.35 sans-serif; color: #111;}}
-#capmap-title {{font-size: 17px; font-weight: bold; margin-bottom: 2px;}}
+#capmap-overlay {{position: absolute; top: 8px; left: 8px; max-width: min(36em, 46vw); padding: 6px 10px;
+  pointer-events: none; background: rgba(255, 255, 255, 0.88); border: 1px solid #bbb; border-radius: 6px;
+  font: 12px/1.3 sans-serif; color: #111;}}
+#capmap-title {{font-size: 14px; font-weight: bold;}}
 .capmap-line {{color: #333;}}
-.capmap-key {{margin-top: 2px;}}
-.capmap-key span {{display: inline-block; width: 14px; height: 14px; margin-right: 6px; vertical-align: -2px;
+#capmap-time {{font: bold 13px monospace; margin-top: 4px;}}
+#capmap-frame {{font: 11.5px/1.3 monospace; white-space: pre-line;}}
+#capmap-inset {{margin-top: 4px;}}
+#capmap-legend {{pointer-events: auto; margin-top: 4px; cursor: pointer;}}
+#capmap-legend summary {{color: #555;}}
+.capmap-key {{margin-top: 1px;}}
+.capmap-key span {{display: inline-block; width: 12px; height: 12px; margin-right: 5px; vertical-align: -2px;
   border: 1px solid #555;}}
-#capmap-time {{font: bold 16px monospace; margin-top: 6px;}}
-#capmap-frame {{font-family: monospace;}}
 </style>
 <script>
 (function () {{
-    var texts = {texts}, fps = {fps};
+    var texts = {texts}, fps = {fps}, series = {series}, start = {start}, opened = false;
     var time = document.getElementById("capmap-time"), frame = document.getElementById("capmap-frame");
+    var cursor = document.getElementById("capmap-cursor");
     function tick() {{
         var a = viewer.animator;
+        if (a && a.duration > 0 && !opened) {{
+            opened = true;
+            if (start > 0) {{ a.seek(start); a.display_progress(start); }}
+        }}
         var t = a && a.duration > 0 ? a.time : 0;
         if (a && a.duration > 0) {{
             time.textContent = "simulated time t = " + t.toFixed(2) + " s of " + a.duration.toFixed(2) + " s";
         }}
+        var k = Math.max(0, Math.round(t * fps));
         if (texts.length) {{
-            frame.textContent = texts[Math.min(texts.length - 1, Math.max(0, Math.round(t * fps)))];
+            frame.textContent = texts[Math.min(texts.length - 1, k)];
+        }}
+        if (cursor && series[0].length) {{
+            var x = series[0][Math.min(series[0].length - 1, k)];
+            cursor.setAttribute("x1", x); cursor.setAttribute("x2", x);
+            series[1].forEach(function (ys, i) {{
+                var dot = document.getElementById("capmap-dot" + i);
+                dot.setAttribute("cx", x); dot.setAttribute("cy", ys[Math.min(ys.length - 1, k)]);
+            }});
         }}
         requestAnimationFrame(tick);
     }}
@@ -151,11 +208,20 @@ class RecordingWindow:
                                 overlay=self.overlay.markup() if self.overlay else "")
 
 
-def new_scene(title: str | Overlay, **words) -> meshcat.Visualizer:
+LIGHT = (0xF7F7F5, 0xC9CDD3)  # a pale grey background's (top, bottom): translucent colours keep their hue on it
+
+
+def new_scene(title: str | Overlay, light: bool = False, **words) -> meshcat.Visualizer:
     """A MeshCat visualizer recording into a :class:`RecordingWindow`, the title (and ``words``: the other
-    fields of an :class:`Overlay`) drawn over the view; or the whole :class:`Overlay`."""
+    fields of an :class:`Overlay`, its ``inset`` an :class:`Inset` or the tuple of its fields) drawn over the view; or
+    the whole :class:`Overlay`. ``light``: a pale grey background (else MeshCat's sky blue)."""
+    if isinstance(words.get("inset"), tuple):
+        words["inset"] = Inset(*words["inset"])
     overlay = title if isinstance(title, Overlay) else Overlay(title, **words)
-    return meshcat.Visualizer(window=RecordingWindow(overlay.title, overlay))
+    vis = meshcat.Visualizer(window=RecordingWindow(overlay.title, overlay))
+    for end, colour in zip(("top_color", "bottom_color"), LIGHT if light else ()):
+        vis["/Background"].set_property(end, [((colour >> s) & 255) / 255 for s in (16, 8, 0)])
+    return vis
 
 
 def write_html(vis: meshcat.Visualizer, out_html: str | Path) -> None:

@@ -13,16 +13,9 @@ from capmap.dualarm.tables import envelope_from
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
 from capmap.plots.common import not_done_figure
-from capmap.plots.dualarm import (
-    Held,
-    Surroundings,
-    animation,
-    constraint_errors,
-    convergence,
-    distances,
-    joints,
-    torques,
-)
+from capmap.plots.dualarm import constraint_errors, convergence, distances
+from capmap.plots.dualarm_motion import joints, torques, velocities
+from capmap.plots.dualarm_scene import Held, Surroundings, animation
 from capmap.plots.scene3d import Overlay
 from capmap.stages.common import Outputs, stage_config
 
@@ -47,8 +40,8 @@ def stage_dualarm_plots(trajectory: str, fine: str, outer: str, torques_file: st
     tolerance = al_settings(SolverConfig(**solver)).tolerance
     constraint_errors(traj, out["errors"], tolerance)
     distances(traj, fine_df, meta["margin_m"], meta["active"], tolerance, out["distances"])
-    joints(traj, meta, "q", out["joints"])
-    joints(traj, meta, "qd", out["velocities"])
+    joints(traj, meta, out["joints"])
+    velocities(traj, meta, out["velocities"])
     t_pre = float(traj.t_s[traj.phase == "pre_insertion"].iloc[0])
     torques(tq, tq.attrs["capmap"], t_pre, out["torques"])
     node_errors = tuple(float(traj[cols].max().max()) for cols in (["closed_chain_pos_err_m", "path_err_m"],
@@ -83,10 +76,9 @@ def stage_dualarm_animation(trajectory: str, environment: str, capsules: str, ou
     to_go = [np.linalg.norm(f[held.body][:3, :3] @ held.in_body[:3, 3] + f[held.body][:3, 3] - scene.final[:3, 3])
              for f in frames]  # the panel's centre from its final pose, m
     title = f"{robot.description.name.capitalize()} carries a panel in both grippers onto {len(held.pins)} pins"
-    depth = float(np.linalg.norm(scene.final[:3, 3] - scene.pre_insertion[:3, 3]))
     animation(capsules_at, np.array(frames), held,
               Surroundings(env.tri, [(a, b, r) for (a, b), r in zip(env.seg, env.seg_radius)], tri_label),
-              1.0 / (step * asm.task.dt), _caption(traj, step, title, depth, to_go), out_html)
+              1.0 / (step * asm.task.dt), _caption(traj, step, title, to_go), out_html)
     stage_logger(__name__, "dualarm animation").info(f"{len(frames)} frames -> {out_html}")
 
 
@@ -101,25 +93,22 @@ def _held(scene, panel_frame) -> Held:
                 scene.final, pins)
 
 
-PHASES = {"transfer": "transfer", "pre_insertion": "pre-insertion pose", "insertion": "insertion along the pin axis",
+PHASES = {"transfer": "transfer", "pre_insertion": "pre-insertion pose", "insertion": "insertion",
           "final": "final pose"}
 
 
-def _caption(traj: pd.DataFrame, step: int, title: str, depth_m: float, to_go: list[float]) -> Overlay:
-    """The animation's words: its ``title``, the phases (``depth_m``: the insertion's length), the verdict (the
-    smallest safety distance at the nodes against the margin), and per frame (every ``step``-th node) the phase, the
-    panel's distance ``to_go`` (m) from its final pose and the closest pair; or why there is no motion."""
+def _caption(traj: pd.DataFrame, step: int, title: str, to_go: list[float]) -> Overlay:
+    """The animation's words: its ``title``, the verdict (the smallest safety distance at the nodes against the
+    margin), and per frame (every ``step``-th node) the phase, the panel's distance ``to_go`` (m) from its final pose
+    and the closest pair; or why there is no motion."""
     meta = traj.attrs["capmap"]
     if traj.empty:
         return Overlay(f"{title}: no motion planned", (f"no motion: {meta['reason']}",),
                        frame_text=("t = 0 s: the scene at the start pose (no motion)",))
-    t_pre = traj.t_s[traj.phase == "pre_insertion"]
     d, margin = 1e3 * float(traj.min_distance_m.min()), 1e3 * meta["margin_m"]
-    lines = (f"transfer 0–{t_pre.iloc[0]:.1f} s, then {100 * depth_m:.1f} cm of insertion along the pin axis to "
-             f"{traj.t_s.iloc[-1]:.1f} s" if len(t_pre) else f"{traj.t_s.iloc[-1]:.1f} s of motion",
-             f"smallest safety distance at the nodes {d:.2f} mm (margin {margin:g} mm): "
-             + ("collision-free" if d > 0 else "IN COLLISION"))
-    texts = tuple(f"{PHASES.get(r.phase, r.phase)}; panel {100 * g:.1f} cm from its final pose; closest pair "
-                  f"{r.min_distance_pair}, {1e3 * r.min_distance_m:.2f} mm"
+    verdict = "collision-free" if d > 0 else "IN COLLISION"
+    lines = (f"{verdict}: smallest distance {d:.2f} mm at the nodes (margin {margin:g} mm)",)
+    texts = tuple(f"{PHASES.get(r.phase, r.phase)}: panel {100 * g:.1f} cm from its final pose\n"
+                  f"closest: {r.min_distance_pair}, {1e3 * r.min_distance_m:.2f} mm"
                   for r, g in zip(traj.iloc[::step].itertuples(), to_go))
     return Overlay(title, lines, frame_text=texts)

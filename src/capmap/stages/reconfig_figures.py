@@ -46,24 +46,22 @@ def stage_reconfig_animation(tables: list[str], out_html: str, slice_json: str) 
     segments = link_segments(problem.description)
     capture = problem.description.capture(cfg.capture)
     links = tuple(sorted({s[0] for s in segments} | {capture.link_a, capture.link_b}))
-    frames, m, words = {}, {}, []
+    frames, m, names, change = {}, {}, {"nullspace": "null\u2011space", "pinv": "pseudo\u2011inverse"}, []
     for df in map(datasets.read, tables):
         meta = df.attrs["capmap"]
         s = meta.get("summary", {})
-        if "m_final" in s:  # the verdict of each method, over the view
-            name = {"nullspace": "null-space", "pinv": "pseudo-inverse"}.get(meta["method"], meta["method"])
-            words.append(f"{name}: manipulability m {s['m_initial']:.1f} → {s['m_final']:.1f} ({s['m_change_pct']:+.0f} %)")
+        if "m_change_pct" in s:  # the verdict: each method's change of the manipulability
+            change.append((names.get(meta["method"], meta["method"]), f"{s['m_change_pct']:+.0f} %".replace("-", "−")))
         t = np.arange(0.0, df.t_s.iloc[-1] + 1e-9, 1.0 / cfg.animation_fps)
         sub = df.iloc[np.clip(np.searchsorted(df.t_s.to_numpy(), t), 0, len(df) - 1)]
-        names = problem.split.moving.joints
-        states = [problem.state.with_values(names, np.deg2rad([r[f"q_{column(j)}_deg"] for j in names]))
+        joints = problem.split.moving.joints
+        states = [problem.state.with_values(joints, np.deg2rad([r[f"q_{column(j)}_deg"] for j in joints]))
                   .with_passive(problem.split.unlocked, np.deg2rad(r.passive_theta_deg), r.passive_d_m)
                   for _, r in sub.iterrows()]
         frames[meta["method"]] = np.array([model.placements(s, links) for s in states])
         m[meta["method"]] = sub.manipulability.to_numpy()
-    desc, unlocked = problem.description, problem.split.unlocked
-    title = (f"{desc.name}: {len(desc.arms)}-arm platform, {capture.link_a} and {capture.link_b} holding each other; "
-             f"boom joint {unlocked} unlocked and moved" + "".join(f"\n{w}" for w in words))
+    unlocked, robot = problem.split.unlocked, f"Reconfigurable {len(problem.description.arms)}-arm robot"
+    title = f"{robot}: manipulability " + " vs ".join(f"{c} ({n})" for n, c in change) if change else robot
     animation(ReconfigMotion(links, frames, m, cfg.animation_fps, unlocked, (capture.link_a, capture.link_b)),
               segments, title, out_html)
     stage_logger(__name__, "reconfig animation").info(f"{len(next(iter(frames.values())))} frames -> {out_html}")
