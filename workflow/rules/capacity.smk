@@ -261,6 +261,7 @@ rule verify_plots:
         "../envs/capmap.yaml"
     params:
         slice=lambda w: params("verify", "verify_plots", job_of(w.verify_dir)),
+        colour=lambda w: path_colour_of(w.verify_dir),  # the planned path's, as on the summary map and 3D page
     script:
         "../scripts/verify_plots.py"
 

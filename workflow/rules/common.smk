@@ -11,6 +11,7 @@ from capmap.config.run import DEFAULT_CONFIG
 from capmap.config.slices import section_modules
 from capmap.errors import CapmapError
 from capmap.io.datasets import missing_catalogued, rebuild_hint_config
+from capmap.plots.palette import path_colour
 from capmap.io.fingerprint import script_fingerprint
 from capmap.io.runs import check_writable, stale_outputs
 
@@ -129,6 +130,13 @@ def plan_dir_of(verify_dir):
 def job_of(job_dir):
     """The plan/verify job of its plan or verify folder: a payload of the main task, or a further task."""
     return PLAN_DIRS[VERIFY_DIRS.get(job_dir, job_dir)]
+
+
+def path_colour_of(verify_dir):
+    """The colour of a verify folder's planned path: a main payload's by its place among the payloads, a further
+    task's after them (capmap.plots.palette: the same on the summary map and the 3D page)."""
+    job = job_of(verify_dir)
+    return path_colour(RUN.task.payload_kg, job.payload_kg, TASKS.index(job.name) if job.name else None)
 
 
 def follow_job():

@@ -16,10 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.plots.capacity_3d_mesh import cube_faces, page_script
+from capmap.plots.palette import PATH_COLOURS
 
 __all__ = ["PlannedPath", "capacity_3d_html", "slider_levels", "PATH_COLOURS"]
 
-PATH_COLOURS = ("darkorange", "magenta", "saddlebrown", "deepskyblue", "olive", "orchid")  # not in viridis, not red
 SEE_THROUGH = 0.35  # the cubes' opacity of the see-through button (the page opens on solid cubes)
 ZOOM = 2.0  # the scene's box, in its units (the orthographic camera's zoom): the main task and the cut under it
 

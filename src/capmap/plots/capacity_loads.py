@@ -139,7 +139,7 @@ def _panel(ax, g: pd.DataFrame, columns: list[str], limits: dict, name: str, min
     ax.set_ylim(-top, top)
     _mark_over(ax, t, over, lim, top)
     _mark_off(ax, g, columns, limits, top)
-    if binds in columns:
+    if binds in columns and t_lost is None:  # a path that lost tracking: its weakest state is the singular one (0 kg)
         k = int(np.nanargmin(np.where(g.tracked.to_numpy(bool) if "tracked" in g else True,
                                       g.state_capacity_kg.to_numpy(float), np.nan)))
         ax.plot(t[k], g[binds].to_numpy(float)[k], "X", ms=11, mfc="white", mec="black", zorder=7)
@@ -154,6 +154,8 @@ def _panel(ax, g: pd.DataFrame, columns: list[str], limits: dict, name: str, min
     ax.set_title(f"{label} {verdict}", fontsize=10.5, color="black" if ok else "tab:red")
     ax.grid(alpha=0.3)
     names = _also(g, columns, limits)
+    if t_lost is not None:
+        return f"{label} FAILS: singular at t = {t_lost:.1f} s"
     return (f"{label} {'within limits' if ok else 'FAILS'} ({100 * peak:.0f} %)"
             + (f" but fails on {', '.join(names)}" if ok and names else ""))
 

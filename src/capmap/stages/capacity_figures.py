@@ -16,7 +16,8 @@ from capmap.io.logs import stage_logger
 from capmap.io.tables import write_quantities
 from capmap.plots.baseline import BaselineContext, baseline_figure
 from capmap.plots.capacity import capacity_map
-from capmap.plots.capacity_3d import PATH_COLOURS, PlannedPath, capacity_3d_html
+from capmap.plots.capacity_3d import PlannedPath, capacity_3d_html
+from capmap.plots.palette import PATH_COLOURS
 from capmap.robots import run_arm
 from capmap.stages.common import Outputs, stage_config
 

@@ -11,13 +11,13 @@ from capmap.capacity.directions import GRID_AXES
 from capmap.capacity.tables import AXIS_COLUMNS, configuration_voxels, grid_of
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.plots.capacity_3d import PATH_COLOURS
 from capmap.plots.capacity_loads import load_series
 from capmap.plots.capacity_paths import workspace_paths
+from capmap.plots.palette import PATH_COLOURS
 from capmap.robots import run_arm
 from capmap.stages.common import Outputs, stage_config
 
-__all__ = ["stage_verify_plots", "under_path", "path_colour"]
+__all__ = ["stage_verify_plots", "under_path"]
 
 def under_path(main: pd.DataFrame, ts: pd.DataFrame) -> pd.DataFrame:
     """``ts`` (index 0..n-1) with, per sample, ``distance_m`` travelled along its path, its segment's
@@ -50,17 +50,12 @@ def under_path(main: pd.DataFrame, ts: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def path_colour(payloads_kg, job) -> str:
-    """The planned path's colour, as on the summary map and the 3D page: the main task's payload's (by its place
-    among the task payloads), a further task's after them (the first further task's)."""
-    n = len(payloads_kg) if job.name else list(payloads_kg).index(job.payload_kg) if job.payload_kg in payloads_kg else 0
-    return PATH_COLOURS[n % len(PATH_COLOURS)]
-
-
-def stage_verify_plots(voxels: str, configurations: str, timeseries: str, out: Outputs, slice_json: str) -> None:
+def stage_verify_plots(voxels: str, configurations: str, timeseries: str, out: Outputs, slice_json: str,
+                       colour: str = PATH_COLOURS[0]) -> None:
     """The workspace of the verified task on the map of the start's configuration (``out["workspace"]``:
-    does each path carry the payload, its own capacity against the map's voxels under it); torques, base
-    force and base moment against their limits (``torques``, ``force``, ``moment``)."""
+    does each path carry the payload, its own capacity against the map's voxels under it; the planned path in
+    ``colour``, as on the summary map: :func:`capmap.plots.palette.path_colour`); torques, base force and base
+    moment against their limits (``torques``, ``force``, ``moment``)."""
     vox, ts = datasets.read(voxels), datasets.read(timeseries)
     sc = stage_config(slice_json)
     name = configuration_name(run_arm(sc.run), sc.job.q_start_deg)
@@ -71,7 +66,7 @@ def stage_verify_plots(voxels: str, configurations: str, timeseries: str, out: O
     payload, limits = meta["payload_kg"], meta["limits"]
     no_path = "" if meta.get("plan_status", "ok") == "ok" else meta.get("plan_reason", "")
     workspace_paths(main, under_path(main, ts.reset_index(drop=True)), payload, out["workspace"],
-                    name if op is not None else "every IK branch", no_path, path_colour(sc.run.task.payload_kg, sc.job))
+                    name if op is not None else "every IK branch", no_path, colour)
     for prefix, what, key in (("tau_", "Joint torques", "torques"), ("base_f", "Base disturbance force", "force"),
                               ("base_m", "Base disturbance moment", "moment")):
         load_series(ts, [c for c in limits if c.startswith(prefix)], limits, f"{what} carrying {payload:g} kg", out[key])
