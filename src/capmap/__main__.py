@@ -1,29 +1,32 @@
 """Command line.
 
-- ``python -m capmap check [results/<run> ...]`` verifies every catalogued dataset of the runs (the
+- ``capmap check [results/<run> ...]`` verifies every catalogued dataset of the runs (the
   main catalogue's, the atlas', the baseline's and the plan-gain experiment's; default: every run
   under ``results/``) against its sha256 and row count; exit status 1 and one line per problem
   when any is missing, damaged or changed, when a named run folder does not exist, or when a run
   has no catalogue.
-- ``python -m capmap check-config [FILE ...]`` reads and checks config files with capmap's own
+- ``capmap check-config [FILE ...]`` reads and checks config files with capmap's own
   loader (what the workflow checks before any job, without Snakemake reading the file first:
   Snakemake evaluates YTE templates in a ``--configfile``); exit status 1 and one line on a problem.
-- ``python -m capmap arm ROBOT_FILE [--angle-deg A]`` prints, for the robot with each joint locked in
+- ``capmap arm ROBOT_FILE [--angle-deg A]`` prints, for the robot with each joint locked in
   turn (at A, clipped to the joint's range; default mid-range), the geometry of the remaining
   chain's axes and the IK method it gets, and whether that method finds every branch.
-- ``python -m capmap query point X Y Z [--payload M]`` the capacity at that position (the task
-  orientation) on every IK branch, named by configuration (binding limit, worst direction, joint
-  angles), and the run's voxel values there; ``python -m capmap query line AX AY AZ BX BY BZ
+- ``capmap query point X Y Z [--payload M]`` the capacity at that position (the task orientation) on
+  every IK branch, named by configuration (binding limit, worst direction; the arm's own marked; a
+  verdict for the payload), and the run's voxel values there (every voxel the point touches);
+  ``capmap query line AX AY AZ BX BY BZ
   [--payload M] [--configuration C]`` verifies that straight line on a configuration (default: the
   arm's own at the task start). Both read a run's config (``--configfile``, default
-  ``config/config.yaml``), answer without running the pipeline, and print a table (or ``--json``).
+  ``config/config.yaml``), answer without running the pipeline, and print a table (or ``--json``); a
+  warm process answers after the first (:mod:`capmap.stages.query_service`).
 - ``capmap catalogue [RUN]`` lists a run's datasets: the names :func:`capmap.load` takes, their rows and
   what they hold.
 - ``capmap run [CONFIG] [TARGET ...] [--cores N] [-n]`` checks CONFIG (default ``config/config.yaml``) with
   capmap's own loader, then runs the workflow on it (``snakemake --config configfile=CONFIG``: Snakemake
   never opens the file itself, so a config one did not write cannot run code or hang the reader).
 
-Installed, the same commands are ``capmap ...``. A usage error is one ``capmap:`` line and exit status 1.
+``python -m capmap ...`` is the same. A usage error is one ``capmap:`` line and exit status 1; every command
+that answers takes ``--json``.
 """
 
 from __future__ import annotations
