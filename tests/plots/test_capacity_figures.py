@@ -28,8 +28,8 @@ from capmap.capacity.directions import GRID_AXES
 from capmap.capacity.tables import AXIS_COLUMNS
 from capmap.plots.capacity_3d import PATH_COLOURS, PlannedPath, capacity_3d_html
 from capmap.plots.capacity_3d_mesh import cube_faces
-from capmap.plots.common import plt
 from capmap.stages.verify_figures import under_path
+from tests.plots.figures import figure_texts, keep_figures
 
 EDGE = 1.0
 SHAPE = (8, 8, 8)
@@ -39,24 +39,7 @@ LIMITS = {"tau_j2_nm": 700.0, "tau_j3_nm": 700.0, "base_fx_n": 200.0, "base_mx_n
 @pytest.fixture
 def figures(monkeypatch):
     """The figures the plot functions would save, kept open for reading."""
-    kept = []
-    for module in (pc, pp, pl, pa, pb):
-        monkeypatch.setattr(module, "save", lambda fig, out_png, rect=None: kept.append(fig))
-    yield kept
-    for fig in kept:
-        plt.close(fig)
-
-
-def _texts(fig) -> str:
-    out = [fig._suptitle.get_text() if fig._suptitle else ""]
-    for sub in getattr(fig, "subfigs", []):
-        out.append(_texts(sub))
-    for ax in fig.axes:
-        out += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel()] + [t.get_text() for t in ax.texts]
-        if ax.get_legend():
-            out += [t.get_text() for t in ax.get_legend().get_texts()]
-    out += [t.get_text() for leg in fig.legends for t in leg.get_texts()]
-    return "\n".join(out)
+    yield from keep_figures(monkeypatch, pc, pp, pl, pa, pb)
 
 
 def _map(rng=None) -> pd.DataFrame:
@@ -134,7 +117,7 @@ def test_the_workspace_figure_gives_each_path_its_verdict_over_the_capacity_map(
     path = under_path(vox, ts)
     pp.workspace_paths(vox, path, 4000.0, "w.png", "S-E-W+", colour="magenta")
     fig = figures[0]
-    text = _texts(fig)
+    text = figure_texts(fig)
     _one_line(fig)
     assert "planned path holds: weakest segment 4,149 kg (+3.7 %)" in text
     assert "direct line FAILS: weakest segment 3,820 kg (-4.5 %)" in text
@@ -174,7 +157,7 @@ def test_the_workspace_figure_says_where_tracking_was_lost_and_how_low_the_voxel
     path = under_path(vox, ts)
     path.loc[path.path == "planned", "voxel_kg"] = 0.0  # the voxels under it: 0 kg somewhere inside
     pp.workspace_paths(vox, path, 4000.0, "w.png", "S-E-W+")
-    text = _texts(figures[0])
+    text = figure_texts(figures[0])
     _one_line(figures[0])
     s_lost = path.distance_m[lost].iloc[0]
     assert f"direct line FAILS: tracking lost at {s_lost:.2f} m (t = " in text and "tracking lost" in text
@@ -271,7 +254,7 @@ def test_the_summary_map_draws_start_goal_and_paths_where_they_are(figures):
                                                     {"color": PATH_COLOURS[0]}, np.array([4100.0, 4300.0]))],
                     "3200 kg holds only on its A* plan")
     fig = figures[0]
-    text = _texts(fig)
+    text = figure_texts(fig)
     _one_line(fig)
     assert "tab:" not in text and "9000 kg: none here" in text
     assert fig._suptitle.get_text().endswith("; 3200 kg holds only on its A* plan")
@@ -389,7 +372,7 @@ def test_the_baseline_and_atlas_figures_state_what_the_failure_cost(figures):
                           "volume_carrying_payload_m3": [4300.0, 4100.0, 450.0, 160.0],
                           "plan_exists": [True, True, False, False], "direct_feasible": [True, False, False, False]})
     pa.atlas_heatmap(atlas, "heat.png")
-    text = _texts(figures[1])
+    text = figure_texts(figures[1])
     assert "most with joint 1 at 100 deg (4,300 m³), least with joint 4 at 130 deg (160 m³)" in text
     assert "plan + direct" in text and "no path" in text
 

@@ -13,19 +13,15 @@ import capmap.plots.dualarm_motion as dm
 import capmap.plots.dualarm_scene as ds
 from capmap.plots import reconfig
 from capmap.plots.scene3d import Inset, Overlay, facing
+from tests.plots.figures import keep_figures
 
 ARMS = [f"{s}_{j}" for s in ("left", "right") for j in ("s0", "s1", "e0", "e1", "w0", "w1", "w2")]
 
 
 @pytest.fixture
 def figures(monkeypatch):
-    """The figures the plotting functions make (kept open instead of saved)."""
-    made = []
-    for module in (da, dm):
-        monkeypatch.setattr(module, "save", lambda fig, out, rect=None: made.append(fig))
-    yield made
-    for fig in made:
-        da.plt.close(fig)
+    """The figures the plot functions would save, kept open for reading."""
+    yield from keep_figures(monkeypatch, da, dm)
 
 
 @pytest.fixture

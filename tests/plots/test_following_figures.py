@@ -13,7 +13,7 @@ import pytest
 
 import capmap.plots.following as fp
 import capmap.plots.following_limits as fl
-from capmap.plots.common import plt
+from tests.plots.figures import figure_texts, keep_figures
 
 LIMITS = {"tau_j1_nm": 10.0, "tau_j2_nm": 100.0, "tau_j3_nm": 50.0}
 
@@ -21,23 +21,7 @@ LIMITS = {"tau_j1_nm": 10.0, "tau_j2_nm": 100.0, "tau_j3_nm": 50.0}
 @pytest.fixture
 def figures(monkeypatch):
     """The figures the plot functions would save, kept open for reading."""
-    kept = []
-    for module in (fp, fl):
-        monkeypatch.setattr(module, "save", lambda fig, out_png, rect=None: kept.append(fig))
-    yield kept
-    for fig in kept:
-        plt.close(fig)
-
-
-def _texts(fig) -> str:
-    out = [fig._suptitle.get_text() if fig._suptitle else ""]
-    for ax in fig.axes:
-        out += [ax.get_title(), ax.get_ylabel(), ax.get_xlabel()] + [t.get_text() for t in ax.texts]
-        if ax.get_legend():
-            out += [t.get_text() for t in ax.get_legend().get_texts()]
-    for leg in fig.legends:
-        out += [t.get_text() for t in leg.get_texts()]
-    return "\n".join(out + [t.get_text() for t in fig.texts])
+    yield from keep_figures(monkeypatch, fp, fl)
 
 
 def _tables(terms: str = "links+armature+coulomb+viscous"):
@@ -75,7 +59,7 @@ def test_progress_says_what_is_followed_and_splits_the_gap_to_toppra(figures, tm
     _config(ts, follow={"ground": {"v_max_mps": 0.2, "joint_torque_nm": [10, 100, 50]}})
     summary = {"command_duration_s": 10.97, "payload_kg": 2.0, "path": "straight line"}
     fp.follow_progress(ts, tp, LIMITS, "ground", tmp_path / "p.png", summary)
-    title, text = figures[0]._suptitle.get_text(), _texts(figures[0])
+    title, text = figures[0]._suptitle.get_text(), figure_texts(figures[0])
     assert "\n" not in title  # one line
     assert title == ("ground, 2 kg on the straight line: follower 12.0 s, 20 % longer than TOPP-RA (10.0 s): "
                      "0.97 s from its jerk limit, 1.0 s from the torque limits")
@@ -127,7 +111,7 @@ def test_torques_draw_the_binding_joint_on_its_own_limit_and_the_rest_in_percent
     assert title == "space: the follower keeps every torque limit; its command would need 150 % of joint 1's"
     fl.follow_torques(ts, {c: 10.0 for c in LIMITS}, "space", tmp_path / "u.png", {c: 700.0 for c in LIMITS})
     assert figures[1]._suptitle.get_text().endswith("; limits 10 N m (tightened for this case)")
-    assert "derated" not in _texts(figures[1])
+    assert "derated" not in figure_texts(figures[1])
 
 
 def test_the_followers_stops_at_the_waypoints_are_marked_and_explained(figures, tmp_path):
@@ -139,10 +123,10 @@ def test_the_followers_stops_at_the_waypoints_are_marked_and_explained(figures, 
     fl.follow_torques(ts, LIMITS, "ground", tmp_path / "t.png")
     marks = [ln for ln in figures[0].axes[0].lines if ln.get_marker() == "o"]
     assert len(marks) == 1 and marks[0].get_ydata()[0] == -9.0
-    assert "stop at a waypoint: braking pulse ≤ 1 ms, within the limit" in _texts(figures[0])
+    assert "stop at a waypoint: braking pulse ≤ 1 ms, within the limit" in figure_texts(figures[0])
     ts.loc[k, "tau_j1_nm"] = -10.0  # a pulse at the limit: said so, in the same one line
     fl.follow_torques(ts, LIMITS, "ground", tmp_path / "u.png")
-    assert "stop at a waypoint: braking pulse ≤ 1 ms, never beyond the limit" in _texts(figures[1])
+    assert "stop at a waypoint: braking pulse ≤ 1 ms, never beyond the limit" in figure_texts(figures[1])
 
 
 def test_the_split_draws_the_joints_that_carry_torque_and_needs_drives(figures, tmp_path):
@@ -153,12 +137,12 @@ def test_the_split_draws_the_joints_that_carry_torque_and_needs_drives(figures, 
     assert fig._suptitle.get_text() == ("ground: the drives (rotor inertia, friction) take up to 30 % of joint 1's "
                                         "torque limit, the rest moves the links")
     assert [ax.get_title() for ax in fig.axes if ax.axison] == ["joint 1 (±10 N m): drives up to 30 %"]
-    assert "not drawn: joint 3 unloaded, joint 2 below 10 % of its limit" in _texts(fig)
+    assert "not drawn: joint 3 unloaded, joint 2 below 10 % of its limit" in figure_texts(fig)
     assert {ax.get_xlabel() for ax in fig.axes if ax.get_xlabel()} == {"time t [s]"}  # as torques.png
     ts, tp = _tables("links")
     summary = {"command_duration_s": 11.0}
     fl.follow_torque_split(ts, tp, LIMITS, "space", "links", tmp_path / "b.png", summary)
-    text = _texts(figures[1])
+    text = figure_texts(figures[1])
     assert "rotor" not in text and figures[1].texts == [figures[1]._suptitle]  # no footnote: the caption says why
     assert figures[1]._suptitle.get_text() == ("space, joint 1: TOPP-RA rides its torque limit 100 % of the time, "
                                                "the follower 25 %: it ramps up with its jerk-limited command")
@@ -170,7 +154,7 @@ def test_an_infeasible_path_names_the_joint_and_its_need(figures, tmp_path):
                  "what": "starting forward from rest (friction)"}
     fp.follow_infeasible("tau_j1_nm: starting forward from rest needs 1000000.00 N m", shortfall, LIMITS, "ground",
                          tmp_path / "i.png")
-    text = _texts(figures[0])
+    text = figure_texts(figures[0])
     assert "joint 1 needs 100,000 × its limit" in text and "tau_j1_nm" not in text
     fp.follow_infeasible("no path from the start pose", None, LIMITS, "ground", tmp_path / "n.png")  # words only
     assert (tmp_path / "n.png").stat().st_size > 5_000

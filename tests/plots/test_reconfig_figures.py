@@ -12,16 +12,13 @@ import pandas as pd
 import pytest
 
 import capmap.plots.reconfig as rp
-from capmap.plots.common import plt
+from tests.plots.figures import figure_texts, keep_figures
 
 
 @pytest.fixture
 def figures(monkeypatch):
-    kept = []
-    monkeypatch.setattr(rp, "save", lambda fig, out_png, rect=None: kept.append(fig))
-    yield kept
-    for fig in kept:
-        plt.close(fig)
+    """The figures the plot functions would save, kept open for reading."""
+    yield from keep_figures(monkeypatch, rp)
 
 
 def _run(method: str, rising: bool, t_end: float = 10.0) -> pd.DataFrame:
@@ -40,19 +37,11 @@ def _run(method: str, rising: bool, t_end: float = 10.0) -> pd.DataFrame:
     return df
 
 
-def _texts(fig) -> str:
-    out = [fig._suptitle.get_text()] + [t.get_text() for t in fig.texts]
-    for ax in fig.axes:
-        legend = ax.get_legend()
-        out += [ax.get_title(), ax.get_ylabel()] + ([t.get_text() for t in legend.get_texts()] if legend else [])
-    return "\n".join(out + [t.get_text() for leg in fig.legends for t in leg.get_texts()])
-
-
 def test_manipulability_title_gives_each_methods_verdict_in_one_line(figures, tmp_path):
     rp.manipulability({"nullspace": _run("nullspace", True), "pinv": _run("pinv", False)}, tmp_path / "m.png")
     fig = figures[0]
     assert fig._suptitle.get_text() == "Manipulability m: null-space method 70 → 90, never falling; pseudo-inverse 70 → 40"
-    text = _texts(fig)
+    text = figure_texts(fig)
     assert "[m³]" in fig.axes[0].get_ylabel()
     assert "lowest 0.5 (null-space method), 0.29 (pseudo-inverse)" in fig.axes[1].get_title()
     assert "κ" not in text and "J⁺" not in text and "kink" not in text  # the formulas: in the caption
@@ -70,7 +59,7 @@ def test_the_shading_says_where_the_null_space_method_pushes_back_in_its_own_pan
     assert [t.get_text() for t in dm.get_legend().get_texts()] == ["null-space method pushing back"]
     assert "pushing back" not in "".join(t.get_text() for t in top.get_legend().get_texts())
     rp.joint_rates({"nullspace": ns, "pinv": _run("pinv", False)}, tmp_path / "r.png")
-    assert "null-space method\npushing back (until 6 s)" in _texts(figures[1])
+    assert "null-space method\npushing back (until 6 s)" in figure_texts(figures[1])
 
 
 def test_rates_one_panel_per_method_and_arm_each_arm_its_own_joints_legend(figures, tmp_path):
