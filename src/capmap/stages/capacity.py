@@ -78,8 +78,9 @@ def stage_capacity(points: str, out: str, slice_json: str, shard: int, shards: i
 def stage_points(shards: list[str], out: str, slice_json: str) -> None:
     """The capacity shards gathered into one per-point table, by point_id (the shards are temporary)."""
     cfg = stage_config(slice_json)
-    pts = pd.concat([datasets.read(p) for p in shards], ignore_index=True).sort_values("point_id", ignore_index=True)
-    dirs = datasets.read(shards[0]).attrs["capmap"].get("directions") if shards else None
+    parts = [datasets.read(p) for p in shards]
+    pts = pd.concat(parts, ignore_index=True).sort_values("point_id", ignore_index=True)
+    dirs = parts[0].attrs["capmap"].get("directions") if parts else None
     prov = datasets.provenance("capacity", cfg.doc, seed=cfg.run.sampling.seed, shards=len(shards), directions=dirs)
     datasets.write(axes_stored(pts), out, prov)
     stage_logger(__name__, "points").info(f"{len(pts)} points ({int(pts.reachable.sum())} reachable) from "

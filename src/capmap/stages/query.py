@@ -4,8 +4,6 @@ workflow checks it and, when they are of that config, the run's voxel maps."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import sys
 import textwrap
@@ -32,38 +30,34 @@ __all__ = ["load_question", "answer", "answer_point", "answer_line"]
 def answer(request: dict) -> tuple[int, str, str]:
     """A ``capmap query`` question (``what``: point or line, ``configfile``, ``payload_kg``, ``json``; a point:
     ``point_m``, ``joints``; a line: ``a_m``, ``b_m``, ``configuration``) answered: (exit status, the text
-    for stdout, the one line for stderr)."""
-    out, err = io.StringIO(), io.StringIO()
+    for stdout, the one line for stderr). A compile's announcement goes to stderr as it starts."""
     m = request.get("payload_kg")
     try:
-        with contextlib.redirect_stderr(err):  # the compile's announcement
-            if m is not None and not (m >= 0 and m < float("inf")):
-                raise CapmapError(f"--payload {m} must be a finite mass >= 0 kg")
-            if request["what"] == "point":
-                text = answer_point(request["configfile"], request["point_m"], m, request["json"],
-                                    joints=request.get("joints", False))
-            else:
-                text = answer_line(request["configfile"], request["a_m"], request["b_m"], m,
-                                   request.get("configuration"), request["json"])
+        if m is not None and not (m >= 0 and m < float("inf")):
+            raise CapmapError(f"--payload {m} must be a finite mass >= 0 kg")
+        if request["what"] == "point":
+            text = answer_point(request["configfile"], request["point_m"], m, request["json"],
+                                joints=request.get("joints", False))
+        else:
+            text = answer_line(request["configfile"], request["a_m"], request["b_m"], m,
+                               request.get("configuration"), request["json"])
     except CapmapError as exc:
-        return 1, "", err.getvalue() + f"capmap: {exc}\n"
-    out.write(text + "\n")
-    return 0, out.getvalue(), err.getvalue()
+        return 1, "", f"capmap: {exc}\n"
+    return 0, text + "\n", ""
 
 
 def load_question(configfile: str) -> tuple[RunConfig, CapacityProblem]:
     """The run config of ``configfile`` with its capacity part checked (as the workflow checks it) and the
     capacity problem it asks about (per configuration)."""
     run = check_capacity_config(run_document([configfile]), configfile)
+    problem = capacity_problem(run, per_configuration=True)
     key = run_key(run.robot, run.failure.joint, float(np.deg2rad(run.failure.angle_deg)), False)
     if not any(is_warm(k) for k in (key, f"{key} dualarm", f"{key} query")):
         print(f"capmap: compiling the kernels a query of {Path(run.robot).name} with joint {run.failure.joint} locked needs: "
               "once per machine and code version (about a minute on 2 cores)...", file=sys.stderr, flush=True)
-        problem = capacity_problem(run, per_configuration=True)
         point_query(problem, np.asarray(run.failure.start_m, dtype=float))  # the start: reached by construction
         record(f"{key} query")
-        return run, problem
-    return run, capacity_problem(run, per_configuration=True)
+    return run, problem
 
 
 BOUNDARY_M = 1e-6

@@ -18,10 +18,10 @@ __all__ = ["socket_path", "enabled", "ask", "start"]
 
 
 def socket_path() -> Path:
-    """The server's socket for this code and this Python, in capmap's cache folder (``CAPMAP_QUERY_DIR``
-    when set)."""
+    """The server's socket for this code and this Python, in capmap's cache folder (:func:`capmap._numba_cache_dir`'s
+    base; ``CAPMAP_QUERY_DIR`` when set)."""
     key = hashlib.sha256(f"{package_hash()} {sys.executable}".encode()).hexdigest()[:16]
-    base = os.environ.get("CAPMAP_QUERY_DIR") or os.environ.get("CAPMAP_NUMBA_BASE") or Path.home() / ".cache" / "capmap"
+    base = os.environ.get("CAPMAP_QUERY_DIR") or os.environ["CAPMAP_NUMBA_BASE"]  # set by importing capmap
     return Path(base) / f"query-{key}.sock"
 
 

@@ -14,6 +14,7 @@ runs them, so the process never answers for other code."""
 from __future__ import annotations
 
 import contextlib
+import io
 import json
 import os
 import socket
@@ -34,7 +35,10 @@ def _child(conn: socket.socket) -> None:
     try:
         message = json.loads(read_line(conn))
         os.chdir(message["cwd"])
-        rc, out, err = answer(message["request"])
+        said = io.StringIO()
+        with contextlib.redirect_stderr(said):  # what the answer says on the way (a compile's announcement)
+            rc, out, err = answer(message["request"])
+        err = said.getvalue() + err
         conn.sendall(json.dumps({"rc": rc, "out": out, "err": err}).encode() + b"\n")
     finally:
         conn.close()
