@@ -48,9 +48,11 @@ def _plans(out: Path) -> list[str]:
 
 def _follow(out: Path) -> list[str]:
     f = pd.read_csv(out / "follow" / "summary.csv")
+    feasible = f["feasible"].astype(str) == "True" if "feasible" in f else pd.Series(True, index=f.index)
     return ["following: " + "; ".join(
         f"{r['case']} ({r['robot']}) {r['follower_duration_s']:.3g} s vs TOPP-RA {r['toppra_duration_s']:.3g} s "
-        f"(x{r['duration_ratio']:.3f}), peak torque {r['follower_peak_torque_pct']:.1f} %" for _, r in f.iterrows())]
+        f"(x{r['duration_ratio']:.3f}), peak torque {r['follower_peak_torque_pct']:.1f} %" if ok else
+        f"{r['case']} ({r['robot']}) cannot be followed: {r['reason']}" for ok, (_, r) in zip(feasible, f.iterrows()))]
 
 
 def _reconfig(out: Path) -> list[str]:
