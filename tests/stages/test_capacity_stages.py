@@ -20,6 +20,7 @@ from capmap.capacity.engine import capacity_over_directions, coefficients_pinocc
 from capmap.checks import check_run_config
 from capmap.config import canonical, main_task, stage_slice
 from capmap.config.validation import load_yaml
+from capmap.errors import CapmapError
 from capmap.io import datasets
 from capmap.stages.atlas import stage_atlas_map
 from capmap.stages.baseline import stage_baseline_shard
@@ -279,3 +280,31 @@ def test_atlas_tables_stage(run):
     reach = vox.capacity_kg[vox.n_reachable > 0].to_numpy()
     for m, vol in zip(curves.payload_kg[::17], curves.volume_m3[::17]):  # the volume carrying m, counted here
         assert vol == pytest.approx((reach >= m).sum() * cfg.atlas.edge_m ** 3)
+
+
+def test_voxel_map_gathers_configuration_rows_chunk_by_chunk(run, monkeypatch):
+    """The map's configuration rows read 7 at a time (a job holds a chunk, not the map's table) equal the
+    refine shards' rows gathered whole and sorted (pandas), the axis capacities as stored (float32, never
+    above the computed value); shards given out of order are refused (not written unsorted)."""
+    import capmap.stages.refine as refine_stage
+
+    _, d, sl = run
+    monkeypatch.setattr(refine_stage, "CHUNK_ROWS", 7)
+    confs = [str(d / f"conf{k}.parquet") for k in range(SHARDS)]
+    refs = [str(d / f"ref{k}.parquet") for k in range(SHARDS)]
+    stage_voxel_map(str(d / "sampled.parquet"), refs, confs, str(d / "voxels7.parquet"), str(d / "conf7.parquet"),
+                    sl("refine"))
+    got = datasets.read(d / "conf7.parquet")
+    whole = pd.concat([datasets.read(p) for p in confs], ignore_index=True)
+    whole = whole.sort_values(["i", "j", "k", "configuration"], ignore_index=True)  # in the labels' order
+    assert len(got) == len(whole) > 7 and got.attrs["capmap"]["configurations"] == list(got.configuration.cat.categories)
+    for col in got.columns:
+        a, b = got[col], whole[col]
+        if col.startswith("capacity_along_"):
+            assert np.all((a.to_numpy(float) <= b.to_numpy()) | b.isna().to_numpy())
+            np.testing.assert_allclose(a.to_numpy(float), b.to_numpy(), rtol=2e-7)
+        else:
+            assert a.astype(str).tolist() == b.astype(str).tolist(), col
+    with pytest.raises(CapmapError, match="order"):
+        stage_voxel_map(str(d / "sampled.parquet"), refs, confs[::-1], str(d / "voxelsr.parquet"),
+                        str(d / "confr.parquet"), sl("refine"))

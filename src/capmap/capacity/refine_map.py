@@ -5,6 +5,7 @@ the map every later stage reads; the column schemas of these tables. No file I/O
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,10 +16,12 @@ from capmap.capacity.evaluator import LockedEvaluator
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
 from capmap.capacity.refine_data import BATCH_VOXELS
-from capmap.capacity.tables import AXIS_COLUMNS, grid_of
+from capmap.capacity.tables import AXIS_COLUMNS, axes_stored, grid_of
 from capmap.capacity.voxels import Grid
+from capmap.errors import CapmapError
 
-__all__ = ["REFINED_COLUMNS", "CONFIGURATION_COLUMNS", "RefinedShard", "refine_shard", "merge_refined"]
+__all__ = ["REFINED_COLUMNS", "CONFIGURATION_COLUMNS", "RefinedBatch", "refine_shard", "merge_refined",
+           "configuration_rows"]
 
 REFINED_COLUMNS = ["capacity_kg", "binding", "n_points", "n_reachable", "last_change_rel", "converged",
                    "worst_x_m", "worst_y_m", "worst_z_m", *AXIS_COLUMNS]
@@ -27,14 +30,11 @@ CONFIGURATION_COLUMNS = ["i", "j", "k", "x_m", "y_m", "z_m", "configuration", "c
                          "converged", "worst_x_m", "worst_y_m", "worst_z_m", *AXIS_COLUMNS]
 
 
-
-
 @dataclass(frozen=True)
-class RefinedShard:
-    """A refined shard: ``voxels`` (one row per voxel: i, j, k and :data:`REFINED_COLUMNS`),
-    ``configurations`` (:data:`CONFIGURATION_COLUMNS`), the refinement's rounds (the most of any batch) and
-    points evaluated, and the start's values ``start_kg`` (V,) (for the log: how far the refinement
-    lowered them)."""
+class RefinedBatch:
+    """A refined batch of a shard's voxels: ``voxels`` (one row per voxel: i, j, k and :data:`REFINED_COLUMNS`),
+    ``configurations`` (:data:`CONFIGURATION_COLUMNS`), the refinement's rounds and points evaluated,
+    and the start's values ``start_kg`` (V,) (for the log: how far the refinement lowered them)."""
 
     voxels: pd.DataFrame
     configurations: pd.DataFrame
@@ -42,40 +42,27 @@ class RefinedShard:
     n_evaluated: int
     start_kg: np.ndarray
 
-    @property
-    def capacity_kg(self) -> np.ndarray:
-        return self.voxels.capacity_kg.to_numpy()
-
-    @property
-    def converged(self) -> np.ndarray:
-        return self.voxels.converged.to_numpy()
-
 
 def refine_shard(vox: pd.DataFrame, problem: CapacityProblem, settings: RefineSettings, shard: int, shards: int,
-                 rng: np.random.Generator, log) -> RefinedShard:
+                 rng: np.random.Generator, log) -> Iterator[RefinedBatch]:
     """Refine shard ``shard`` of the reachable voxels of the sampled map ``vox`` (in flat-index order,
     ``shards`` slabs of equal count: a slab's voxels share their corners and faces), all branches and
     each configuration of ``problem`` (it must carry its ``labels``); progress to ``log`` per round. The
     slab is refined in batches of :data:`BATCH_VOXELS` consecutive voxels, one after the other from the same
     ``rng`` (each voxel's value needs only its own points: a point two batches share is evaluated by
-    each), so that a job's memory does not grow with its slab."""
+    each), each batch's tables yielded as it is done (in flat-index order; at least one, empty for an
+    empty slab), so that a job's memory is bounded by a batch, not by its slab."""
     grid = grid_of(vox)
     mine = vox[vox.n_reachable > 0]
     mine = mine.iloc[np.argsort(grid.flat(mine[["i", "j", "k"]].to_numpy()), kind="stable")]
     cut = np.linspace(0, len(mine), shards + 1).round().astype(int)  # slabs: neighbours share their corners
     mine = mine.iloc[cut[shard]:cut[shard + 1]]
-    parts = [_refine_batch(mine.iloc[b:b + BATCH_VOXELS], grid, problem, settings, rng, log, (b, len(mine)))
-             for b in range(0, len(mine), BATCH_VOXELS)]
-    if not parts:
-        parts = [_refine_batch(mine, grid, problem, settings, rng, log, (0, 0))]
-    return RefinedShard(pd.concat([p.voxels for p in parts], ignore_index=True),
-                        pd.concat([p.configurations for p in parts], ignore_index=True),
-                        max(p.rounds for p in parts), sum(p.n_evaluated for p in parts),
-                        np.concatenate([p.start_kg for p in parts]))
+    for b in range(0, max(len(mine), 1), BATCH_VOXELS):
+        yield _refine_batch(mine.iloc[b:b + BATCH_VOXELS], grid, problem, settings, rng, log, (b, len(mine)))
 
 
 def _refine_batch(mine: pd.DataFrame, grid: Grid, problem: CapacityProblem, settings: RefineSettings,
-                  rng: np.random.Generator, log, where: tuple[int, int]) -> RefinedShard:
+                  rng: np.random.Generator, log, where: tuple[int, int]) -> RefinedBatch:
     """One batch of a shard's voxels (``mine``: rows of the sampled table) refined; ``where``: (its first
     voxel, the shard's voxels), for the progress lines."""
     labels = problem.labels
@@ -102,7 +89,7 @@ def _refine_batch(mine: pd.DataFrame, grid: Grid, problem: CapacityProblem, sett
                        "worst_x_m": res.worst_m[:, 0], "worst_y_m": res.worst_m[:, 1], "worst_z_m": res.worst_m[:, 2]})
     for c, col in enumerate(AXIS_COLUMNS):
         df[col] = res.axis_capacity_kg[:, c]
-    return RefinedShard(df, _configuration_table(res, grid, list(labels.names), names), res.rounds, res.n_evaluated,
+    return RefinedBatch(df, _configuration_table(res, grid, list(labels.names), names), res.rounds, res.n_evaluated,
                         start.capacity_kg)
 
 
@@ -112,10 +99,11 @@ def _configuration_table(res: VoxelMinima, grid: Grid, configurations: list[str]
     i, j, k = np.unravel_index(res.voxel[v], grid.shape)
     centre = grid.centres(np.stack([i, j, k], axis=1)) if len(v) else np.zeros((0, 3))
     w = res.config_worst_m[v, c]
+    b = res.config_binding[v, c]
     df = pd.DataFrame({"i": i, "j": j, "k": k, "x_m": centre[:, 0], "y_m": centre[:, 1], "z_m": centre[:, 2],
                        "configuration": pd.Categorical.from_codes(c, configurations),
                        "capacity_kg": res.config_capacity_kg[v, c],
-                       "binding": np.array(limit_names + [""])[res.config_binding[v, c]],
+                       "binding": pd.Categorical.from_codes(np.where(b < 0, len(limit_names), b), limit_names + [""]),
                        "n_points": res.config_n_points[v, c], "converged": res.converged[v],
                        "worst_x_m": w[:, 0], "worst_y_m": w[:, 1], "worst_z_m": w[:, 2]})
     for a, col in enumerate(AXIS_COLUMNS):
@@ -123,11 +111,9 @@ def _configuration_table(res: VoxelMinima, grid: Grid, configurations: list[str]
     return df[CONFIGURATION_COLUMNS]
 
 
-def merge_refined(vox: pd.DataFrame, refined: list[pd.DataFrame], configurations: list[pd.DataFrame],
-                  names: list[str]) -> tuple[pd.DataFrame, pd.DataFrame]:
+def merge_refined(vox: pd.DataFrame, refined: list[pd.DataFrame]) -> pd.DataFrame:
     """The sampled voxel table ``vox`` with each refined voxel's values (``capacity_sampled_kg`` keeps the
-    sampled minimum; no refined shards: the sampled table as is), and the per-configuration shards
-    gathered (``names``: the configurations, in order; no rows without refinement)."""
+    sampled minimum; no refined shards: the sampled table as is)."""
     grid = grid_of(vox)
     vox["capacity_sampled_kg"] = vox.capacity_kg
     vox["last_change_rel"] = np.nan
@@ -139,10 +125,27 @@ def merge_refined(vox: pd.DataFrame, refined: list[pd.DataFrame], configurations
         for col in REFINED_COLUMNS:
             vox.loc[rows, col] = ref[col].to_numpy()
         vox["binding"] = vox.binding.astype("category")
-    conf = (pd.concat(configurations, ignore_index=True) if configurations
-            else pd.DataFrame({c: [] for c in CONFIGURATION_COLUMNS}))
-    conf = conf.sort_values(["i", "j", "k", "configuration"], ignore_index=True) if len(conf) else conf
-    if len(conf):
-        conf["configuration"] = pd.Categorical(conf.configuration.astype(str), categories=names)
-        conf["binding"] = conf.binding.astype("category")
-    return vox, conf[CONFIGURATION_COLUMNS]
+    return vox
+
+
+def configuration_rows(chunks: Iterable[pd.DataFrame], grid: Grid, names: list[str]) -> Iterator[pd.DataFrame]:
+    """The per-configuration rows of the refine shards (``chunks``: each shard's rows, chunk by chunk, the
+    shards in order) as the map stores them, one chunk at a time: in (i, j, k, configuration) order (the
+    shards are consecutive slabs of the grid's flat order, each in that order; checked), the
+    configurations ``names`` as categories, the axis capacities as stored (:func:`axes_stored`). No chunk:
+    one empty table."""
+    last, binding = -1, None
+    for df in chunks:
+        if not len(df):
+            continue
+        if list(df.configuration.cat.categories) != list(names) or (
+                binding is not None and list(df.binding.cat.categories) != binding):
+            raise CapmapError("the refine shards disagree on the configurations or limits: rerun `refine`")
+        binding = list(df.binding.cat.categories)
+        key = grid.flat(df[["i", "j", "k"]].to_numpy()) * len(names) + df.configuration.cat.codes.to_numpy()
+        if key[0] <= last or np.any(np.diff(key) <= 0):
+            raise CapmapError("the refine shards' configuration rows are not in (i, j, k, configuration) order")
+        last = int(key[-1])
+        yield axes_stored(df)[CONFIGURATION_COLUMNS]
+    if last < 0:
+        yield pd.DataFrame({c: [] for c in CONFIGURATION_COLUMNS})

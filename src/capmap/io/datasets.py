@@ -10,6 +10,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -20,8 +22,8 @@ from capmap.io.fingerprint import file_sha256
 if TYPE_CHECKING:  # pandas loads when a table is read or written (capmap query reads columns without it)
     import pandas as pd
 
-__all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "read", "rebuild_hint_config",
-           "verify_catalogue", "missing_catalogued"]
+__all__ = ["UNITS", "column_unit", "canonical", "config_hash", "provenance", "write", "write_chunks", "read",
+           "read_chunks", "read_provenance", "rebuild_hint_config", "verify_catalogue", "missing_catalogued"]
 
 UNITS = [("_deg", "deg"), ("_rad", "rad"), ("_kg", "kg"), ("_nm", "N m"), ("_n", "N"), ("_mps2", "m/s^2"),
          ("_mps", "m/s"), ("_m", "m"), ("_s", "s"), ("_pct", "%"), ("_rad_s", "rad/s"), ("_rad_s2", "rad/s^2"),
@@ -81,6 +83,38 @@ def write(df: pd.DataFrame, path: str | Path, prov: dict) -> None:
         raise
 
 
+def write_chunks(chunks: Iterable[pd.DataFrame], path: str | Path, prov: dict) -> int:
+    """Write the tables ``chunks`` (the same columns and types, categories included) one after the other
+    into one Parquet file with provenance, as :func:`write` does for one table, holding one chunk in memory
+    at a time (a row group each); no chunk: nothing is written. Returns the rows written."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp.parquet")
+    writer, schema, rows = None, None, 0
+    try:
+        for df in chunks:
+            if writer is None:
+                table = pa.Table.from_pandas(df, preserve_index=False)
+                schema = table.schema.with_metadata({**(table.schema.metadata or {}),
+                                                     _ATTRS_KEY: json.dumps({"capmap": prov}).encode()})
+                writer = pq.ParquetWriter(tmp, schema, compression="zstd")
+            table = pa.Table.from_pandas(df, preserve_index=False, schema=schema)
+            writer.write_table(table)
+            rows += len(df)
+        if writer is not None:
+            writer.close()
+            tmp.replace(path)
+    except BaseException:
+        if writer is not None:
+            writer.close()
+        tmp.unlink(missing_ok=True)
+        raise
+    return rows
+
+
 _CONFIG_ARGS_ENV = "CAPMAP_CONFIG_ARGS"  # set by the workflow, inherited by its jobs
 
 
@@ -93,13 +127,51 @@ def rebuild_hint_config(config_args: str) -> None:
 def read(path: str | Path) -> pd.DataFrame:
     """Read a dataset; a missing, truncated or foreign file is one :class:`DataError` line naming it
     and the command that rebuilds it."""
-    rebuild = f"rebuild it with: snakemake --cores 2 all{os.environ.get(_CONFIG_ARGS_ENV, '')} --forcerun {path}"
     import pandas as pd
 
-    try:
+    with _reading(path):
         return pd.read_parquet(path)
+
+
+def read_chunks(path: str | Path, rows: int) -> Iterator[pd.DataFrame]:
+    """A dataset's rows in order, at most ``rows`` at a time (categories as written; no provenance), so
+    that a reader holds one chunk, not the file; errors as :func:`read`'s."""
+    import pyarrow.parquet as pq
+
+    with _reading(path):
+        f = pq.ParquetFile(path)
+        batches = f.iter_batches(batch_size=int(rows))
+    while True:
+        with _reading(path):
+            batch = next(batches, None)
+        if batch is None:
+            return
+        yield batch.to_pandas()
+
+
+def read_provenance(path: str | Path) -> dict:
+    """A dataset's provenance (``attrs["capmap"]``) without reading its rows."""
+    import pyarrow.parquet as pq
+
+    with _reading(path):
+        meta = pq.read_schema(path).metadata or {}
+    return json.loads(meta.get(_ATTRS_KEY, b"{}")).get("capmap", {})
+
+
+_ATTRS_KEY = b"PANDAS_ATTRS"  # where pandas keeps a table's attrs in Parquet metadata (and reads them back)
+
+
+@contextmanager
+def _reading(path: str | Path):
+    """A missing, truncated or foreign file as one :class:`DataError` line naming it and the command
+    that rebuilds it."""
+    rebuild = f"rebuild it with: snakemake --cores 2 all{os.environ.get(_CONFIG_ARGS_ENV, '')} --forcerun {path}"
+    try:
+        yield
     except FileNotFoundError:
         raise DataError(f"{path} is missing; {rebuild}") from None
+    except DataError:
+        raise
     except Exception as exc:  # pyarrow raises several types for a damaged file
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise DataError(f"{path} is not a readable Parquet dataset ({first}); {rebuild}") from None
