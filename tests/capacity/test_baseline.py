@@ -7,8 +7,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.capacity.baseline import HealthyProblem, SelfMotion, healthy_capacity, screening_subset, self_motion_angles
-from capmap.capacity.directions import Directions, paper_grid, sphere
+from capmap.capacity.baseline import (HealthyProblem, Hint, SelfMotion, healthy_capacity, screening_subset,
+                                      self_motion_angles)
+from capmap.capacity.directions import Directions, exact, paper_grid, sphere
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.problem import CapacityProblem, point_capacity
 from capmap.core import ik
@@ -131,6 +132,19 @@ def test_branch_and_bound_equals_every_candidate_evaluated(sweep, n_screen):
     assert np.all(got.n_full[ok] <= got.n_candidates[ok])
 
 
+@pytest.mark.parametrize("n_screen", [4, 16])
+def test_on_the_whole_sphere_a_screen_of_its_start_directions_only_bounds(sweep, n_screen):
+    """The whole sphere (the default set): its 16 start directions, even all of them, are a subset of the
+    motion set whose minimum lies above the sphere's; the value is still every candidate's on the sphere."""
+    sm, points, _ = sweep
+    dirs = exact()
+    got = healthy_capacity(_hp(sm, dirs, screening_subset(dirs, n_screen)), points[:40])
+    ref, _ = _per_solution_max(sm, points[:40], dirs)
+    ok = np.isfinite(ref)
+    assert ok.sum() > 20 and np.array_equal(np.isnan(got.capacity_kg), np.isnan(ref))
+    np.testing.assert_allclose(got.capacity_kg[ok], ref[ok], rtol=1e-9, atol=1e-9)
+
+
 def test_a_ceiling_stops_only_points_at_or_above_it(sweep):
     sm, points, dirs = sweep
     exact = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points)
@@ -185,7 +199,7 @@ def test_hints_and_ceilings_keep_each_groups_least_value_below_its_ceiling_exact
     low = {g: np.nanmin(exact.capacity_kg[groups == g], initial=np.inf) for g in np.unique(groups)}
     factor = {g: 1.05 if g % 2 else 0.95 for g in low}  # the group's least value below / above its ceiling
     ceiling = np.array([low[g] * factor[g] if np.isfinite(low[g]) else np.inf for g in groups])
-    hint = rng.integers(-1, len(sm.angles_deg), len(points))
+    hint = Hint(rng.integers(-1, len(sm.angles_deg), len(points)), rng.integers(-1, 8, len(points)))
     got = healthy_capacity(_hp(sm, dirs, _subset(dirs, 8)), points, ceiling, groups, hint)
     assert np.array_equal(np.isnan(got.capacity_kg), np.isnan(exact.capacity_kg))
     fin = np.isfinite(exact.capacity_kg)

@@ -50,26 +50,55 @@ def _locked():
     return LockedEvaluator(problem, chunk=3), reference  # a small chunk: the chunks' seams are in the test
 
 
-def _healthy():
+def _healthy(levels: int = 0):
+    """The healthy arm's evaluator over a 60 deg grid of joint 1, its best posture followed ``levels``
+    levels between grid angles; the reference per point, one posture at a time (Pinocchio's path): the
+    best over every angle and solution, then the angles half a step either side of it, each with the
+    solution nearest its joints, the better kept, the step halved each level."""
     robot = load(SSRMS_YAML)
     lo, hi = np.rad2deg(robot.q_lower[0]), np.rad2deg(robot.q_upper[0])
     sm = SelfMotion.build(self_motion_angles(lo, hi, 100.0, 60.0), lambda a: lock(robot, 1, np.deg2rad(a)),
-                          LIMITS.for_arm)
+                          LIMITS.for_arm, lo, hi)
+
+    def follow(point, value, angle, q):
+        h = 30.0
+        for _ in range(levels):
+            best = (value, angle, q)
+            for a in (angle - h, angle + h):
+                a = a - 360.0 if a > hi else a + 360.0 if a < lo else a  # joint 1 turns through 540 deg
+                arm = lock(robot, 1, np.deg2rad(a))
+                sol = ik.solve(arm, point[None], TASK_R)
+                n = sol.n_solutions[0]
+                if n:
+                    d = [np.linalg.norm(np.angle(np.exp(1j * (sol.q[0, b] - q)))) for b in range(n)]
+                    qb = sol.q[0, int(np.argmin(d))]
+                    v = _posture_reference(arm, qb[None])[0]
+                    if v > best[0]:
+                        best = (v, a, qb)
+            value, angle, q = best
+            h /= 2
+        return value
 
     def reference(points):
-        out = np.full(len(points), -np.inf)
-        for arm in sm.arms:
-            sol = ik.solve(arm, points, TASK_R)
-            for i, n in enumerate(sol.n_solutions):
-                if n:
-                    out[i] = max(out[i], _posture_reference(arm, sol.q[i, :n]).max())
-        return np.where(np.isfinite(out), out, np.nan)
+        out = np.full(len(points), np.nan)
+        for i, point in enumerate(points):
+            best = (-np.inf, None, None)
+            for a, arm in zip(sm.angles_deg, sm.arms):
+                sol = ik.solve(arm, point[None], TASK_R)
+                for b in range(sol.n_solutions[0]):
+                    v = _posture_reference(arm, sol.q[0, b:b + 1])[0]
+                    if v > best[0]:
+                        best = (v, a, sol.q[0, b])
+            if np.isfinite(best[0]):
+                out[i] = follow(point, *best)
+        return out
 
-    hp = HealthyProblem(CapacityProblem(sm.arms[0], TASK_R, MOTION, sm.limits, DIRS), sm, screening_subset(DIRS, 6))
+    hp = HealthyProblem(CapacityProblem(sm.arms[0], TASK_R, MOTION, sm.limits, DIRS), sm, screening_subset(DIRS, 6),
+                        levels)
     return HealthyEvaluator(hp, n_voxels=4, chunk=3), reference
 
 
-EVALUATORS = {"locked": _locked, "healthy": _healthy}
+EVALUATORS = {"locked": _locked, "healthy": _healthy, "healthy, followed": lambda: _healthy(3)}
 
 
 @pytest.fixture(scope="module", params=sorted(EVALUATORS))

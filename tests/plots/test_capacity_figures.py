@@ -360,12 +360,12 @@ def test_the_baseline_and_atlas_figures_state_what_the_failure_cost(figures):
     b["healthy_capacity_kg"] = 4000.0
     b["capacity_kg"] = b["arm_configuration_capacity_kg"] = np.where(b.i < 4, 3500.0, 1000.0)
     b["arm_configuration_loss_kg"] = b.healthy_capacity_kg - b.arm_configuration_capacity_kg
-    conv = pd.DataFrame({"rise_half_step_rel": [0.001, 0.02], "rise_quarter_step_rel": [0.002, 0.03]})
-    ctx = pb.BaselineContext("S-E-W+", 1, 100.0, 10.0, EDGE, np.array([1.5, 1.5, 1.5]), (1500.0, 3800.0))
+    conv = pd.DataFrame({"shortfall_rel": [-0.01, 0.002, 0.03]})
+    ctx = pb.BaselineContext("S-E-W+", 1, 100.0, 10.0, 1.0, EDGE, np.array([1.5, 1.5, 1.5]), (1500.0, 3800.0))
     pb.baseline_figure(b, conv, ctx, "loss.png")
     title = figures[0]._suptitle.get_text()
     assert "1500 kg: 512 → 256 m³ on S-E-W+ (50 % lost)" in title and "3800 kg: 512 → 0 m³ on S-E-W+ (100 % lost)" in title
-    assert "2 checked voxels rise by" in title and "3 % at most" in title
+    assert "against a 1 deg sweep, 3 checked voxels lie 3 % below at most (1 by more than 1 %)" in title
     atlas = pd.DataFrame({"joint": [1, 1, 4, 4], "angle_deg": [100.0, 130.0, 100.0, 130.0], "payload_kg": 1500.0,
                           "reachable_volume_m3": [4900.0, 4800.0, 1800.0, 1000.0],
                           "capacity_median_kg": [1900.0, 1800.0, 0.0, 0.0],

@@ -184,7 +184,7 @@ def test_baseline_stage_is_never_below_the_locked_arm(run):
     locked = _reference(capacity_problem(cfg), pts)
     ok = np.isfinite(locked)
     assert np.all(rows.healthy_capacity_kg.to_numpy()[ok] >= locked[ok] * (1 - 1e-9) - 1e-6)
-    assert np.allclose(healthy_capacity(healthy_problem(cfg, cfg.baseline.step_deg), pts).capacity_kg,
+    assert np.allclose(healthy_capacity(healthy_problem(cfg), pts).capacity_kg,
                        rows.healthy_capacity_kg)
 
 

@@ -25,7 +25,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from capmap.capacity.baseline import HealthyProblem, healthy_capacity
+from capmap.capacity.baseline import HealthyProblem, Hint, healthy_capacity
 from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine_data import Evaluation
@@ -64,7 +64,7 @@ class LockedEvaluator:
 class HealthyEvaluator:
     """The healthy arm's points (:func:`capmap.capacity.baseline.healthy_capacity`) of ``hp`` (the arm over
     its swept joint's angles, the task's rotation, motion and directions, the screening set); ``n_voxels``
-    the grid's voxel count (the owners' range). A voxel's points are evaluated
+    the owners' range (the refinement's voxels: owner = a voxel's row). A voxel's points are evaluated
     together, ``chunk`` at a time; each voxel's least value exact, the others may stop at it, tried first
     at the angle of the voxel's least value so far. No per-axis or per-configuration values."""
 
@@ -72,23 +72,26 @@ class HealthyEvaluator:
 
     def __init__(self, hp: HealthyProblem, n_voxels: int, chunk: int = 1000):
         self.hp, self.chunk, self.n_evaluated = hp, int(chunk), 0
-        self.hint_of = np.full(int(n_voxels), -1)  # per voxel: the angle (index) of its least value's posture
+        self.hint_of = np.full(int(n_voxels), -1)  # per voxel: the grid angle (index) of its least value's posture
+        self.configuration_of = np.full(int(n_voxels), -1)  # and that posture's configuration label
 
     def evaluate(self, points: np.ndarray, ceiling: np.ndarray | None = None,
                  owner: np.ndarray | None = None) -> Evaluation:
         N = len(points)
         order = np.argsort(owner, kind="stable") if owner is not None else np.arange(N)
-        cap, binding, angle = np.full(N, np.nan), np.full(N, -1), np.full(N, np.nan)
+        cap, binding, angle, conf = np.full(N, np.nan), np.full(N, -1), np.full(N, np.nan), np.full(N, -1)
         for r in range(0, N, self.chunk):
             rows = order[r:r + self.chunk]
             hc = healthy_capacity(self.hp, points[rows], None if ceiling is None else ceiling[rows],
                                   None if owner is None else owner[rows],
-                                  None if owner is None else self.hint_of[owner[rows]])
-            cap[rows], binding[rows], angle[rows] = hc.capacity_kg, hc.binding, hc.angle_deg
+                                  None if owner is None else Hint(self.hint_of[owner[rows]],
+                                                                  self.configuration_of[owner[rows]]))
+            cap[rows], binding[rows], angle[rows], conf[rows] = hc.capacity_kg, hc.binding, hc.angle_deg, hc.configuration
         self.n_evaluated += N
-        if owner is not None and N:  # a voxel's new least value: its angle is the voxel's next hint
+        if owner is not None and N:  # a voxel's new least value: its posture is the voxel's next hint
             c = np.where(np.isfinite(cap), cap, np.inf)
             i = argmin_per_group(c, owner)
             new = np.isfinite(c[i]) & (c[i] < (np.inf if ceiling is None else ceiling[i]))
-            self.hint_of[owner[i[new]]] = np.searchsorted(self.hp.sm.angles_deg, angle[i[new]])
+            self.hint_of[owner[i[new]]] = self.hp.sm.grid_index(angle[i[new]])
+            self.configuration_of[owner[i[new]]] = conf[i[new]]
         return Evaluation(cap, np.zeros((N, 0)), binding, np.isfinite(cap).astype(int))

@@ -19,7 +19,7 @@ from capmap.capacity.voxels import Grid
 from capmap.core.reduction import free
 
 __all__ = ["HEALTHY_COLUMNS", "BASELINE_COLUMNS", "healthy_samples", "baseline_shard", "loss_table",
-           "angle_convergence"]
+           "angle_convergence", "CONVERGENCE_COLUMNS"]
 
 HEALTHY_COLUMNS = ["x_m", "y_m", "z_m", "healthy_capacity_kg", "healthy_binding", "healthy_angle_deg", "n_points",
                    "n_reachable", "converged", "last_change_rel", "worst_x_m", "worst_y_m", "worst_z_m"]
@@ -28,7 +28,9 @@ HEALTHY_COLUMNS = ["x_m", "y_m", "z_m", "healthy_capacity_kg", "healthy_binding"
 # where it reaches no point of the voxel)
 BASELINE_COLUMNS = ["i", "j", "k", *HEALTHY_COLUMNS[:6], "n_points", "converged", "capacity_kg",
                     "arm_configuration_capacity_kg", "loss_kg", "arm_configuration_loss_kg"]
-_CHUNK = 1000  # points per call of the evaluation (memory: ~36 angles x 8 solutions each)
+# baseline/convergence.parquet: the check of the angle search at sampled voxels' worst points
+CONVERGENCE_COLUMNS = ["x_m", "y_m", "z_m", "healthy_capacity_kg", "healthy_reference_kg", "shortfall_rel"]
+_CHUNK = 500  # points per call of the evaluation (memory: ~36 angles x 8 solutions each, their coefficients kept)
 
 
 def healthy_samples(robot, sc, edge_m: float) -> tuple[np.ndarray, Grid]:
@@ -68,15 +70,16 @@ def baseline_shard(hp: HealthyProblem, failed: pd.DataFrame, samples: tuple[np.n
     shard, shards = part
     mine = flat % shards == shard
     pos, flat = pos[mine], flat[mine]
-    ev = HealthyEvaluator(hp, grid.n_voxels, _CHUNK)
+    vox_of, first_of, row = np.unique(flat, return_index=True, return_inverse=True)
+    row = row.reshape(-1)  # each point's voxel, as the refinement numbers them: its row in vox_of
+    ev = HealthyEvaluator(hp, len(vox_of), _CHUNK)
     # the first point of each voxel exactly, then the others against it (only a lower value needs to be exact)
     first = np.zeros(len(flat), dtype=bool)
-    first[np.unique(flat, return_index=True)[1]] = True
-    ev1 = ev.evaluate(pos[first], None, flat[first])
-    head = np.full(grid.n_voxels, np.inf)
-    head[flat[first]] = np.where(np.isfinite(ev1.capacity_kg), ev1.capacity_kg, np.inf)
-    ev2 = ev.evaluate(pos[~first], head[flat[~first]], flat[~first])
-    vox_of = np.unique(flat)
+    first[first_of] = True
+    ev1 = ev.evaluate(pos[first], None, row[first])
+    head = np.full(len(vox_of), np.inf)
+    head[row[first]] = np.where(np.isfinite(ev1.capacity_kg), ev1.capacity_kg, np.inf)
+    ev2 = ev.evaluate(pos[~first], head[row[~first]], row[~first])
     log.info(f"{len(vox_of)} voxels, {len(pos)} sampled points over {len(hp.sm.angles_deg)} angles of joint "
              f"{hp.problem.arm.locked_joint} ({time.perf_counter() - t0:.1f} s)")
     cap, binding = np.full(len(pos), np.nan), np.full(len(pos), -1)
@@ -156,19 +159,19 @@ def loss_table(h: pd.DataFrame, failed: pd.DataFrame, op: pd.DataFrame | None) -
     return df.sort_values(["i", "j", "k"], ignore_index=True)
 
 
-def angle_convergence(problems: tuple[HealthyProblem, HealthyProblem, HealthyProblem], h: pd.DataFrame, n_voxels: int,
+def angle_convergence(hp: HealthyProblem, reference: HealthyProblem, h: pd.DataFrame, n_voxels: int,
                       rng: np.random.Generator) -> pd.DataFrame:
-    """The healthy value at the worst points of ``n_voxels`` random voxels of the healthy table ``h`` with
-    the angle step, half and a quarter of it (``problems``, in that order): each voxel's value can rise
-    by at most its worst point's rise (a finer grid holds the coarser one's angles), so the table bounds
-    the change of the map."""
+    """The healthy value at the worst points of ``n_voxels`` random voxels of the healthy table ``h``, by
+    the map's search ``hp`` and by the finer grid ``reference`` (every angle of it, not followed):
+    ``shortfall_rel`` = (reference - map) / reference, > 0 where the map's value lies below the finer
+    sweep's (both are postures' values: lower bounds of the healthy arm's); 0 where both are 0 kg."""
     rows = h[h.healthy_capacity_kg.notna()]
     rows = rows.iloc[np.sort(rng.choice(len(rows), size=min(n_voxels, len(rows)), replace=False))]
     pts = rows[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
     out = pd.DataFrame({"x_m": pts[:, 0], "y_m": pts[:, 1], "z_m": pts[:, 2]})
-    for col, hp in zip(("healthy_capacity_kg", "healthy_half_step_kg", "healthy_quarter_step_kg"), problems):
-        out[col] = healthy_capacity(hp, pts).capacity_kg
-    base = out.healthy_capacity_kg.where(out.healthy_capacity_kg > 0)
-    out["rise_half_step_rel"] = (out.healthy_half_step_kg - out.healthy_capacity_kg) / base
-    out["rise_quarter_step_rel"] = (out.healthy_quarter_step_kg - out.healthy_capacity_kg) / base
+    out["healthy_capacity_kg"] = healthy_capacity(hp, pts).capacity_kg
+    out["healthy_reference_kg"] = healthy_capacity(reference, pts).capacity_kg
+    ref, got = out.healthy_reference_kg.to_numpy(), out.healthy_capacity_kg.to_numpy()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out["shortfall_rel"] = np.where(ref > 0, (ref - got) / ref, np.where(got >= ref, 0.0, np.nan))
     return out

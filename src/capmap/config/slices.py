@@ -66,7 +66,7 @@ _TASK_MOTION = ("task.orientation_rpy_deg", "task.v_max_mps", "task.a_max_mps2")
 
 def _baseline_shard(cfg: RunConfig) -> tuple[str, ...]:  # the healthy arm on the failed map's lattice
     return ("robot", "failure.joint", "failure.angle_deg", "sampling", "voxel_edge_m", "limits", "directions",
-            "baseline.step_deg", "baseline.screen_directions") + _TASK_MOTION + _refine(cfg)
+            "baseline.step_deg", "baseline.screen_directions", "baseline.polish_levels") + _TASK_MOTION + _refine(cfg)
 
 
 STAGES: dict[str, Stage] = {
@@ -87,7 +87,7 @@ STAGES: dict[str, Stage] = {
     "atlas": Stage(("atlas",), ("atlas_map",)),
     # the healthy arm and the failure's cost (reads the failed map: its worst points, its values)
     "baseline_shard": Stage(_baseline_shard, ("refine",)),
-    "baseline": Stage(("baseline.check_voxels",), ("baseline_shard", "view")),
+    "baseline": Stage(("baseline.check_voxels", "baseline.check_step_deg"), ("baseline_shard", "view")),
     # family 2: following (space: the verified path of its payload, not the verification's sampling)
     "follow_space": Stage(("job", "follow.period_s", "follow.store_period_s", "follow.space"), ("plan",)),
     "follow_ground": Stage(("follow.period_s", "follow.store_period_s", "follow.ground")),

@@ -48,6 +48,10 @@ class Coefficients:
         (:func:`capmap.capacity.engine.motion_features`)."""
         return np.concatenate([self.c0[..., None], self.L, self.Q], axis=-1)
 
+    def take(self, rows: np.ndarray) -> "Coefficients":
+        """The configurations ``rows`` (M,) of a batch (indices or a mask on the leading axis)."""
+        return Coefficients(*(getattr(self, f.name)[rows] for f in fields(self)))
+
     @classmethod
     def empty(cls, n_out: int) -> "Coefficients":
         """A batch of no configurations (B = 0) with n_out outputs."""

@@ -16,13 +16,15 @@ __all__ = ["BaselineContext", "baseline_figure"]
 @dataclass(frozen=True)
 class BaselineContext:
     """What the baseline's figure tells of its run: the arm's configuration (its name); the failed
-    ``joint`` (1-based) locked at angle_deg deg; the healthy map's angle step step_deg deg; the voxel
+    ``joint`` (1-based) locked at angle_deg deg; the healthy map's angle step step_deg deg and the
+    check's finer sweep check_step_deg deg; the voxel
     edge edge_m m; the task start start_m (3,) m; the task's payloads_kg (kg each)."""
 
     configuration: str
     joint: int
     angle_deg: float
     step_deg: float
+    check_step_deg: float
     edge_m: float
     start_m: np.ndarray
     payloads_kg: tuple[float, ...]
@@ -103,16 +105,15 @@ def baseline_figure(df: pd.DataFrame, conv: pd.DataFrame, context: BaselineConte
           title=f"Where: the loss over the task start's voxel layer, z = {lo[2] + (k + 0.5) * c.edge_m:.2f} m")
     a.legend(fontsize=8.5, loc="upper center", bbox_to_anchor=(0.5, -0.12))
     fig.suptitle(f"What the failure of joint {c.joint} (locked at {c.angle_deg:g} deg) cost: {verdict}\n"
-                 + _convergence(conv, c.step_deg), fontsize=11.5)
+                 + _convergence(conv, c), fontsize=11.5)
     save(fig, out_png)
 
 
-def _convergence(conv: pd.DataFrame, step_deg: float) -> str:
-    """The check of the angle step, in words: how much the checked voxels' healthy values rise at half and a
-    quarter of it (they are lower bounds)."""
-    rise = 100 * conv.rise_quarter_step_rel.dropna().to_numpy()
-    if not len(rise):
-        return f"healthy values: best over a {step_deg:g} deg grid of the failed joint's angle (no voxel checked)"
-    return (f"healthy values are lower bounds: with a {step_deg / 4:g} deg step instead of {step_deg:g} deg, "
-            f"{len(rise)} checked voxels rise by {np.median(rise):.2g} % median, {rise.max():.2g} % at most "
-            f"({int((rise > 1).sum())} by more than 1 %)")
+def _convergence(conv: pd.DataFrame, c: BaselineContext) -> str:
+    """The check of the angle search, in words: how far the checked voxels' healthy values lie below a
+    sweep of the finer step (both are lower bounds of the healthy arm's)."""
+    short = 100 * conv.shortfall_rel.dropna().to_numpy()
+    if not len(short):
+        return f"healthy values: best over a {c.step_deg:g} deg grid of the failed joint's angle, refined (no voxel checked)"
+    return (f"healthy values are lower bounds; against a {c.check_step_deg:g} deg sweep, {len(short)} checked voxels lie "
+            f"{max(short.max(), 0):.2g} % below at most ({int((short > 1).sum())} by more than 1 %)")

@@ -236,6 +236,7 @@ def stage_baseline_figure(voxels: str, convergence: str, out_png: str, slice_jso
     run = stage_config(slice_json).run
     meta = df.attrs["capmap"]
     context = BaselineContext(meta["configuration"], run.failure.joint, run.failure.angle_deg,
-                              conv.attrs["capmap"]["step_deg"], meta["grid"]["edge_m"], view.start_m, view.payloads_kg)
+                              conv.attrs["capmap"]["step_deg"], conv.attrs["capmap"]["check_step_deg"],
+                              meta["grid"]["edge_m"], view.start_m, view.payloads_kg)
     baseline_figure(df, conv, context, out_png)
     stage_logger(__name__, "baseline figure").info(f"-> {out_png}")
