@@ -38,6 +38,16 @@ def measured_peaks(run_dir: Path) -> dict[str, float]:
     return peaks
 
 
+def refine_cost(run_dir: Path) -> tuple[int, float]:
+    """Points the refine jobs evaluated and their wall seconds (each job on one core), from the logs."""
+    points, seconds = 0, 0.0
+    for log in run_dir.glob("logs/refine/*.log"):
+        text = log.read_text()
+        points += sum(int(m) for m in re.findall(r"done: \d+ voxels.*?, (\d+) points evaluated", text))
+        seconds += sum(float(m) for m in re.findall(r"job stage_refine: ([\d.]+) s wall", text))
+    return points, seconds
+
+
 def run_edge(edge: float, cores: int) -> tuple[dict, dict, float]:
     doc = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     name = f"mem{str(edge).replace('.', 'p')}"
@@ -73,6 +83,8 @@ def main() -> None:
                 print(f"  {job:<22} {est[kind]:>12.0f} {got[job]:>12.0f} {ratio:>7.2f}")
         maps = max(got.get(j, 0.0) for j, k in STAGE_OF_JOB.items() if k == "maps")
         worst = max(worst, est["maps"] / maps, maps / est["maps"])
+        points, seconds = refine_cost(ROOT / "results" / f"mem{str(edge).replace('.', 'p')}")
+        print(f"  refinement: {points:,} points in {seconds:.0f} job-s: {1e6 * seconds / max(points, 1):.0f} µs per point")
         top = max(got.values())
         print(f"  largest job measured {top:.0f} MB ({max(got, key=got.get)}); estimate of the largest "
               f"{max(est.values()):.0f} MB (ratio {max(est.values()) / top:.2f})")
