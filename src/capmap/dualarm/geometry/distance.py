@@ -32,8 +32,7 @@ import numpy as np
 __all__ = ["Closest", "segment_segment", "point_triangle", "segment_triangle", "segseg", "segtri", "segpoint", "EPS"]
 
 EPS = 1e-14  # a segment shorter than sqrt(EPS) m is a point
-_jit = numba.njit(cache=True)
-_inline = numba.njit(cache=True, inline="always")
+_jit = numba.njit(cache=True)  # plain calls (numba's IR inlining, inline="always", compiles several times slower)
 
 
 @dataclass(frozen=True)
@@ -52,12 +51,12 @@ class Closest:
         return np.where(d > 0, (self.p - self.q) / np.where(d > 0, d, 1.0), 0.0)
 
 
-@_inline
+@_jit
 def _clamp01(x):
     return 0.0 if x < 0.0 else (1.0 if x > 1.0 else x)
 
 
-@_inline
+@_jit
 def _segseg_st(A, a, B, b, C, c, D, d):
     """(s, t) of the closest points of segments A[a] -> B[b] and C[c] -> D[d] (rows of (n, 3) tables)."""
     aa = ee = f = cc = bb = 0.0
@@ -84,7 +83,7 @@ def _segseg_st(A, a, B, b, C, c, D, d):
     return s, t
 
 
-@_inline
+@_jit
 def _pointtri_uv(X, x, V, v, s, Y, y):
     """Barycentric (u, w) of the point of triangle V[v] (3, 3) nearest the point X[x] + s (Y[y] - X[x])."""
     d1 = d2 = d3 = d4 = d5 = d6 = 0.0
@@ -115,7 +114,7 @@ def _pointtri_uv(X, x, V, v, s, Y, y):
     return vb / denom, vc / denom
 
 
-@_inline
+@_jit
 def _gap2(A, a, B, b, s, V, v, u, w):
     """|A[a] + s (B[b] - A[a]) - V[v] point (u, w)|^2."""
     dd = 0.0
@@ -126,7 +125,7 @@ def _gap2(A, a, B, b, s, V, v, u, w):
     return dd
 
 
-@_inline
+@_jit
 def _segtri_suw(A, a, B, b, V, v):
     """(s, u, w, distance^2) of the closest points of segment A[a] -> B[b] and triangle V[v]."""
     best, bs, bu, bw = np.inf, 0.0, 0.0, 0.0
@@ -161,7 +160,7 @@ def _segtri_suw(A, a, B, b, V, v):
     return bs, bu, bw, best
 
 
-@_inline
+@_jit
 def segseg(A, a, B, b, C, c, D, d, P, Q, n):
     """Closest points of A[a] -> B[b] and C[c] -> D[d] into rows P[n], Q[n]; the distance."""
     s, t = _segseg_st(A, a, B, b, C, c, D, d)
@@ -173,7 +172,7 @@ def segseg(A, a, B, b, C, c, D, d, P, Q, n):
     return np.sqrt(dd)
 
 
-@_inline
+@_jit
 def segtri(A, a, B, b, V, v, P, Q, n):
     """Closest points of segment A[a] -> B[b] and triangle V[v] into rows P[n], Q[n]; the distance."""
     s, u, w, dd = _segtri_suw(A, a, B, b, V, v)
