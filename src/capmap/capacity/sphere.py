@@ -51,7 +51,7 @@ def start_directions(n_pairs: int = START_DIRECTIONS) -> np.ndarray:
     return np.concatenate([u, -u])
 
 
-@numba.njit(cache=True, error_model="numpy", inline="always")
+@_jit
 def _y(c, a, v2, x0, x1, x2):
     """The payload-free output y(u) of coefficients c (10,) along u = (x0, x1, x2)."""
     return (c[0] + a * (c[1] * x0 + c[2] * x1 + c[3] * x2)
