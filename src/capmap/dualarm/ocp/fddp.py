@@ -32,6 +32,9 @@ HUGE = 1e30  # Crocoddyl's raiseIfNaN: nan, inf or >= 1e30 fails a rollout or a 
 STOPPED = -1.0  # a trial stopped by its partial cost (_forward; a cost is >= 0)
 # _eval's diff: numpy bools, typed bool (a literal True or False would compile node_eval once more for each)
 VALUE, DIFF = np.False_, np.True_
+# _calc and _forward inlined in numba's IR: every compiled function calling node_eval, directly or not, links its machine
+# code and optimises and emits it again (seconds of compilation each); their own code is short to type
+_wrapper = numba.njit(cache=True, inline="always")
 
 
 def _offsets(sizes) -> np.ndarray:
@@ -101,7 +104,7 @@ def evaluate_nodes(P, xs):
         _eval(P, k, xs[k], u0, 1.0, VALUE, Lx, Lxx, Lu, xn)
 
 
-@numba.njit(cache=True)
+@_wrapper
 def _calc(P, mu, cost, xnext, k, x, u):
     """Node k's cost at (x, u) into cost[k], its next state into xnext[k]."""
     Lx, Lxx, Lu = np.empty(0), np.empty((0, 0)).T, np.empty(0)
@@ -214,7 +217,7 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
     return True
 
 
-@numba.njit(cache=True)
+@_wrapper
 def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total0, limit):
     """Crocoddyl's FDDP forwardPass: the trial's cost, nan when the cost or a state is nan, inf or >= HUGE
     (the products written out: no allocation per node); STOPPED as soon as total0 - (the cost so far) <=
