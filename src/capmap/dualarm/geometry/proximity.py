@@ -133,7 +133,10 @@ def _place(chain_f, chain_i, q, R, p, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA
     for i in range(len(ms)):
         A[ms[i]], B[ms[i]], ctr[ms[i]], rad[ms[i]] = mA[i], mB[i], mctr[i], mrad[i]
     for i in range(len(mt)):
-        V[mt[i]], ctr[S + mt[i]], rad[S + mt[i]] = mV[i], mctr[len(ms) + i], mrad[len(ms) + i]
+        for k in range(3):  # element by element: a 2-D array assignment compiles numba's shape-error path (~3 s)
+            for j in range(3):
+                V[mt[i], k, j] = mV[i, k, j]
+        ctr[S + mt[i]], rad[S + mt[i]] = mctr[len(ms) + i], mrad[len(ms) + i]
 
 
 @_jit

@@ -160,7 +160,9 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
     Vxx is nan, inf or >= HUGE."""
     N, n2 = Lx.shape[0] - 1, Lx.shape[1]
     n = n2 // 2
-    Vxx[N] = Lxx[N]
+    for i in range(n2):  # element by element: a 2-D array assignment compiles numba's shape-error path (~3 s)
+        for j in range(n2):
+            Vxx[N, i, j] = Lxx[N, i, j]
     Vx[N] = Lx[N]
     for i in range(n2):
         Vxx[N, i, i] += preg
@@ -335,8 +337,11 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
             if (dVexp >= 0.0 and (abs(d0) < TH_GRAD or dV > TH_ACCEPT * dVexp)) or (
                     dVexp < 0.0 and not feasible and dV > TH_ACCEPTNEG * dVexp):
                 was_feasible = feasible
-                xs[:] = xs_try
-                us[:] = us_try
+                for t in range(N + 1):  # element by element (_backward)
+                    for i in range(n2):
+                        xs[t, i] = xs_try[t, i]
+                        if t < N and i < nu:
+                            us[t, i] = us_try[t, i]
                 feasible = was_feasible or alpha == 1.0
                 total = trial
                 recalc = True
