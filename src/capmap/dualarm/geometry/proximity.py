@@ -173,8 +173,10 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
     kept, lb, dm = np.zeros(NP, np.bool_), np.full(groups.shape[0], -np.inf), np.zeros(lever.shape[0])
     cap = max(1024, 16 * qs.shape[0])
     ok, on, od = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
-    count = 0
-    nearest = -1
+    # np.int64, not a literal: numba types a call first with a variable's first value's literal type and would
+    # compile _grow and _pair_distance once more for it
+    count = np.int64(0)
+    nearest = np.int64(-1)
     for k in range(qs.shape[0]):
         _place(chain_f, chain_i, qs[k], R, p, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad, A, B, V,
                ctr, rad)
@@ -197,7 +199,7 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
                 idx[m], val[m] = nearest, d0
                 m += 1
         if within >= 0.0:
-            nearest = -1
+            nearest = np.int64(-1)
             best = np.inf
             for i in range(m):
                 if val[i] < best or (val[i] == best and idx[i] < nearest):
@@ -226,7 +228,7 @@ def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order
     dm, lbk = np.zeros(lever.shape[0]), np.empty(G)
     idx, val = np.empty(rows.shape[0], np.int64), np.empty(rows.shape[0])
     ok, on, od = np.empty(1024, np.int64), np.empty(1024, np.int64), np.empty(1024)
-    count = 0
+    count = np.int64(0)  # (not a literal: _batch)
     nb = np.empty(G)
     for k in range(K):
         lbk[:] = lb[k]
