@@ -32,7 +32,11 @@ import numpy as np
 __all__ = ["Closest", "segment_segment", "point_triangle", "segment_triangle", "segseg", "segtri", "segpoint", "EPS"]
 
 EPS = 1e-14  # a segment shorter than sqrt(EPS) m is a point
-_jit = numba.njit(cache=True)  # plain calls (numba's IR inlining, inline="always", compiles several times slower)
+_jit = numba.njit(cache=True)
+# the batch kernels' loops over pairs inline the helpers in numba's IR (~2.5x the pairs per second of plain calls);
+# the node kernel and the pair filters call segseg and segtri, plain calls typing that inlined code once (numba's IR
+# inlining re-types it at every call site: those callers compiled several times slower)
+_inline = numba.njit(cache=True, inline="always")
 
 
 @dataclass(frozen=True)
@@ -51,12 +55,12 @@ class Closest:
         return np.where(d > 0, (self.p - self.q) / np.where(d > 0, d, 1.0), 0.0)
 
 
-@_jit
+@_inline
 def _clamp01(x):
     return 0.0 if x < 0.0 else (1.0 if x > 1.0 else x)
 
 
-@_jit
+@_inline
 def _segseg_st(A, a, B, b, C, c, D, d):
     """(s, t) of the closest points of segments A[a] -> B[b] and C[c] -> D[d] (rows of (n, 3) tables)."""
     aa = ee = f = cc = bb = 0.0
@@ -83,7 +87,7 @@ def _segseg_st(A, a, B, b, C, c, D, d):
     return s, t
 
 
-@_jit
+@_inline
 def _pointtri_uv(X, x, V, v, s, Y, y):
     """Barycentric (u, w) of the point of triangle V[v] (3, 3) nearest the point X[x] + s (Y[y] - X[x])."""
     d1 = d2 = d3 = d4 = d5 = d6 = 0.0
@@ -114,7 +118,7 @@ def _pointtri_uv(X, x, V, v, s, Y, y):
     return vb / denom, vc / denom
 
 
-@_jit
+@_inline
 def _gap2(A, a, B, b, s, V, v, u, w):
     """|A[a] + s (B[b] - A[a]) - V[v] point (u, w)|^2."""
     dd = 0.0
@@ -125,7 +129,7 @@ def _gap2(A, a, B, b, s, V, v, u, w):
     return dd
 
 
-@_jit
+@_inline
 def _segtri_suw(A, a, B, b, V, v):
     """(s, u, w, distance^2) of the closest points of segment A[a] -> B[b] and triangle V[v]."""
     best, bs, bu, bw = np.inf, 0.0, 0.0, 0.0
@@ -160,8 +164,8 @@ def _segtri_suw(A, a, B, b, V, v):
     return bs, bu, bw, best
 
 
-@_jit
-def segseg(A, a, B, b, C, c, D, d, P, Q, n):
+@_inline
+def _segseg(A, a, B, b, C, c, D, d, P, Q, n):
     """Closest points of A[a] -> B[b] and C[c] -> D[d] into rows P[n], Q[n]; the distance."""
     s, t = _segseg_st(A, a, B, b, C, c, D, d)
     dd = 0.0
@@ -172,14 +176,26 @@ def segseg(A, a, B, b, C, c, D, d, P, Q, n):
     return np.sqrt(dd)
 
 
-@_jit
-def segtri(A, a, B, b, V, v, P, Q, n):
+@_inline
+def _segtri(A, a, B, b, V, v, P, Q, n):
     """Closest points of segment A[a] -> B[b] and triangle V[v] into rows P[n], Q[n]; the distance."""
     s, u, w, dd = _segtri_suw(A, a, B, b, V, v)
     for i in range(3):
         P[n, i] = A[a, i] + s * (B[b, i] - A[a, i])
         Q[n, i] = V[v, 0, i] + u * (V[v, 1, i] - V[v, 0, i]) + w * (V[v, 2, i] - V[v, 0, i])
     return np.sqrt(dd)
+
+
+@_jit
+def segseg(A, a, B, b, C, c, D, d, P, Q, n):
+    """Closest points of A[a] -> B[b] and C[c] -> D[d] into rows P[n], Q[n]; the distance."""
+    return _segseg(A, a, B, b, C, c, D, d, P, Q, n)
+
+
+@_jit
+def segtri(A, a, B, b, V, v, P, Q, n):
+    """Closest points of segment A[a] -> B[b] and triangle V[v] into rows P[n], Q[n]; the distance."""
+    return _segtri(A, a, B, b, V, v, P, Q, n)
 
 
 @_jit
@@ -196,13 +212,13 @@ def segpoint(A, B, s, x, y, z):
 @_jit
 def _segseg_batch(p0, p1, q0, q1, d, P, Q):
     for n in range(len(d)):
-        d[n] = segseg(p0, n, p1, n, q0, n, q1, n, P, Q, n)
+        d[n] = _segseg(p0, n, p1, n, q0, n, q1, n, P, Q, n)
 
 
 @_jit
 def _segtri_batch(p0, p1, V, d, P, Q):
     for n in range(len(d)):
-        d[n] = segtri(p0, n, p1, n, V, n, P, Q, n)
+        d[n] = _segtri(p0, n, p1, n, V, n, P, Q, n)
 
 
 @_jit

@@ -44,9 +44,10 @@ def _bounding_spheres(A, B, V, ctr, rad):
 @_jit
 def _pair_distance(A, B, V, rows, rsum, n, P, Q):
     """Pair row n's safety distance (m)."""
+    row = np.int64(0)  # P[0], Q[0]: not a literal 0 (segseg and segtri compiled once more for it)
     if rows[n, 0] == 1:
-        return segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, 0) - rsum[n]
-    return segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, 0) - rsum[n]
+        return segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, row) - rsum[n]
+    return segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, row) - rsum[n]
 
 
 @_jit
