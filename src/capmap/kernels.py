@@ -90,8 +90,8 @@ def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) ->
     if is_warm(key):
         return False
     print(f"capmap: compiling the numba kernels for {Path(robot_file).name}, joint {joint} locked"
-          f"{' and the dual-arm family' if dualarm else ''}: once per machine and code version (about 2 min on "
-          "2 cores; every checkout of this code then loads them)...", file=sys.stderr, flush=True)
+          f"{' and the dual-arm family' if dualarm else ''}: once per machine and code version (about a minute "
+          "on 1 or 2 cores; every checkout of this code then loads them)...", file=sys.stderr, flush=True)
     warm(robot_file, joint, angle_rad, dualarm)
     record(key)
     return True
