@@ -5,8 +5,9 @@ writes the cache, the others load it. Parallel jobs started together (the capaci
 each compile the same kernels; :func:`warm` compiles those a run uses once, before its jobs, by
 running the stages' compiled calls on a few inputs of their types: the locked arm's IK (whichever
 method its chain takes), the capacity kernels, and the dual-arm distances and node models when the
-run has that family. ``python -m capmap.kernels [--configfile FILE]`` (the README's install command;
-Snakemake's ``onstart`` runs it for the run's own config). With a config, the dual-arm robot's
+run has that family (in a second process when this one may use two cores: the two families' kernels
+are independent, so they compile side by side). ``python -m capmap.kernels [--configfile FILE]`` (the
+README's install command; Snakemake's ``onstart`` runs it for the run's own config). With a config, the dual-arm robot's
 pre-run build is done and remembered as well (:func:`remember_dual_arm`). A marker per hash of the
 kernels' source files, numba's version and the CPU lists what was warmed, so the next call is a
 check of milliseconds (after its imports, about a second).
@@ -15,6 +16,8 @@ check of milliseconds (after its imports, about a second).
 from __future__ import annotations
 
 import argparse
+import os
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -35,12 +38,41 @@ from capmap.errors import CapmapError
 from capmap.io.kernel_marker import is_warm, record, run_key
 from capmap.robots import load
 
-__all__ = ["warm", "ensure_warm", "remember_dual_arm", "main"]
+__all__ = ["warm", "warm_dual_arm", "ensure_warm", "remember_dual_arm", "main"]
 
 
 def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
     """Compile (or load) the kernels of a run: ``robot_file``'s arm with ``joint`` (1-based) locked at
-    ``angle_rad`` (its IK method, the capacity kernels), and the dual-arm distances if ``dualarm``."""
+    ``angle_rad`` (its IK method, the capacity kernels), and the dual-arm distances and node models if
+    ``dualarm`` (:func:`warm_dual_arm`: in a child process beside this one when this process may use two
+    cores; capmap's environment gives the child the same numba cache folder)."""
+    child = None
+    if dualarm and len(os.sched_getaffinity(0)) >= 2:
+        child = subprocess.Popen([sys.executable, "-c", "import capmap.kernels as k; k.warm_dual_arm()"])
+    try:
+        _warm_arm(robot_file, joint, angle_rad)
+    except BaseException:
+        if child is not None:
+            child.kill()
+            child.wait()
+        raise
+    if child is None and dualarm:
+        warm_dual_arm()
+    elif child is not None and child.wait() != 0:
+        raise RuntimeError(f"the dual-arm kernels' process failed (exit code {child.returncode})")
+
+
+def warm_dual_arm() -> None:
+    """Compile (or load) the dual-arm family's kernels: the distances, the node models, the compiled FDDP."""
+    p = np.random.default_rng(0).normal(size=(4, 3))
+    distance.segment_segment(p, p + 1, p + 2, p + 3)
+    distance.point_triangle(p, p + 1, p + 2, p + 3)
+    distance.segment_triangle(p, p + 1, p + 2, p + 3, p + 4)
+    nodes.warm_up()
+
+
+def _warm_arm(robot_file: str, joint: int, angle_rad: float) -> None:
+    """The arm's kernels: its IK with ``joint`` locked at ``angle_rad``, the capacity kernels."""
     rng = np.random.default_rng(0)
     arm = lock(load(robot_file), joint, angle_rad)
     T = arm.fk(rng.uniform(np.maximum(arm.q_lower, -np.pi), np.minimum(arm.q_upper, np.pi), (8, arm.n_active)))
@@ -50,12 +82,6 @@ def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
         sol = ik.solve(arm, T[:, :3, 3], T[:, :3, :3])  # each its own orientation: every IK branch kind
         problem.capacity(sol)
     problem.dyn.batch.coefficients(sol.q[:, 0], np.full(len(sol.q), angle_rad))  # the baseline's held angles
-    if dualarm:
-        p = rng.normal(size=(4, 3))
-        distance.segment_segment(p, p + 1, p + 2, p + 3)
-        distance.point_triangle(p, p + 1, p + 2, p + 3)
-        distance.segment_triangle(p, p + 1, p + 2, p + 3, p + 4)
-        nodes.warm_up()
 
 
 def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> bool:
@@ -64,8 +90,8 @@ def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) ->
     if is_warm(key):
         return False
     print(f"capmap: compiling the numba kernels for {Path(robot_file).name}, joint {joint} locked"
-          f"{' and the dual-arm family' if dualarm else ''}: once per machine and code version (about 2 min on "
-          "2 cores; every checkout of this code then loads them)...", file=sys.stderr, flush=True)
+          f"{' and the dual-arm family' if dualarm else ''}: once per machine and code version (about a minute "
+          "on 1 or 2 cores; every checkout of this code then loads them)...", file=sys.stderr, flush=True)
     warm(robot_file, joint, angle_rad, dualarm)
     record(key)
     return True

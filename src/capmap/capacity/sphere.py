@@ -51,7 +51,7 @@ def start_directions(n_pairs: int = START_DIRECTIONS) -> np.ndarray:
     return np.concatenate([u, -u])
 
 
-@numba.njit(cache=True, error_model="numpy", inline="always")
+@_jit
 def _y(c, a, v2, x0, x1, x2):
     """The payload-free output y(u) of coefficients c (10,) along u = (x0, x1, x2)."""
     return (c[0] + a * (c[1] * x0 + c[2] * x1 + c[3] * x2)
@@ -62,9 +62,9 @@ def _y(c, a, v2, x0, x1, x2):
 def _eig3(Q, w, V, A):
     """Symmetric Q (3, 3) -> eigenvalues w (3,) and eigenvectors V (3, 3) (columns), cyclic Jacobi;
     A (3, 3) workspace."""
-    A[:, :] = Q
-    for i in range(3):
+    for i in range(3):  # (element by element: an array assignment compiles numba's shape-mismatch error, ~3 s)
         for j in range(3):
+            A[i, j] = Q[i, j]
             V[i, j] = 1.0 if i == j else 0.0
     for _ in range(30):
         off = A[0, 1] ** 2 + A[0, 2] ** 2 + A[1, 2] ** 2

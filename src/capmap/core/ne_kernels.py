@@ -17,8 +17,7 @@ import numpy as np
 
 __all__ = ["kinematics", "rest_multi", "velocity_multi", "outputs_multi", "invert", "workspace"]
 
-_jit = numba.njit(cache=True)
-_inline = numba.njit(cache=True, inline="always")
+_jit = numba.njit(cache=True)  # plain calls (numba's IR inlining, inline="always", compiles several times slower)
 
 
 @_jit
@@ -60,7 +59,7 @@ def _workspace(n, K):
     return np.zeros((6, n, 3, K)), np.zeros((8, 3, K))
 
 
-@_inline
+@_jit
 def _cross_c(x, c, out, sign):
     """out = sign (x x c): x (3, K), c a constant 3-vector."""
     c0, c1, c2 = c[0], c[1], c[2]
@@ -70,7 +69,7 @@ def _cross_c(x, c, out, sign):
         out[2, r] = sign * (x[0, r] * c1 - x[1, r] * c0)
 
 
-@_inline
+@_jit
 def _add_cross(x, y, out):
     """out += x x y, all (3, K)."""
     for r in range(x.shape[1]):
@@ -79,7 +78,7 @@ def _add_cross(x, y, out):
         out[2, r] += x[0, r] * y[1, r] - x[1, r] * y[0, r]
 
 
-@_inline
+@_jit
 def _transform_in(Rj, x, y, out):
     """out = Rj' x + y: x (3, K) from the parent's frame into the joint's, plus y (3, K) already there."""
     for b in range(3):
@@ -88,7 +87,7 @@ def _transform_in(Rj, x, y, out):
             out[b, r] = r0 * x[0, r] + r1 * x[1, r] + r2 * x[2, r] + y[b, r]
 
 
-@_inline
+@_jit
 def _inertia(m, c, Ic, lin, ang, out_l, out_a, tmp):
     """Spatial inertia (mass m, com c, Ic about the com) times the motions (lin, ang) (3, K):
     linear m (lin + ang x c), angular Ic ang + c x (m (lin + ang x c))."""
@@ -103,7 +102,7 @@ def _inertia(m, c, Ic, lin, ang, out_l, out_a, tmp):
             out_a[b, r] = i0 * ang[0, r] + i1 * ang[1, r] + i2 * ang[2, r] + tmp[b, r]
 
 
-@_inline
+@_jit
 def _backward(Rl, p0, axis, fl, fn, tau, f1, t1, t2):
     """The RNEA's backward pass over the link forces (fl, fn) (n, 3, K), in place: tau_j = axis . n_j;
     parent += X' f: f_p = Rl f, n_p = Rl n + p x (Rl f); f1 (6, K) = joint 1's [f; n]."""

@@ -58,7 +58,9 @@ def _log(R, out):
 def _fk(X, q, frames):
     """frames[k] (4, 4): the frame before joint k's rotation, frames[n]: the tip."""
     n = len(q)
-    frames[0] = X[0]
+    for i in range(4):  # element by element: a 2-D array assignment compiles numba's shape-error path (~3 s)
+        for j in range(4):
+            frames[0, i, j] = X[0, i, j]
     for k in range(n):
         c, s = math.cos(q[k]), math.sin(q[k])
         F = frames[k]

@@ -44,9 +44,10 @@ def _bounding_spheres(A, B, V, ctr, rad):
 @_jit
 def _pair_distance(A, B, V, rows, rsum, n, P, Q):
     """Pair row n's safety distance (m)."""
+    row = np.int64(0)  # P[0], Q[0]: not a literal 0 (segseg and segtri compiled once more for it)
     if rows[n, 0] == 1:
-        return segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, 0) - rsum[n]
-    return segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, 0) - rsum[n]
+        return segtri(A, rows[n, 1], B, rows[n, 1], V, rows[n, 2], P, Q, row) - rsum[n]
+    return segseg(A, rows[n, 1], B, rows[n, 1], A, rows[n, 2], B, rows[n, 2], P, Q, row) - rsum[n]
 
 
 @_jit
@@ -133,7 +134,10 @@ def _place(chain_f, chain_i, q, R, p, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA
     for i in range(len(ms)):
         A[ms[i]], B[ms[i]], ctr[ms[i]], rad[ms[i]] = mA[i], mB[i], mctr[i], mrad[i]
     for i in range(len(mt)):
-        V[mt[i]], ctr[S + mt[i]], rad[S + mt[i]] = mV[i], mctr[len(ms) + i], mrad[len(ms) + i]
+        for k in range(3):  # element by element: a 2-D array assignment compiles numba's shape-error path (~3 s)
+            for j in range(3):
+                V[mt[i], k, j] = mV[i, k, j]
+        ctr[S + mt[i]], rad[S + mt[i]] = mctr[len(ms) + i], mrad[len(ms) + i]
 
 
 @_jit
@@ -170,8 +174,10 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
     kept, lb, dm = np.zeros(NP, np.bool_), np.full(groups.shape[0], -np.inf), np.zeros(lever.shape[0])
     cap = max(1024, 16 * qs.shape[0])
     ok, on, od = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
-    count = 0
-    nearest = -1
+    # np.int64, not a literal: numba types a call first with a variable's first value's literal type and would
+    # compile _grow and _pair_distance once more for it
+    count = np.int64(0)
+    nearest = np.int64(-1)
     for k in range(qs.shape[0]):
         _place(chain_f, chain_i, qs[k], R, p, ms, mt, mseg_f, mseg_j, mtri_f, mtri_j, mA, mB, mV, mctr, mrad, A, B, V,
                ctr, rad)
@@ -194,7 +200,7 @@ def _batch(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order, 
                 idx[m], val[m] = nearest, d0
                 m += 1
         if within >= 0.0:
-            nearest = -1
+            nearest = np.int64(-1)
             best = np.inf
             for i in range(m):
                 if val[i] < best or (val[i] == best and idx[i] < nearest):
@@ -223,7 +229,7 @@ def _recheck(chain_f, chain_i, seg_f, seg_j, tri_f, tri_j, qs, rows, rsum, order
     dm, lbk = np.zeros(lever.shape[0]), np.empty(G)
     idx, val = np.empty(rows.shape[0], np.int64), np.empty(rows.shape[0])
     ok, on, od = np.empty(1024, np.int64), np.empty(1024, np.int64), np.empty(1024)
-    count = 0
+    count = np.int64(0)  # (not a literal: _batch)
     nb = np.empty(G)
     for k in range(K):
         lbk[:] = lb[k]

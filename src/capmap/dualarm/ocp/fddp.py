@@ -30,6 +30,11 @@ REG_MIN, REG_MAX, REG_DEC = 1e-9, 1e9, 10.0
 TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEPINC = 0.1, 2.0, 1e-12, 0.5, 0.01
 HUGE = 1e30  # Crocoddyl's raiseIfNaN: nan, inf or >= 1e30 fails a rollout or a backward pass
 STOPPED = -1.0  # a trial stopped by its partial cost (_forward; a cost is >= 0)
+# _eval's diff: numpy bools, typed bool (a literal True or False would compile node_eval once more for each)
+VALUE, DIFF = np.False_, np.True_
+# _calc and _forward inlined in numba's IR: every compiled function calling node_eval, directly or not, links its machine
+# code and optimises and emits it again (seconds of compilation each); their own code is short to type
+_wrapper = numba.njit(cache=True, inline="always")
 
 
 def _offsets(sizes) -> np.ndarray:
@@ -75,7 +80,8 @@ def pack_nodes(models: list) -> tuple:
 
 @numba.njit(cache=True)
 def _eval(P, k, x, u, mu, diff, Lx, Lxx, Lu, xnext):
-    """Node k's cost (node_eval on its slice of the packed nodes ``P``)."""
+    """Node k's cost (node_eval on its slice of the packed nodes ``P``); Lxx F-ordered, as Crocoddyl's data
+    (:class:`capmap.dualarm.ocp.compiled_nodes.CompiledNodeModel`): one compiled node_eval for both."""
     (chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, so, tri_f, tri_j, to, Aw, Bw, Vw, lever, ref_lb, ref_q,
      rows, rsum, po, order, groups, spheres, go, kind, tg, axis, par, lim, lam_eq, eo, lam_in, io, c, C, g) = P
     s0, s1, t0, t1, p0, p1 = so[k], so[k + 1], to[k], to[k + 1], po[k], po[k + 1]
@@ -92,17 +98,17 @@ def evaluate_nodes(P, xs):
     the packed nodes' c and g (flat, by node offsets eo, io); as in a calc, a pair with no multiplier whose
     lower bound clears the margin has that bound in g."""
     n2 = xs.shape[1]
-    Lx, Lxx, Lu, xn = np.empty(n2), np.empty((n2, n2)), np.empty(n2 // 2), np.empty(n2)
+    Lx, Lxx, Lu, xn = np.empty(n2), np.empty((n2, n2)).T, np.empty(n2 // 2), np.empty(n2)
     u0 = np.zeros(n2 // 2)
     for k in range(xs.shape[0]):
-        _eval(P, k, xs[k], u0, 1.0, False, Lx, Lxx, Lu, xn)
+        _eval(P, k, xs[k], u0, 1.0, VALUE, Lx, Lxx, Lu, xn)
 
 
-@numba.njit(cache=True)
+@_wrapper
 def _calc(P, mu, cost, xnext, k, x, u):
     """Node k's cost at (x, u) into cost[k], its next state into xnext[k]."""
-    Lx, Lxx, Lu = np.empty(0), np.empty((0, 0)), np.empty(0)
-    cost[k] = _eval(P, k, x, u, mu, False, Lx, Lxx, Lu, xnext[k])
+    Lx, Lxx, Lu = np.empty(0), np.empty((0, 0)).T, np.empty(0)
+    cost[k] = _eval(P, k, x, u, mu, VALUE, Lx, Lxx, Lu, xnext[k])
     return cost[k]
 
 
@@ -154,7 +160,9 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
     Vxx is nan, inf or >= HUGE."""
     N, n2 = Lx.shape[0] - 1, Lx.shape[1]
     n = n2 // 2
-    Vxx[N] = Lxx[N]
+    for i in range(n2):  # element by element: a 2-D array assignment compiles numba's shape-error path (~3 s)
+        for j in range(n2):
+            Vxx[N, i, j] = Lxx[N, i, j]
     Vx[N] = Lx[N]
     for i in range(n2):
         Vxx[N, i, i] += preg
@@ -211,7 +219,7 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
     return True
 
 
-@numba.njit(cache=True)
+@_wrapper
 def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total0, limit):
     """Crocoddyl's FDDP forwardPass: the trial's cost, nan when the cost or a state is nan, inf or >= HUGE
     (the products written out: no allocation per node); STOPPED as soon as total0 - (the cost so far) <=
@@ -250,7 +258,9 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
     cost, trials not rolled out or stopped by their partial cost)."""
     N, n2, nu = xs.shape[0] - 1, xs.shape[1], us.shape[1]
     cost, xnext = np.zeros(N + 1), np.zeros((N + 1, n2))
-    Lx, Lxx, Lu = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2)), np.zeros((N + 1, nu))
+    # node t's Lxx is LxxT[t].T: F-ordered for node_eval (_eval), read through the view Lxx
+    Lx, LxxT, Lu = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2)), np.zeros((N + 1, nu))
+    Lxx = LxxT.transpose(0, 2, 1)
     Vx, Vxx = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2))
     Qu, Quuk, K, k_ = np.zeros((N, nu)), np.zeros((N, nu)), np.zeros((N, nu, n2)), np.zeros((N, nu))
     fs = np.zeros((N + 1, n2))
@@ -270,7 +280,7 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
                     for t in range(N + 1):
                         _calc(P, mu, cost, xnext, t, xs[t], us[t] if t < N else u0)
                 for t in range(N + 1):
-                    _eval(P, t, xs[t], us[t] if t < N else u0, mu, True, Lx[t], Lxx[t], Lu[t], xnext[t])
+                    _eval(P, t, xs[t], us[t] if t < N else u0, mu, DIFF, Lx[t], LxxT[t].T, Lu[t], xnext[t])
                 total = 0.0
                 for t in range(N + 1):  # in Crocoddyl's order
                     total += cost[t]
@@ -327,8 +337,11 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
             if (dVexp >= 0.0 and (abs(d0) < TH_GRAD or dV > TH_ACCEPT * dVexp)) or (
                     dVexp < 0.0 and not feasible and dV > TH_ACCEPTNEG * dVexp):
                 was_feasible = feasible
-                xs[:] = xs_try
-                us[:] = us_try
+                for t in range(N + 1):  # element by element (_backward)
+                    for i in range(n2):
+                        xs[t, i] = xs_try[t, i]
+                        if t < N and i < nu:
+                            us[t, i] = us_try[t, i]
                 feasible = was_feasible or alpha == 1.0
                 total = trial
                 recalc = True
