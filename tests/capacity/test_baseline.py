@@ -7,8 +7,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.capacity.baseline import (HealthyProblem, Hint, SelfMotion, healthy_capacity, screening_subset,
-                                      self_motion_angles)
+from capmap.capacity.baseline import HealthyProblem, Hint, SelfMotion, healthy_capacity, screening_subset, self_motion_angles
 from capmap.capacity.directions import Directions, exact, paper_grid, sphere
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.problem import CapacityProblem, point_capacity

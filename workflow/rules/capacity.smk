@@ -51,6 +51,8 @@ rule capacity:
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("capacity"),
     params:
         slice=params("capacity", "capacity"),
     script:
@@ -68,6 +70,8 @@ rule points:
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("voxels"),
     params:
         slice=params("capacity", "points"),
     script:
@@ -85,6 +89,8 @@ rule voxels:
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("voxels"),
     params:
         slice=params("voxels", "voxels"),
     script:
@@ -107,6 +113,8 @@ rule refine:
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("refine"),
     params:
         slice=params("refine", "refine"),
     script:
@@ -130,6 +138,8 @@ rule voxel_map:
     priority: 20
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("maps"),
     params:
         slice=params("refine", "voxel_map"),
     script:
@@ -152,6 +162,8 @@ rule summary:
         out("logs/summary.log"),
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("maps"),
     params:
         slice=params("view", "summary"),
     script:
@@ -174,6 +186,8 @@ rule capacity_3d:
         out("logs/capacity_3d.log"),
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("maps"),
     params:
         slice=params("view", "capacity_3d"),
         tasks=TASKS,  # the further tasks' names, in the order of input.tasks (the paths' labels)
@@ -194,6 +208,8 @@ rule plan:
         plan_dir=PLAN_DIR_RE,
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("plan"),
     params:
         slice=lambda w: params("plan", "plan", job_of(w.plan_dir)),
     script:
@@ -216,6 +232,8 @@ rule verify:
         verify_dir=VERIFY_DIR_RE,
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("verify"),
     params:
         slice=lambda w: params("verify", "verify", job_of(w.verify_dir)),
     script:
@@ -259,6 +277,8 @@ rule verify_plots:
         verify_dir=VERIFY_DIR_RE,
     conda:
         "../envs/capmap.yaml"
+    resources:
+        mem_mb=mem_mb("maps"),
     params:
         slice=lambda w: params("verify", "verify_plots", job_of(w.verify_dir)),
         colour=lambda w: path_colour_of(w.verify_dir),  # the planned path's, as on the summary map and 3D page

@@ -50,6 +50,12 @@ def out(path):
     return f"{OUT}/{path}"
 
 
+def mem_mb(kind):
+    """A map job's memory request (MB): 1.5 x the pre-run estimate of its kind (capmap.capacity.sizing:
+    capacity, voxels, refine, plan, verify, maps), rounded up to 100 MB; what a cluster reserves per job."""
+    return int(-(-1.5 * RUN.estimate.jobs_mb[kind] // 100) * 100)
+
+
 print(f"capmap: run {RUN.name!r}: outputs under {OUT}/", file=sys.stderr)
 print(f"capmap: {RUN.failure.describe()}", file=sys.stderr)
 print(f"capmap: {RUN.limits.describe()}", file=sys.stderr)

@@ -44,9 +44,9 @@ from capmap.core import ik
 from capmap.core.coefficients import Coefficients
 from capmap.core.configuration import Configurations, arm_configurations
 from capmap.core.dynamics import ArmDynamics
-from capmap.core.limits import AffineLimits
 from capmap.core.ik.finish import RESIDUAL_TOL, wrap_to_range
 from capmap.core.kinematics import pose_error
+from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm, free
 from capmap.errors import CapmapError
 
