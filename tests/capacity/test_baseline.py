@@ -7,10 +7,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from capmap.capacity.baseline import HealthyProblem, Hint, SelfMotion, healthy_capacity, screening_subset, self_motion_angles
+from capmap.capacity.baseline import healthy_capacity
 from capmap.capacity.directions import Directions, exact, paper_grid, sphere
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.problem import CapacityProblem, point_capacity
+from capmap.capacity.self_motion import HealthyProblem, Hint, SelfMotion, screening_subset, self_motion_angles
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
 from capmap.core.reduction import lock

@@ -9,11 +9,11 @@ orders above that and far below any capacity difference that matters."""
 import numpy as np
 import pytest
 
-from capmap.capacity.baseline import HealthyProblem, SelfMotion, screening_subset, self_motion_angles
 from capmap.capacity.directions import grid_axes, sphere
 from capmap.capacity.engine import LoadLimits, Motion, capacity_over_directions, coefficients_pinocchio
 from capmap.capacity.evaluator import Evaluator, HealthyEvaluator, LockedEvaluator
 from capmap.capacity.problem import CapacityProblem
+from capmap.capacity.self_motion import HealthyProblem, SelfMotion, screening_subset, self_motion_angles
 from capmap.core import ik
 from capmap.core.configuration import arm_configurations
 from capmap.core.dynamics import ArmDynamics

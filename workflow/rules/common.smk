@@ -52,8 +52,10 @@ def out(path):
 
 def mem_mb(kind):
     """A map job's memory request (MB): 1.5 x the pre-run estimate of its kind (capmap.capacity.sizing:
-    capacity, voxels, refine, plan, verify, maps), rounded up to 100 MB; what a cluster reserves per job."""
-    return int(-(-1.5 * RUN.estimate.jobs_mb[kind] // 100) * 100)
+    capacity, voxels, refine, plan, verify, maps; a kind the run does not have, e.g. refine without
+    voxels.refine: the largest), rounded up to 100 MB; what a cluster reserves per job."""
+    est = RUN.estimate
+    return int(-(-1.5 * est.jobs_mb.get(kind, est.peak_mb) // 100) * 100)
 
 
 print(f"capmap: run {RUN.name!r}: outputs under {OUT}/", file=sys.stderr)

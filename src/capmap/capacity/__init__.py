@@ -15,6 +15,8 @@
 - :mod:`~capmap.capacity.gain`         the plan-gain experiment (isotropic vs direction-aware moves, verified)
 - :mod:`~capmap.capacity.atlas`        one coarse map per (locked joint, angle) and its summary rows
 - :mod:`~capmap.capacity.baseline`     the healthy arm: the failed joint swept, the best posture per point
+- :mod:`~capmap.capacity.self_motion`  the healthy arm's data: its angles, question, answer, postures' capacity
+- :mod:`~capmap.capacity.angle_search` between the grid angles: a best posture followed along its IK branch
 - :mod:`~capmap.capacity.refine`       voxel minima refined until they converge, all branches and each configuration
 - :mod:`~capmap.capacity.refine_data`  the refinement's settings, point results and per-voxel minima (plain data)
 - :mod:`~capmap.capacity.folds`        the refinement's fold brackets (singular surfaces crossing a voxel)

@@ -17,11 +17,11 @@ from __future__ import annotations
 import numpy as np
 
 from capmap.capacity import directions as dirs_mod
-from capmap.capacity.baseline import HealthyProblem, SelfMotion, screening_subset, self_motion_angles
 from capmap.capacity.directions import Directions, grid_axes
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine_data import RefineSettings
+from capmap.capacity.self_motion import HealthyProblem, SelfMotion, screening_subset, self_motion_angles
 from capmap.config.capacity import DirectionsConfig, LimitsConfig, LockConfig, RefineConfig, TaskConfig
 from capmap.config.failure import Failure
 from capmap.config.run import RunConfig

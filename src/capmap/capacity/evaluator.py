@@ -25,10 +25,11 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from capmap.capacity.baseline import HealthyProblem, Hint, healthy_capacity
+from capmap.capacity.baseline import healthy_capacity
 from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine_data import Evaluation
+from capmap.capacity.self_motion import HealthyProblem, Hint
 
 __all__ = ["Evaluator", "LockedEvaluator", "HealthyEvaluator"]
 

@@ -11,9 +11,10 @@ import numpy as np
 import pandas as pd
 
 from capmap.capacity import sampling
-from capmap.capacity.baseline import HealthyProblem, healthy_capacity
+from capmap.capacity.baseline import healthy_capacity
 from capmap.capacity.evaluator import HealthyEvaluator
 from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
+from capmap.capacity.self_motion import HealthyProblem
 from capmap.capacity.tables import grid_of
 from capmap.capacity.voxels import Grid
 from capmap.core.reduction import free

@@ -6,11 +6,11 @@ the same backward pass (gaps in the value function while infeasible, the regular
 Quu and Vxx, Cholesky of Quu), the same expected improvement (dg, dq, dv), the same line search over
 alphas 1, 1/2, ..., 1/512 with its acceptance tests (th_acceptstep 0.1, th_acceptnegstep 2, th_grad
 1e-12), the same regularisation schedule (reg_min 1e-9, reg_max 1e9, the given increase factor,
-decrease 10, thresholds 0.5 and 0.01) and stop (|d0 + d1 / 2| < th_stop once feasible). The problem
-is the one :class:`capmap.dualarm.ocp.compiled_nodes.CompiledNodeModel` states (linear dynamics x+ = Fx x + Fu u,
-Luu = dt diag(w_control), Lxu = 0), its nodes packed flat by :func:`pack_nodes`.
-tests/dualarm/test_fddp.py checks it step for step against Crocoddyl's own solver on the same nodes, and
-tests/dualarm/test_nodes.py the whole AL solve against Crocoddyl on the Pinocchio node models.
+decrease 10, thresholds 0.5 and 0.01) and stop (|d0 + d1 / 2| < th_stop once feasible). The problem is the
+one :class:`capmap.dualarm.ocp.compiled_nodes.CompiledNodeModel` states (linear dynamics x+ = Fx x + Fu u, Luu = dt
+diag(w_control), Lxu = 0), its nodes packed flat by :func:`pack_nodes`. tests/dualarm/test_fddp.py checks it step
+for step against Crocoddyl's own solver on the same nodes, and tests/dualarm/test_nodes.py the whole AL solve
+against Crocoddyl on the Pinocchio node models.
 """
 
 from __future__ import annotations
@@ -20,20 +20,16 @@ import numpy as np
 
 from capmap.dualarm.ocp.node_kernel import node_eval
 
-__all__ = ["pack_nodes", "fddp", "evaluate_nodes", "ALPHAS", "LAM_EQ", "EQ_AT", "LAM_IN", "IN_AT", "C_VALUES",
-           "G_VALUES"]
+__all__ = ["pack_nodes", "fddp", "evaluate_nodes", "ALPHAS", "LAM_EQ", "EQ_AT", "LAM_IN", "IN_AT", "C_VALUES", "G_VALUES"]
 
 ALPHAS = 0.5 ** np.arange(10)  # Crocoddyl's step lengths
 # where pack_nodes() puts the multipliers, their node offsets and the nodes' constraint values
 LAM_EQ, EQ_AT, LAM_IN, IN_AT, C_VALUES, G_VALUES = 29, 30, 31, 32, 33, 35
-REG_MIN, REG_MAX, REG_DEC = 1e-9, 1e9, 10.0
-TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEPINC = 0.1, 2.0, 1e-12, 0.5, 0.01
+REG_MIN, REG_MAX, REG_DEC, TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEPINC = 1e-9, 1e9, 10.0, 0.1, 2.0, 1e-12, 0.5, 0.01
 HUGE = 1e30  # Crocoddyl's raiseIfNaN: nan, inf or >= 1e30 fails a rollout or a backward pass
 STOPPED = -1.0  # a trial stopped by its partial cost (_forward; a cost is >= 0)
-# _eval's diff: numpy bools, typed bool (a literal True or False would compile node_eval once more for each)
-VALUE, DIFF = np.False_, np.True_
-# _calc and _forward inlined in numba's IR: every compiled function calling node_eval, directly or not, links its machine
-# code and optimises and emits it again (seconds of compilation each); their own code is short to type
+VALUE, DIFF = np.False_, np.True_  # _eval's diff, typed bool (a literal would compile node_eval once per value)
+# _calc, _forward inlined in numba's IR: each compiled caller of node_eval re-optimises its code (seconds each)
 _wrapper = numba.njit(cache=True, inline="always")
 
 
@@ -80,8 +76,7 @@ def pack_nodes(models: list) -> tuple:
 
 @numba.njit(cache=True)
 def _eval(P, k, x, u, mu, diff, Lx, Lxx, Lu, xnext):
-    """Node k's cost (node_eval on its slice of the packed nodes ``P``); Lxx F-ordered, as Crocoddyl's data
-    (:class:`capmap.dualarm.ocp.compiled_nodes.CompiledNodeModel`): one compiled node_eval for both."""
+    """Node k's cost (node_eval on its slice of the packed nodes ``P``); Lxx F-ordered, as Crocoddyl's data."""
     (chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, so, tri_f, tri_j, to, Aw, Bw, Vw, lever, ref_lb, ref_q,
      rows, rsum, po, order, groups, spheres, go, kind, tg, axis, par, lim, lam_eq, eo, lam_in, io, c, C, g) = P
     s0, s1, t0, t1, p0, p1 = so[k], so[k + 1], to[k], to[k + 1], po[k], po[k + 1]
@@ -160,9 +155,8 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
     Vxx is nan, inf or >= HUGE."""
     N, n2 = Lx.shape[0] - 1, Lx.shape[1]
     n = n2 // 2
-    for i in range(n2):  # element by element: a 2-D array assignment compiles numba's shape-error path (~3 s)
-        for j in range(n2):
-            Vxx[N, i, j] = Lxx[N, i, j]
+    for i in range(n2 * n2):  # element by element: a 2-D array assignment compiles numba's shape-error path (~3 s)
+        Vxx[N, i // n2, i % n2] = Lxx[N, i // n2, i % n2]
     Vx[N] = Lx[N]
     for i in range(n2):
         Vxx[N, i, i] += preg
@@ -258,9 +252,8 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
     cost, trials not rolled out or stopped by their partial cost)."""
     N, n2, nu = xs.shape[0] - 1, xs.shape[1], us.shape[1]
     cost, xnext = np.zeros(N + 1), np.zeros((N + 1, n2))
-    # node t's Lxx is LxxT[t].T: F-ordered for node_eval (_eval), read through the view Lxx
     Lx, LxxT, Lu = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2)), np.zeros((N + 1, nu))
-    Lxx = LxxT.transpose(0, 2, 1)
+    Lxx = LxxT.transpose(0, 2, 1)  # node t's Lxx is LxxT[t].T: F-ordered for node_eval, read through this view
     Vx, Vxx = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2))
     Qu, Quuk, K, k_ = np.zeros((N, nu)), np.zeros((N, nu)), np.zeros((N, nu, n2)), np.zeros((N, nu))
     fs = np.zeros((N + 1, n2))
