@@ -16,7 +16,7 @@ from capmap.core.kinematics import pose_error
 __all__ = ["FINER", "between_grid_angles", "polish", "follow"]
 
 FINER = 8  # a 0 kg plateau on the grid: its points searched again on a grid this many times finer
-_NEWTON_STEPS = 8  # following a branch over at most half a grid step: converged to 1e-12 well within this
+_NEWTON_STEPS = 8  # over half a 10 deg step, 400 postures of the default map: 385 meet the IK's tolerance (12 steps: 386)
 
 
 def between_grid_angles(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray) -> None:
