@@ -67,7 +67,8 @@ class HealthyEvaluator:
     its swept joint's angles, the task's rotation, motion and directions, the screening set); ``n_voxels``
     the owners' range (the refinement's voxels: owner = a voxel's row). A voxel's points are evaluated
     together, ``chunk`` at a time; each voxel's least value exact, the others may stop at it, tried first
-    at the angle of the voxel's least value so far. No per-axis or per-configuration values."""
+    on the configuration of the voxel's least value's posture, at and near its angle. No per-axis or
+    per-configuration values."""
 
     pointwise = False
 
