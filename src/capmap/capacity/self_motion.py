@@ -39,14 +39,19 @@ def self_motion_angles(lower_deg: float, upper_deg: float, through_deg: float, s
     if upper_deg - lower_deg >= 360.0 - 1e-9:
         n = int(np.ceil(360.0 / step_deg - 1e-9))
         a = through_deg + step_deg * (np.arange(n) - n // 2)  # half a turn each side: the failed angle as it is
-        a = np.where(a > upper_deg + 1e-9, a - 360.0, a)  # the others' representatives inside the range
-        a = np.where(a < lower_deg - 1e-9, a + 360.0, a)
+        a = _into_turn(a, lower_deg, upper_deg)  # the others' representatives inside the range
     else:
         m = np.arange(np.ceil((lower_deg - through_deg) / step_deg - 1e-9),
                       np.floor((upper_deg - through_deg) / step_deg + 1e-9) + 1)
         a = np.concatenate([through_deg + step_deg * m, [lower_deg, upper_deg]])
     a = np.clip(np.sort(a), lower_deg, upper_deg)
     return a[np.concatenate([[True], np.diff(a) > 1e-9])]
+
+
+def _into_turn(a: np.ndarray, lower_deg: float, upper_deg: float) -> np.ndarray:
+    """Angles (N,) deg shifted by a turn into [lower, upper] (a range spanning a turn or more)."""
+    a = np.where(a > upper_deg + 1e-9, a - 360.0, a)
+    return np.where(a < lower_deg - 1e-9, a + 360.0, a)
 
 
 def screening_subset(directions: Directions, n: int) -> Directions:
@@ -119,8 +124,7 @@ class SelfMotion:
         NaN where outside it otherwise."""
         a = np.asarray(angle_deg, dtype=float)
         if self.turns:
-            a = np.where(a > self.upper_deg + 1e-9, a - 360.0, a)
-            return np.where(a < self.lower_deg - 1e-9, a + 360.0, a)
+            return _into_turn(a, self.lower_deg, self.upper_deg)
         return np.where((a >= self.lower_deg - 1e-9) & (a <= self.upper_deg + 1e-9), a, np.nan)
 
     def grid_index(self, angle_deg: np.ndarray) -> np.ndarray:
