@@ -37,6 +37,7 @@ include: "workflow/rules/reconfig.smk"
 include: "workflow/rules/dualarm.smk"
 include: "workflow/rules/atlas.smk"
 include: "workflow/rules/baseline.smk"
+include: "workflow/rules/advice.smk"
 include: "workflow/rules/catalogue.smk"
 
 

@@ -38,7 +38,7 @@ from capmap.errors import CapmapError, ConfigError
 from capmap.io.fingerprint import code_fingerprint, file_sha256
 from capmap.robots import load
 
-__all__ = ["check_run_config", "check_capacity_config", "check_goal", "check_dt", "check_follow", "check_atlas",
+__all__ = ["check_run_config", "check_capacity_config", "check_goal", "check_dt", "check_follow", "check_atlas", "check_advice",
            "check_on_grid", "check_motions",
            "check_dualarm", "dual_arm_limits"]
 
@@ -87,6 +87,8 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
                          len(limits.names), MapJobs(1, False), keys)
         except ConfigError as exc:
             raise ConfigError(f"{source}: {exc}") from None
+    if cfg.advice is not None:
+        check_advice(cfg, robot, source)
     if cfg.dualarm is not None:
         check_dualarm(cfg, source)
     return cfg
@@ -220,6 +222,17 @@ def check_atlas(at: AtlasConfig, robot: Robot, source: str = "config") -> None:
         for a in at.angles_deg:
             if not lo - 1e-9 <= a <= hi + 1e-9:
                 raise ConfigError(f"{source}: atlas.angles_deg: {a:g} is outside joint {j}'s range [{lo:g}, {hi:g}] deg")
+
+
+def check_advice(cfg: RunConfig, robot: Robot, source: str = "config") -> None:
+    """The advice has the atlas' maps to use, and every joint it advises on exists."""
+    if cfg.atlas is None:
+        raise ConfigError(f"{source}: advice needs an atlas section: its maps are the atlas' (atlas.sampling, "
+                          "atlas.directions, atlas.edge_m)")
+    for j in cfg.advice.joints_of(cfg.lock.joint):
+        if not 1 <= j <= robot.n_joints:
+            raise ConfigError(f"{source}: advice.joints: joint {j} is out of range: {robot.name} has joints "
+                              f"1..{robot.n_joints}")
 
 
 def check_on_grid(cfg: RunConfig, failure: Failure, grid: Grid | None, source: str = "config") -> None:

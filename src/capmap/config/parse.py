@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from capmap.config.advice import AdviceConfig
 from capmap.config.atlas import AtlasConfig
 from capmap.config.baseline import BaselineConfig
 from capmap.config.capacity import (
@@ -61,6 +62,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         dualarm=dualarm,
         atlas=atlas,
         baseline=BaselineConfig.from_doc(doc.get("baseline")),
+        advice=AdviceConfig.from_doc(doc.get("advice")) if "advice" in doc or atlas is not None else None,
         name=run_name(doc, source),
     )
 

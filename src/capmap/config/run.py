@@ -17,6 +17,7 @@ from capmap.config.validation import load_yaml
 from capmap.errors import ConfigError
 
 if TYPE_CHECKING:  # resolved lazily at run time through SECTION_TYPES
+    from capmap.config.advice import AdviceConfig
     from capmap.config.atlas import AtlasConfig
     from capmap.config.baseline import BaselineConfig
     from capmap.config.capacity import (
@@ -40,7 +41,7 @@ __all__ = ["RunConfig", "SECTION_TYPES", "run_name", "run_document", "config_fil
 SECTION_TYPES = {  # a section type's name -> the module defining it (imported when a slice holds it)
     **dict.fromkeys(("DirectionsConfig", "LimitsConfig", "LockConfig", "PlanningConfig", "RefineConfig", "SamplingConfig",
                      "TaskConfig", "VerificationConfig"), "capmap.config.capacity"),
-    "AtlasConfig": "capmap.config.atlas", "BaselineConfig": "capmap.config.baseline",
+    "AdviceConfig": "capmap.config.advice", "AtlasConfig": "capmap.config.atlas", "BaselineConfig": "capmap.config.baseline",
     "DualArmConfig": "capmap.config.dualarm", "Estimate": "capmap.config.estimate",
     "Failure": "capmap.config.failure", "FollowConfig": "capmap.config.following", "ReconfigConfig": "capmap.config.reconfig",
 }
@@ -71,6 +72,7 @@ class RunConfig:
     dualarm: DualArmConfig | None = None
     atlas: AtlasConfig | None = None
     baseline: BaselineConfig | None = None  # parse_config always sets it (absent section: its defaults)
+    advice: AdviceConfig | None = None  # with an atlas (its maps): the section or its defaults
     failure: Failure | None = None
     estimate: Estimate | None = None
     name: str = "default"

@@ -85,6 +85,14 @@ STAGES: dict[str, Stage] = {
                         "failure.start_m")  # the start (given or FK(q_ini)) does not depend on the lock
                        + _TASK_MOTION + tuple(f"task.{k}" for k in ("payload_kg", "goal_m", "q_ini_deg"))),
     "atlas": Stage(("atlas",), ("atlas_map",)),
+    # the lock-angle advice: one lock sweep per joint (its angle where it stands: a param), the run's tasks verified
+    # at every swept angle (each from its start, its start configuration the reference), the failure-tolerant map
+    "lock_sweep": Stage(("robot", "limits", "atlas.sampling", "atlas.directions", "atlas.edge_m", "advice.step_deg")
+                        + _TASK_MOTION),
+    "advice_tasks": Stage(("failure.start_m", "task.goal_m", "task.payload_kg", "task.q_ini_deg", "tasks",
+                           "verification.dt_s"), ("lock_sweep",)),
+    "advice": Stage(("advice.step_deg",), ("advice_tasks",)),
+    "tolerant": Stage(("task.payload_kg", "failure.start_m", "task.goal_m"), ("lock_sweep",)),
     # the healthy arm and the failure's cost (reads the failed map: its worst points, its values)
     "baseline_shard": Stage(_baseline_shard, ("refine",)),
     "baseline": Stage(("baseline.check_voxels", "baseline.check_step_deg"), ("baseline_shard", "view")),

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from capmap.plots.common import plt, save
+from capmap.plots.common import grid_corner, plt, save, voxel_layer
 
 __all__ = ["BaselineContext", "baseline_figure"]
 
@@ -28,24 +28,6 @@ class BaselineContext:
     edge_m: float
     start_m: np.ndarray
     payloads_kg: tuple[float, ...]
-
-
-def _lower(df: pd.DataFrame, edge: float) -> np.ndarray:
-    """(3,) m: the corner of voxel (0, 0, 0) of the table's grid (centre = lower + (index + 1/2) edge)."""
-    r = df.iloc[0]
-    return np.array([r.x_m, r.y_m, r.z_m]) - (np.array([r.i, r.j, r.k], dtype=float) + 0.5) * edge
-
-
-def _layer(df: pd.DataFrame, column: str, k: int, edge: float) -> tuple[np.ndarray, list[float]]:
-    """Image (ny, nx) of ``column`` over the voxel layer k (NaN: no value) and its imshow extent [m]."""
-    i0, j0 = int(df.i.min()), int(df.j.min())
-    nx, ny = int(df.i.max()) - i0 + 1, int(df.j.max()) - j0 + 1
-    img = np.full((ny, nx), np.nan)
-    sl = df[df.k == k]
-    img[sl.j.to_numpy() - j0, sl.i.to_numpy() - i0] = sl[column].to_numpy()
-    lo = _lower(df, edge)
-    x0, y0 = lo[0] + i0 * edge, lo[1] + j0 * edge
-    return img, [x0, x0 + nx * edge, y0, y0 + ny * edge]
 
 
 def _volumes(a, df: pd.DataFrame, configuration: str, edge_m: float, payloads_kg) -> str:
@@ -87,10 +69,10 @@ def baseline_figure(df: pd.DataFrame, conv: pd.DataFrame, context: BaselineConte
     c = context
     fig, ax = plt.subplots(1, 2, figsize=(15, 7), layout="constrained")
     verdict = _volumes(ax[0], df, c.configuration, c.edge_m, c.payloads_kg)
-    lo = _lower(df, c.edge_m)
+    lo = grid_corner(df, c.edge_m)
     k = int(np.floor((c.start_m[2] - lo[2]) / c.edge_m))  # the task start's layer
     a = ax[1]
-    img, extent = _layer(df, "arm_configuration_loss_kg", k, c.edge_m)
+    img, extent = voxel_layer(df, "arm_configuration_loss_kg", k, c.edge_m)
     im = a.imshow(img, origin="lower", cmap="magma_r", extent=extent, interpolation="nearest",
                   vmin=min(0.0, float(np.nanmin(img, initial=0.0))))
     fig.colorbar(im, ax=a, label=f"loss on {c.configuration} [kg]: healthy − failed capacity (white: neither reaches)")

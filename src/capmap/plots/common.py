@@ -7,11 +7,12 @@ from pathlib import Path
 
 import matplotlib
 import numpy as np
+import pandas as pd
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-__all__ = ["plt", "save", "not_done_figure", "legend_beside", "on_top"]
+__all__ = ["plt", "save", "not_done_figure", "legend_beside", "on_top", "grid_corner", "voxel_layer"]
 
 
 def save(fig, out_png: str | Path, rect: tuple[float, float, float, float] | None = None) -> None:
@@ -47,3 +48,21 @@ def on_top(values, i: int) -> float:
     higher, so that no small curve hides under a larger one."""
     rank = np.argsort(np.argsort(-np.abs(values).max(axis=0)))
     return 2 + rank[i] / (2 * len(rank))
+
+
+def grid_corner(df: pd.DataFrame, edge: float) -> np.ndarray:
+    """(3,) m: the corner of voxel (0, 0, 0) of the table's grid (centre = lower + (index + 1/2) edge)."""
+    r = df.iloc[0]
+    return np.array([r.x_m, r.y_m, r.z_m]) - (np.array([r.i, r.j, r.k], dtype=float) + 0.5) * edge
+
+
+def voxel_layer(df: pd.DataFrame, column: str, k: int, edge: float) -> tuple[np.ndarray, list[float]]:
+    """Image (ny, nx) of ``column`` over the voxel layer k (NaN: no value) and its imshow extent [m]."""
+    i0, j0 = int(df.i.min()), int(df.j.min())
+    nx, ny = int(df.i.max()) - i0 + 1, int(df.j.max()) - j0 + 1
+    img = np.full((ny, nx), np.nan)
+    sl = df[df.k == k]
+    img[sl.j.to_numpy() - j0, sl.i.to_numpy() - i0] = sl[column].to_numpy()
+    lo = grid_corner(df, edge)
+    x0, y0 = lo[0] + i0 * edge, lo[1] + j0 * edge
+    return img, [x0, x0 + nx * edge, y0, y0 + ny * edge]

@@ -1,0 +1,33 @@
+"""Config section of the lock-angle advice: ``advice`` (optional; absent: these defaults).
+
+The advice sweeps a joint's lock angle and verifies the run's tasks at each angle on the arm locked
+there; the failure-tolerant map takes the minimum over every joint's sweep. Its maps are the fault
+atlas' (``atlas.sampling``, ``atlas.directions``, ``atlas.edge_m``): without an atlas section there
+is no advice."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["AdviceConfig"]
+
+
+@dataclass(frozen=True)
+class AdviceConfig:
+    """``advice``: the joints to advise on (``joints``; None: the failed one, ``lock.joint``), each
+    swept in steps of ``step_deg`` through the angle it stood at (``task.q_ini_deg``), one turn at most
+    (a joint turning less: its whole range)."""
+
+    joints: tuple[int, ...] | None = None
+    step_deg: float = 10.0
+
+    @classmethod
+    def from_doc(cls, d: dict | None) -> "AdviceConfig":
+        d = dict(d or {})
+        if "joints" in d:
+            d["joints"] = tuple(int(j) for j in d["joints"])
+        return cls(**d)
+
+    def joints_of(self, failed_joint: int) -> tuple[int, ...]:
+        """The joints advised on: the listed ones, else the failed joint."""
+        return self.joints if self.joints is not None else (int(failed_joint),)
