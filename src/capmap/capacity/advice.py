@@ -174,7 +174,7 @@ def tasks_at_lock(problem: CapacityProblem, vox: pd.DataFrame, grid: Grid, tasks
                    capacity_kg=planned if best == "planned" else direct, feasible=direct_ok or planned_ok)
         row["margin_pct"] = margin_pct(row["capacity_kg"], m)
         rows.append(row)
-    return rows
+    return [{c: r[c] for c in ADVICE_TASK_COLUMNS[2:]} for r in rows]
 
 
 def healthy_lines(sweep: pd.DataFrame, grid: Grid, tasks: list[PlanTask]) -> pd.DataFrame:
