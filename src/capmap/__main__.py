@@ -21,6 +21,9 @@
   warm process answers after the first (:mod:`capmap.stages.query_service`).
 - ``capmap catalogue [RUN]`` lists a run's datasets: the names :func:`capmap.load` takes, their rows and
   what they hold.
+- ``capmap advise [CONFIG] [--joint J] [--cores N] [-n]`` runs the lock-angle advice of joint J (default: the
+  config's ``advice.joints`` and the failure-tolerant map) and prints where to brake each joint and what the
+  worst task keeps there.
 - ``capmap run [CONFIG] [TARGET ...] [--cores N] [-n]`` checks CONFIG (default ``config/config.yaml``) with
   capmap's own loader, then runs the workflow on it (``snakemake --config configfile=CONFIG``: Snakemake
   never opens the file itself, so a config one did not write cannot run code or hang the reader).
@@ -80,6 +83,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("targets", nargs="*", default=["all"], help="workflow targets (default: all)")
     run.add_argument("--cores", default="2", help="cores for the jobs (default: 2)")
     run.add_argument("-n", "--dry-run", action="store_true", help="show the jobs without running them")
+    adv = sub.add_parser("advise", help="where to brake a joint: its lock angle swept, the run's tasks verified at each")
+    adv.add_argument("config", nargs="?", default=DEFAULT_CONFIG, help=f"the run's config (default: {DEFAULT_CONFIG})")
+    adv.add_argument("--joint", type=int, default=None,
+                     help="the joint, 1-based (default: advice.joints, and the failure-tolerant map)")
+    adv.add_argument("--cores", default="2", help="cores for the jobs (default: 2)")
+    adv.add_argument("-n", "--dry-run", action="store_true", help="show the jobs without running them")
     chk = sub.add_parser("check", help="verify the catalogued datasets (sha256, rows)")
     chk.add_argument("runs", nargs="*", help="run folders, results/<run> (default: every run under results/)")
     cfg = sub.add_parser("check-config", help="read and check config files as the workflow does, before any job")
@@ -112,6 +121,10 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "run":
         return _run(args)
+    if args.command == "advise":
+        from capmap.stages.advise_command import advise
+
+        return advise(args, _run)
     if args.command == "query":
         return _query(args)
     if args.command == "check-config":

@@ -17,6 +17,7 @@ from capmap.capacity.advice import (
     convergence,
     full_grid,
     healthy_lines,
+    neighbours_worst,
     recommend,
     tasks_at_lock,
 )
@@ -174,3 +175,13 @@ def test_convergence_takes_every_other_and_every_fourth_angle():
         worst = rows[rows.angle_deg.isin(keep)].groupby("angle_deg").margin_pct.min()
         assert r.recommended_angle_deg == worst.idxmax() and r.worst_margin_pct == worst.max()
         assert 100.0 in keep
+
+
+def test_neighbours_worst_takes_the_swept_angles_either_side_a_turn_round():
+    angles = np.arange(-80.0, 280.0, 10.0)  # one turn: -80 and 270 are neighbours
+    rows = pd.DataFrame({"angle_deg": angles, "task": "a", "payload_kg": 1.0, "margin_pct": angles / 10,
+                         "line_margin_pct": 0.0, "feasible": True})
+    assert neighbours_worst(rows, 100.0) == 9.0 and neighbours_worst(rows, -80.0) == -7.0
+    assert neighbours_worst(rows, 270.0) == -8.0
+    part = rows[rows.angle_deg <= 0]  # under a turn: the ends have one neighbour
+    assert neighbours_worst(part, -80.0) == -7.0 and neighbours_worst(part, 0.0) == -1.0

@@ -38,7 +38,7 @@ from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError, NoPath
 
 __all__ = ["ADVICE_TASK_COLUMNS", "ADVICE_COLUMNS", "PLANNER_MOVES", "AdviceSettings", "task_name", "full_grid", "line_voxels",
-           "tasks_at_lock", "healthy_lines", "recommend", "convergence"]
+           "tasks_at_lock", "healthy_lines", "recommend", "neighbours_worst", "convergence"]
 
 ADVICE_TASK_COLUMNS = ["joint", "angle_deg", "task", "payload_kg", "start_branch_offset_deg", "direct_capacity_kg",
                        "direct_note", "planned_capacity_kg", "planned_payload_kg", "planned_note", "capacity_kg",
@@ -46,8 +46,8 @@ ADVICE_TASK_COLUMNS = ["joint", "angle_deg", "task", "payload_kg", "start_branch
 """advice/joint{j}/tasks.parquet: one row per (lock angle, task)."""
 
 ADVICE_COLUMNS = ["joint", "step_deg", "n_angles", "stands_at_deg", "recommended_angle_deg", "worst_task",
-                  "worst_margin_pct", "worst_line_margin_pct", "tasks_carried", "n_tasks", "stands_at_worst_margin_pct",
-                  "healthy_worst_line_margin_pct"]
+                  "worst_margin_pct", "neighbours_worst_margin_pct", "worst_line_margin_pct", "tasks_carried", "n_tasks",
+                  "stands_at_worst_margin_pct", "healthy_worst_line_margin_pct"]
 """advice/joint{j}/advice.parquet: the recommendation, and the angle the joint stands at for comparison."""
 
 
@@ -209,6 +209,17 @@ def recommend(rows: pd.DataFrame, stands_at_deg: float) -> pd.Series:
     key = np.lexsort((-np.abs(per.angle_deg.to_numpy() - stands_at_deg), per.worst_line_margin_pct.to_numpy(),
                       per.worst_margin_pct.to_numpy()))
     return per.iloc[key[-1]]
+
+
+def neighbours_worst(rows: pd.DataFrame, angle_deg: float) -> float:
+    """The worst task's margin [%] at the swept angles either side of ``angle_deg`` (a turn taken round
+    when the sweep spans one): how far the margin falls if the brake holds a step off (NaN: no neighbour)."""
+    per = _per_angle(rows).set_index("angle_deg").worst_margin_pct.sort_index()
+    a = per.index.to_numpy()
+    i = int(np.argmin(np.abs(a - angle_deg)))
+    turn = len(a) > 2 and np.isclose((a[-1] - a[0]) + (a[1] - a[0]), 360.0)
+    near = [i - 1, i + 1] if turn else [k for k in (i - 1, i + 1) if 0 <= k < len(a)]
+    return float(per.iloc[[k % len(a) for k in near]].min()) if near else np.nan
 
 
 def convergence(rows: pd.DataFrame, stands_at_deg: float, step_deg: float, strides=(4, 2, 1)) -> pd.DataFrame:

@@ -59,7 +59,8 @@ def advice_figure(rows: pd.DataFrame, healthy: pd.DataFrame, advice: pd.Series, 
     steps = ", ".join(f"{r.step_deg:g} deg: {r.recommended_angle_deg:g} deg ({r.worst_margin_pct:+.0f} %)"
                       for r in conv.itertuples())
     fig.suptitle(f"Where to brake joint {int(advice.joint)}: at {rec:g} deg the worst task ({advice.worst_task}) keeps "
-                 f"{advice.worst_margin_pct:+.0f} %, {int(advice.tasks_carried)} of {int(advice.n_tasks)} tasks carried "
+                 f"{advice.worst_margin_pct:+.0f} % (a step either side: {advice.neighbours_worst_margin_pct:+.0f} %), "
+                 f"{int(advice.tasks_carried)} of {int(advice.n_tasks)} tasks carried "
                  f"(where it stands: {advice.stands_at_worst_margin_pct:+.0f} %)\n"
                  f"the recommendation on sweeps of {steps}", fontsize=11)
     save(fig, out_png)

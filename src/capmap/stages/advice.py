@@ -11,6 +11,7 @@ from capmap.capacity.advice import (
     convergence,
     full_grid,
     healthy_lines,
+    neighbours_worst,
     recommend,
     tasks_at_lock,
 )
@@ -68,7 +69,8 @@ def stage_advice(tasks_path: str, healthy_path: str, out: Outputs, slice_json: s
     advice = pd.DataFrame([{
         "joint": joint, "step_deg": step, "n_angles": rows.angle_deg.nunique(), "stands_at_deg": stands_at,
         "recommended_angle_deg": best.angle_deg, "worst_task": best.worst_task,
-        "worst_margin_pct": best.worst_margin_pct, "worst_line_margin_pct": best.worst_line_margin_pct,
+        "worst_margin_pct": best.worst_margin_pct, "neighbours_worst_margin_pct": neighbours_worst(rows, best.angle_deg),
+        "worst_line_margin_pct": best.worst_line_margin_pct,
         "tasks_carried": int(best.tasks_carried), "n_tasks": int(best.n_tasks),
         "stands_at_worst_margin_pct": float(here.margin_pct.min()) if len(here) else np.nan,
         "healthy_worst_line_margin_pct": float(healthy.line_margin_pct.min())}])
