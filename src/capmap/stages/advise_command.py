@@ -36,6 +36,7 @@ def advise(args, run_workflow: Callable[[argparse.Namespace], int]) -> int:
     for j in [] if rc or args.dry_run else joints:
         a = pd.read_parquet(folder / f"joint{j}" / "advice.parquet").iloc[0]
         print(f"joint {j}: brake it at {a.recommended_angle_deg:g} deg: the worst task ({a.worst_task}) keeps "
-              f"{a.worst_margin_pct:+.1f} % (a step either side: {a.neighbours_worst_margin_pct:+.1f} %), {a.tasks_carried} of {a.n_tasks} tasks carried (where it stands, "
-              f"{a.stands_at_deg:g} deg: {a.stands_at_worst_margin_pct:+.1f} %); {folder / f'joint{j}' / 'margins.png'}")
+              f"{a.worst_margin_pct:+.1f} % (a step either side: {a.neighbours_worst_margin_pct:+.1f} %), "
+              f"{a.tasks_carried} of {a.n_tasks} tasks carried (where it stands, {a.stands_at_deg:g} deg: "
+              f"{a.stands_at_worst_margin_pct:+.1f} %); {folder / f'joint{j}' / 'margins.png'}")
     return rc
