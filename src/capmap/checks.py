@@ -18,7 +18,6 @@ import pinocchio as pin
 from capmap.capacity.build import directions_of, load_limits, refine_settings, resolve_failure, task_rotation
 from capmap.capacity.sizing import estimate_map
 from capmap.capacity.voxels import Grid
-from capmap.config.atlas import AtlasConfig
 from capmap.config.capacity import DirectionsConfig, TaskConfig
 from capmap.config.estimate import MapJobs, check_duration, check_steps, line_duration_s
 from capmap.config.failure import Failure
@@ -38,7 +37,7 @@ from capmap.errors import CapmapError, ConfigError
 from capmap.io.fingerprint import code_fingerprint, file_sha256
 from capmap.robots import load
 
-__all__ = ["check_run_config", "check_capacity_config", "check_goal", "check_dt", "check_follow", "check_atlas", "check_advice",
+__all__ = ["check_run_config", "check_capacity_config", "check_goal", "check_dt", "check_follow",
            "check_on_grid", "check_motions",
            "check_dualarm", "dual_arm_limits"]
 
@@ -80,7 +79,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
         with _named(source):
             rate_limits(cfg.reconfig, reconfig_problem(cfg.reconfig))
     if cfg.atlas is not None:
-        check_atlas(cfg.atlas, robot, source)
+        cfg.atlas.check(robot.name, np.rad2deg(robot.q_lower), np.rad2deg(robot.q_upper), source)
         keys = _map_keys("atlas.", "atlas.edge_m", cfg.atlas.directions)
         try:
             estimate_map(arm, cfg.atlas.sampling, cfg.atlas.edge_m, len(directions_of(cfg.atlas.directions)),
@@ -88,7 +87,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
         except ConfigError as exc:
             raise ConfigError(f"{source}: {exc}") from None
     if cfg.advice is not None:
-        check_advice(cfg, robot, source)
+        cfg.advice.check(robot.name, robot.n_joints, cfg.lock.joint, cfg.atlas is not None, source)
     if cfg.dualarm is not None:
         check_dualarm(cfg, source)
     return cfg
@@ -210,29 +209,6 @@ def check_follow(fol: FollowConfig, cfg: RunConfig, source: str = "config") -> N
         raise ConfigError(f"{source}: follow.ground.line_m = {list(g.line_m)} ends at "
                           f"[{', '.join(f'{v:.4g}' for v in end)}], which {robot.name} cannot reach at the "
                           f"start orientation")
-
-
-def check_atlas(at: AtlasConfig, robot: Robot, source: str = "config") -> None:
-    """Every atlas joint exists and every angle is inside every listed joint's range."""
-    for j in at.joints:
-        if not 1 <= j <= robot.n_joints:
-            raise ConfigError(f"{source}: atlas.joints: joint {j} is out of range: {robot.name} has joints "
-                              f"1..{robot.n_joints}")
-        lo, hi = np.rad2deg(robot.q_lower[j - 1]), np.rad2deg(robot.q_upper[j - 1])
-        for a in at.angles_deg:
-            if not lo - 1e-9 <= a <= hi + 1e-9:
-                raise ConfigError(f"{source}: atlas.angles_deg: {a:g} is outside joint {j}'s range [{lo:g}, {hi:g}] deg")
-
-
-def check_advice(cfg: RunConfig, robot: Robot, source: str = "config") -> None:
-    """The advice has the atlas' maps to use, and every joint it advises on exists."""
-    if cfg.atlas is None:
-        raise ConfigError(f"{source}: advice needs an atlas section: its maps are the atlas' (atlas.sampling, "
-                          "atlas.directions, atlas.edge_m)")
-    for j in cfg.advice.joints_of(cfg.lock.joint):
-        if not 1 <= j <= robot.n_joints:
-            raise ConfigError(f"{source}: advice.joints: joint {j} is out of range: {robot.name} has joints "
-                              f"1..{robot.n_joints}")
 
 
 def check_on_grid(cfg: RunConfig, failure: Failure, grid: Grid | None, source: str = "config") -> None:

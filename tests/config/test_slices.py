@@ -77,9 +77,11 @@ def test_the_job_rebuilds_its_fields_and_refuses_the_others(cfg, stage):
 
 
 @pytest.mark.parametrize("edit, changed", [
-    (lambda d: d.update(tasks=[]) or d["lock"].update(angle_deg=101), {"sample"}),  # (tasks are not in slices)
-    (lambda d: d["task"].update(goal_m=[2.625, 1.875, 4.125]), {"plan", "view", "atlas_map"}),
-    (lambda d: d["verification"].update(dt_s=0.05), {"verify", "gain", "atlas_map"}),
+    # (the further tasks are in the advice's slice only: each plan job holds its own task)
+    (lambda d: d.update(tasks=[]) or d["lock"].update(angle_deg=101), {"sample", "advice_tasks"}),
+    (lambda d: d["task"].update(goal_m=[2.625, 1.875, 4.125]), {"plan", "view", "atlas_map", "advice_tasks",
+                                                                  "tolerant"}),
+    (lambda d: d["verification"].update(dt_s=0.05), {"verify", "gain", "atlas_map", "advice_tasks"}),
     (lambda d: d["directions"].update(kind="paper_grid", step_deg=15), {"capacity"}),
     (lambda d: d["planning"].update(gain_tasks=3), {"gain"}),
     (lambda d: d["dualarm"]["weights"].update(panel=0.02), {"dualarm_problem"}),

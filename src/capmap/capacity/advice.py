@@ -2,7 +2,7 @@
 the angle that leaves them the most margin.
 
 At each lock angle of a joint's sweep (:mod:`capmap.capacity.lock_sweep`) every task (the main task at
-each payload and the further tasks, each a :class:`~capmap.config.jobs.PlanTask`) starts on the IK branch
+each payload and the further tasks, each a :data:`Task`) starts on the IK branch
 at its start nearest its own start configuration, and is verified carrying its payload
 (:func:`capmap.capacity.verification.verify_path`) along its direct line and along a path planned on that
 lock's map (A* with moves along the grid axes, :data:`PLANNER_MOVES`). Where no path on the
@@ -23,6 +23,7 @@ swept angle shows whether the step has converged. No file I/O."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -32,13 +33,16 @@ from capmap.capacity.plan_verify import plan_waypoints
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.verification import judge, verify_path
 from capmap.capacity.voxels import Grid
-from capmap.config.jobs import PlanTask
 from capmap.core import ik
 from capmap.core.tracking import nearest_branch
 from capmap.errors import CapmapError, NoPath
 
 __all__ = ["ADVICE_TASK_COLUMNS", "ADVICE_COLUMNS", "PLANNER_MOVES", "AdviceSettings", "task_name", "full_grid", "line_voxels",
            "tasks_at_lock", "healthy_lines", "recommend", "neighbours_worst", "convergence"]
+
+Task = Any
+"""A task to verify: ``payload_kg``, ``start_m``, ``goal_m`` (3,) m, ``q_start_deg`` (every joint, deg: its start
+configuration's reference), ``name`` (None: the main task), e.g. a :class:`capmap.config.jobs.PlanTask`."""
 
 ADVICE_TASK_COLUMNS = ["joint", "angle_deg", "task", "payload_kg", "start_branch_offset_deg", "direct_capacity_kg",
                        "direct_note", "planned_capacity_kg", "planned_payload_kg", "planned_note", "capacity_kg",
@@ -64,7 +68,7 @@ class AdviceSettings:
     dt_s: float
 
 
-def task_name(task: PlanTask) -> str:
+def task_name(task: Task) -> str:
     """A task's label in the tables: its name, or ``task`` for the main task."""
     return task.name or "task"
 
@@ -98,7 +102,7 @@ def _least_on(capacity_kg: np.ndarray, flat: np.ndarray) -> float:
     return float(np.min(np.where(np.isfinite(c), c, 0.0), initial=np.inf)) if len(flat) else 0.0
 
 
-def _start(problem: CapacityProblem, task: PlanTask) -> tuple[np.ndarray | None, float]:
+def _start(problem: CapacityProblem, task: Task) -> tuple[np.ndarray | None, float]:
     """The IK branch at the task's start nearest its start configuration (active joints, rad; a joint a whole
     turn out of its range turned back into it) and its largest joint offset [deg]; (None, NaN) when the locked
     arm does not reach the start."""
@@ -142,7 +146,7 @@ def _planned(problem, vox, grid, task, q_full_deg, s: AdviceSettings):
     return None, np.nan, note
 
 
-def tasks_at_lock(problem: CapacityProblem, vox: pd.DataFrame, grid: Grid, tasks: list[PlanTask],
+def tasks_at_lock(problem: CapacityProblem, vox: pd.DataFrame, grid: Grid, tasks: list[Task],
                   s: AdviceSettings) -> list[dict]:
     """The tasks verified on ``problem``'s locked arm, planned on its map ``vox`` (:func:`full_grid`) on
     ``grid``: one row per task (:data:`ADVICE_TASK_COLUMNS` without joint and angle)."""
@@ -177,7 +181,7 @@ def tasks_at_lock(problem: CapacityProblem, vox: pd.DataFrame, grid: Grid, tasks
     return [{c: r[c] for c in ADVICE_TASK_COLUMNS[2:]} for r in rows]
 
 
-def healthy_lines(sweep: pd.DataFrame, grid: Grid, tasks: list[PlanTask]) -> pd.DataFrame:
+def healthy_lines(sweep: pd.DataFrame, grid: Grid, tasks: list[Task]) -> pd.DataFrame:
     """The healthy reference of each task: the least voxel capacity on its direct line of the best swept
     lock per voxel (``sweep``: one joint's lock sweep): task, payload_kg, line_capacity_kg, line_margin_pct."""
     best = np.full(grid.n_voxels, np.nan)

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from capmap.errors import ConfigError
+
 __all__ = ["AdviceConfig"]
 
 
@@ -31,3 +33,13 @@ class AdviceConfig:
     def joints_of(self, failed_joint: int) -> tuple[int, ...]:
         """The joints advised on: the listed ones, else the failed joint."""
         return self.joints if self.joints is not None else (int(failed_joint),)
+
+    def check(self, robot: str, n_joints: int, failed_joint: int, has_atlas: bool, source: str = "config") -> None:
+        """The advice has the atlas' maps to use, and every joint it advises on exists on ``robot``."""
+        if not has_atlas:
+            raise ConfigError(f"{source}: advice needs an atlas section: its maps are the atlas' (atlas.sampling, "
+                              "atlas.directions, atlas.edge_m)")
+        for j in self.joints_of(failed_joint):
+            if not 1 <= j <= n_joints:
+                raise ConfigError(f"{source}: advice.joints: joint {j} is out of range: {robot} has joints "
+                                  f"1..{n_joints}")

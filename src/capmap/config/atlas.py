@@ -38,6 +38,19 @@ class AtlasConfig:
         return cls(joints=tuple(int(j) for j in d["joints"]), angles_deg=tuple(float(a) for a in d["angles_deg"]),
                    sampling=SamplingConfig.from_doc(d["sampling"]), directions=directions, edge_m=float(d["edge_m"]))
 
+    def check(self, robot: str, lower_deg, upper_deg, source: str = "config") -> None:
+        """Every joint exists on ``robot`` (its joints' ranges [lower_deg, upper_deg]) and every angle is
+        inside every listed joint's range."""
+        for j in self.joints:
+            if not 1 <= j <= len(lower_deg):
+                raise ConfigError(f"{source}: atlas.joints: joint {j} is out of range: {robot} has joints "
+                                  f"1..{len(lower_deg)}")
+            lo, hi = float(lower_deg[j - 1]), float(upper_deg[j - 1])
+            for a in self.angles_deg:
+                if not lo - 1e-9 <= a <= hi + 1e-9:
+                    raise ConfigError(f"{source}: atlas.angles_deg: {a:g} is outside joint {j}'s range "
+                                      f"[{lo:g}, {hi:g}] deg")
+
     @property
     def cases(self) -> list[tuple[int, str]]:
         """(joint, angle label) of every map."""
