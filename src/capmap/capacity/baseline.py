@@ -32,8 +32,6 @@ is measured, not assumed (the baseline stage evaluates voxels' worst points agai
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from capmap.capacity.angle_search import between_grid_angles, polish
@@ -69,7 +67,8 @@ def healthy_capacity(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray
     and a finite ceiling first looks for a posture reaching its ceiling on the hint's configuration,
     at the hint's grid angle, then at grid angles ever farther from it (:func:`_witness`). A stopped
     point has ``exact`` False and capacity_kg a value at or above that ceiling (a posture's, so at most
-    its healthy value); the least value of each group below its ceiling is exact."""
+    its healthy value); the least value of each group below its ceiling is exact. The postures are not
+    labelled with their configurations (``SelfMotion.configuration`` where one is needed)."""
     sm = hp.sm
     N = len(points)
     ceiling = np.full(N, np.inf) if ceiling is None else np.asarray(ceiling, dtype=float)
@@ -82,7 +81,7 @@ def healthy_capacity(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray
         sub = _exact(hp, points[rest], ceiling[rest], None if groups is None else np.asarray(groups)[rest])
         for f in SEARCH_FIELDS:
             getattr(out, f)[rest] = getattr(sub, f)
-    return replace(out, configuration=sm.configuration(out.angle_deg, out.q_rad))
+    return out
 
 
 def _postures(sm: SelfMotion, rotation: np.ndarray, points: np.ndarray, rows: np.ndarray, t: np.ndarray

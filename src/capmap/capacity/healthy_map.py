@@ -93,25 +93,31 @@ def baseline_shard(hp: HealthyProblem, failed: pd.DataFrame, samples: tuple[np.n
                      f"({time.perf_counter() - t0:.1f} s so far)")
 
         res = refine(grid, res, ev, settings, rng, progress)
-    return _healthy_table(hp, grid, res, log), {
+    return _healthy_table(hp, grid, res, ev, log), {
         "angles_deg": hp.sm.angles_deg.tolist(), "seconds": time.perf_counter() - t0,
         "points_evaluated": ev.n_evaluated, "screen_directions": len(hp.screen)}
 
 
-def _healthy_table(hp: HealthyProblem, grid: Grid, res: VoxelMinima, log) -> pd.DataFrame:
-    """One row per reached voxel (:data:`HEALTHY_COLUMNS`); each worst point evaluated again, exactly, for
-    its angle and binding limit."""
+def _healthy_table(hp: HealthyProblem, grid: Grid, res: VoxelMinima, ev: HealthyEvaluator, log
+                   ) -> pd.DataFrame:
+    """One row per reached voxel (:data:`HEALTHY_COLUMNS`), with the angle of its minimum's posture: the one the
+    evaluator ``ev`` kept for the voxel (per row) where its point is the voxel's worst; elsewhere (a tie
+    between points: the refinement kept another) the worst point searched again for a posture reaching the
+    voxel's value, from the voxel's hint (its binding limit then that posture's)."""
     reach = np.isfinite(res.capacity_kg)
-    final = healthy_capacity(hp, res.worst_m[reach])
+    angle, binding = ev.angle_of[reach], res.binding[reach].copy()
+    again = ~np.all(ev.least_m[reach] == res.worst_m[reach], axis=1) | np.isnan(angle)
+    if again.any():
+        hint = ev.hint(np.flatnonzero(reach)[again])
+        final = healthy_capacity(hp, res.worst_m[reach][again], res.capacity_kg[reach][again], hint=hint)
+        angle[again], binding[again] = final.angle_deg, final.binding
+        log.info(f"{int(again.sum())} worst points searched again for their angle (ties)")
     names = list(hp.sm.limits.names) + ["singular"]
-    off = final.capacity_kg - res.capacity_kg[reach]  # > 0 only where a tie kept a point stopped at its ceiling
-    if len(off) and np.nanmax(np.abs(off)) > 1e-9 * max(1.0, np.nanmax(np.abs(final.capacity_kg))):
-        log.info(f"worst points re-evaluated: {np.nanmax(np.abs(off)):.3g} kg from the voxel minimum at most (ties)")
     centres = grid.centres(np.stack(np.unravel_index(res.voxel[reach], grid.shape), axis=1))
     return pd.DataFrame({"x_m": centres[:, 0], "y_m": centres[:, 1], "z_m": centres[:, 2],
                          "healthy_capacity_kg": res.capacity_kg[reach],
-                         "healthy_binding": pd.Categorical(np.array(names)[final.binding]),
-                         "healthy_angle_deg": final.angle_deg, "n_points": res.n_points[reach],
+                         "healthy_binding": pd.Categorical(np.array(names)[binding]),
+                         "healthy_angle_deg": angle, "n_points": res.n_points[reach],
                          "n_reachable": res.n_reachable[reach], "converged": res.converged[reach],
                          "last_change_rel": res.last_change[reach], "worst_x_m": res.worst_m[reach, 0],
                          "worst_y_m": res.worst_m[reach, 1], "worst_z_m": res.worst_m[reach, 2]})[HEALTHY_COLUMNS]

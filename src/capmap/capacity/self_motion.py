@@ -174,7 +174,7 @@ class HealthyCapacity:
     failed joint's angle attaining it, q_rad (N, n_active) the active joints there, binding the binding
     output's index into the limits' names (+ singular), n_candidates the (angle, solution) pairs seen,
     n_full those evaluated on the full direction set, exact: the value is the search's (not stopped at
-    a ceiling); configuration the posture's configuration label (-1: none)."""
+    a ceiling)."""
 
     capacity_kg: np.ndarray
     angle_deg: np.ndarray
@@ -183,7 +183,6 @@ class HealthyCapacity:
     n_candidates: np.ndarray
     n_full: np.ndarray
     exact: np.ndarray
-    configuration: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
