@@ -1,22 +1,5 @@
 # Where to brake a failing joint, and what survives any one failure (not part of `all`):
 #   snakemake --cores 2 advise        (capmap advise --joint J: one joint's advice)
-from snakemake.exceptions import WorkflowError
-
-ADVICE = RUN.advice is not None  # with an atlas section: the advice's maps are the atlas' settings
-N_JOINTS = len(RUN.failure.q_start_deg)
-ADVICE_JOINTS = list(RUN.advice.joints_of(RUN.failure.joint)) if ADVICE else []
-
-
-def stands_at(wildcards):
-    """The angle joint {joint} stands at: the failed one's lock angle, another's angle when it failed."""
-    j = int(wildcards.joint)
-    return RUN.failure.angle_deg if j == RUN.failure.joint else RUN.task.q_ini_deg[j - 1]
-
-
-def advice_params(stage):
-    if not ADVICE:
-        raise WorkflowError(f"capmap: {stage} needs an atlas section in the config (the advice's maps are the atlas')")
-    return params(stage, stage)
 
 
 rule lock_sweep:

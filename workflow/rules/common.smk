@@ -10,6 +10,7 @@ from capmap.config import canonical, main_task, payload_label, stage_slice
 from capmap.config.run import DEFAULT_CONFIG
 from capmap.config.slices import section_modules
 from capmap.errors import CapmapError
+from snakemake.exceptions import WorkflowError
 from capmap.io.datasets import missing_catalogued, rebuild_hint_config
 from capmap.plots.palette import path_colour
 from capmap.io.fingerprint import script_fingerprint
@@ -165,3 +166,21 @@ def dualarm_files(*keys):
     if da is None:
         return []
     return [getattr(da, k) for k in keys] + ([da.cloud_file] if "scene" in keys and da.cloud_file else [])
+
+
+# the lock-angle advice (rules/advice.smk)
+ADVICE = RUN.advice is not None  # with an atlas section: the advice's maps are the atlas' settings
+N_JOINTS = len(RUN.failure.q_start_deg)
+ADVICE_JOINTS = list(RUN.advice.joints_of(RUN.failure.joint)) if ADVICE else []
+
+
+def stands_at(wildcards):
+    """The angle joint {joint} stands at: the failed one's lock angle, another's angle when it failed."""
+    j = int(wildcards.joint)
+    return RUN.failure.angle_deg if j == RUN.failure.joint else RUN.task.q_ini_deg[j - 1]
+
+
+def advice_params(stage):
+    if not ADVICE:
+        raise WorkflowError(f"capmap: {stage} needs an atlas section in the config (the advice's maps are the atlas')")
+    return params(stage, stage)
