@@ -43,7 +43,10 @@ DT = 0.5
 EDGE = 2.5
 TASKS = [PlanTask(1500.0, tuple(X_INI), tuple(X_DES), tuple(Q_INI_DEG)),
          PlanTask(4000.0, tuple(X_INI), tuple(X_DES), tuple(Q_INI_DEG)),
-         PlanTask(2000.0, (2.0, 4.0, 3.0), (-1.0, 5.0, 1.0), tuple(Q_INI_DEG), name="aside")]
+         PlanTask(2000.0, (2.0, 4.0, 3.0), (-1.0, 5.0, 1.0), tuple(Q_INI_DEG), name="aside"),
+         PlanTask(0.0, (2.0, 4.0, 3.0), (-1.0, 5.0, 1.0), tuple(Q_INI_DEG), name="reach")]
+# the run's own planned path of a task (here a detour over the line's midpoint), verified at every angle too
+RUN_PLANS = [np.array([X_INI, 0.5 * (X_INI + X_DES) + [0.0, 0.0, 1.0], X_DES]), None, None, None]
 
 
 def _problem(robot, angle: float) -> CapacityProblem:
@@ -60,7 +63,7 @@ def swept():
     grid = Grid.covering(points, EDGE)
     rows = []
     for a, vox in sweep.groupby("angle_deg", sort=True):
-        for r in tasks_at_lock(_problem(robot, a), full_grid(vox, grid), grid, TASKS, AdviceSettings(DT)):
+        for r in tasks_at_lock(_problem(robot, a), full_grid(vox, grid), grid, TASKS, AdviceSettings(DT), RUN_PLANS):
             rows.append({"joint": 1, "angle_deg": a, **r})
     return robot, sweep, grid, pd.DataFrame(rows)
 
@@ -99,60 +102,106 @@ def _line_least(cap: np.ndarray, grid: Grid, a, b) -> float:
     return float(np.nan_to_num(c, nan=0.0).min())
 
 
+def _plan(grid, cap, axis, task, payload):
+    return planning.plan(grid, cap, np.asarray(task.start_m), np.asarray(task.goal_m), payload, axis).waypoints
+
+
+def _widest(grid, cap, axis, task):
+    """The path for the largest payload any path on the map carries (bisected to 1 % of the task's)."""
+    try:
+        wp = _plan(grid, cap, axis, task, 0.0)
+    except CapmapError:  # no path at all, or the start or goal voxel unreached: no plan
+        return None
+    lo, hi = 0.0, task.payload_kg
+    while hi - lo > 0.01 * task.payload_kg:
+        mid = 0.5 * (lo + hi)
+        try:
+            wp, lo = _plan(grid, cap, axis, task, mid), mid
+        except NoPath:
+            hi = mid
+    return wp
+
+
 def _brute_force(robot, sweep, grid):
-    """Per angle: the worst task's margin [%] and the worst line margin [%], by the brute force above."""
+    """Per angle: the worst task's margin [%] and the mean map capacity over the tasks' lines, by the brute
+    force above."""
     out = {}
     for a, vox in sweep.groupby("angle_deg", sort=True):
         problem = _problem(robot, a)
         full = full_grid(vox, grid)
         cap, axis = full.capacity_kg.to_numpy(), full[AXIS_COLUMNS].to_numpy()
-        margins, lines = [], []
-        for task in TASKS:
+        margins, region = [], set()
+        for task, known in zip(TASKS, RUN_PLANS):
             m = task.payload_kg
-            lines.append(100 * (_line_least(cap, grid, task.start_m, task.goal_m) - m) / m)
+            p = np.asarray(task.start_m) + np.linspace(0, 1, 2001)[:, None] * (np.asarray(task.goal_m) - task.start_m)
+            idx = grid.index(p)
+            region |= set(grid.flat(idx[idx[:, 0] >= 0]).tolist())
             q0 = _start(problem.arm, task)
             if q0 is None:
                 margins.append(-100.0)
                 continue
-            carried = [_carries(problem, np.array([task.start_m, task.goal_m]), q0, m)]
-            for payload in (m, 0.0):
-                try:
-                    p = planning.plan(grid, cap, np.asarray(task.start_m), np.asarray(task.goal_m), payload, axis)
-                except NoPath:
-                    continue
-                except CapmapError:  # the start or goal voxel unreached on this map: no plan at all
-                    break
-                carried.append(_carries(problem, p.waypoints, q0, m))
-                break
-            margins.append(100 * (max(carried) - m) / m)
-        out[a] = (min(margins), min(lines))
+            paths = [np.array([task.start_m, task.goal_m]), known]
+            try:
+                paths.append(_plan(grid, cap, axis, task, m))
+            except NoPath:
+                paths.append(_widest(grid, cap, axis, task))
+            except CapmapError:
+                pass
+            carried = [_carries(problem, wp, q0, m) for wp in paths if wp is not None]
+            best = max(carried)
+            margins.append(100 * (best - m) / m if m > 0 else (0.0 if best >= 0 and any(
+                c >= 0 and _executable(problem, wp, q0) for c, wp in zip(carried, [w for w in paths if w is not None]))
+                else -100.0))
+        out[a] = (min(margins), float(np.mean(np.nan_to_num(cap[sorted(region)], nan=0.0))))
     return out
+
+
+def _executable(problem, waypoints, q0) -> bool:
+    res = verify_path(problem.dyn, waypoints, problem.rotation, q0, problem.motion, DT, problem.limits)
+    _, v = judge(res, problem.arm, problem.limits, 0.0)
+    return v.tracking == "ok" and v.joint_range == "ok"
 
 
 def test_recommended_angle_equals_a_brute_force_over_the_angles(swept):
     robot, sweep, grid, rows = swept
     assert list(rows.columns) == ADVICE_TASK_COLUMNS
     brute = _brute_force(robot, sweep, grid)
-    per_angle = rows.groupby("angle_deg").agg(worst=("margin_pct", "min"), line=("line_margin_pct", "min"))
-    for a, (worst, line) in brute.items():
+    per_angle = rows.groupby("angle_deg").agg(worst=("margin_pct", "min"), region=("region_capacity_kg", "first"))
+    for a, (worst, region) in brute.items():
         assert per_angle.worst[a] == pytest.approx(worst, abs=1e-6)
-        assert per_angle.line[a] == pytest.approx(line, abs=1e-6)
+        assert per_angle.region[a] == pytest.approx(region, rel=1e-12)
     top = max(brute.values())
-    best = [a for a, v in brute.items() if np.isclose(v[0], top[0]) and np.isclose(v[1], top[1])]
+    best = [a for a, v in brute.items() if v == top]
     best = min(best, key=lambda a: abs(a - 100.0))  # ties: nearest the angle the joint stands at
     got = recommend(rows, 100.0)
     assert got.angle_deg == best and got.worst_margin_pct == pytest.approx(brute[best][0], abs=1e-6)
     assert len(set(np.round([v[0] for v in brute.values()], 6))) > 1  # the angle matters: not a flat sweep
 
 
-def test_each_row_is_its_better_verified_path(swept):
+def test_ties_go_to_the_task_region_then_to_the_angle_nearest_where_the_joint_stands():
+    def rows(worst, region):
+        return pd.DataFrame({"angle_deg": [0.0, 60.0, 120.0, 180.0], "task": "a", "payload_kg": 1.0,
+                             "margin_pct": worst, "line_margin_pct": 0.0, "region_capacity_kg": region,
+                             "feasible": True})
+    assert recommend(rows([5.0, 5.0, 5.0, 1.0], [10.0, 30.0, 20.0, 99.0]), 170.0).angle_deg == 60.0
+    assert recommend(rows([5.0, 5.0, 5.0, 1.0], [10.0, 30.0, 30.0, 99.0]), 170.0).angle_deg == 120.0
+    assert recommend(rows([5.0, 5.0, 5.0, 1.0], [10.0, 30.0, 30.0, 99.0]), 0.0).angle_deg == 60.0
+    assert recommend(rows([-100.0, 2.0, -3.0, 1.0], [10.0, 0.0, 30.0, 99.0]), 0.0).angle_deg == 60.0
+
+
+def test_each_row_is_its_best_verified_path(swept):
     _, _, _, rows = swept
     ran = rows[rows.direct_note != "start not reachable"]
-    assert len(ran) > 0
-    best = np.maximum(ran.direct_capacity_kg, ran.planned_capacity_kg)
+    assert len(ran) > 0 and ran.run_plan_capacity_kg[ran.payload_kg == 1500].notna().all()
+    best = np.fmax(np.maximum(ran.direct_capacity_kg, ran.planned_capacity_kg), ran.run_plan_capacity_kg)
     np.testing.assert_allclose(ran.capacity_kg, best)
-    np.testing.assert_allclose(rows.margin_pct, 100 * (rows.capacity_kg - rows.payload_kg) / rows.payload_kg)
-    assert (rows.feasible == (rows.capacity_kg >= rows.payload_kg)).all()
+    paid = rows.payload_kg > 0
+    np.testing.assert_allclose(rows.margin_pct[paid], 100 * (rows.capacity_kg - rows.payload_kg)[paid] / rows.payload_kg[paid])
+    assert (rows.feasible[paid] == (rows.capacity_kg >= rows.payload_kg)[paid]).all()
+    reach = rows[~paid]  # a 0 kg task: 0 % where a path is executable, -100 % where none is
+    assert set(reach.margin_pct) <= {0.0, -100.0} and (reach.margin_pct == np.where(reach.feasible, 0.0, -100.0)).all()
+    widest = rows[rows.planned_note.str.contains("the widest carries")]
+    assert len(widest) and (widest.planned_payload_kg < widest.payload_kg).all()
 
 
 def test_healthy_reference_is_never_below_a_locked_arm(swept):
@@ -167,7 +216,8 @@ def test_convergence_takes_every_other_and_every_fourth_angle():
     angles = np.arange(-80.0, 280.0, 10.0)
     rng = np.random.default_rng(0)
     rows = pd.DataFrame([{"angle_deg": a, "task": t, "payload_kg": 1000.0, "margin_pct": rng.uniform(-50, 50),
-                          "line_margin_pct": 0.0, "feasible": True} for a, t in product(angles, ("a", "b"))])
+                          "line_margin_pct": 0.0, "region_capacity_kg": 0.0, "feasible": True}
+                         for a, t in product(angles, ("a", "b"))])
     conv = convergence(rows, 100.0, 10.0)
     assert list(conv.step_deg) == [40.0, 20.0, 10.0] and list(conv.n_angles) == [9, 18, 36]
     for r in conv.itertuples():
@@ -180,7 +230,7 @@ def test_convergence_takes_every_other_and_every_fourth_angle():
 def test_neighbours_worst_takes_the_swept_angles_either_side_a_turn_round():
     angles = np.arange(-80.0, 280.0, 10.0)  # one turn: -80 and 270 are neighbours
     rows = pd.DataFrame({"angle_deg": angles, "task": "a", "payload_kg": 1.0, "margin_pct": angles / 10,
-                         "line_margin_pct": 0.0, "feasible": True})
+                         "line_margin_pct": 0.0, "region_capacity_kg": 0.0, "feasible": True})
     assert neighbours_worst(rows, 100.0) == 9.0 and neighbours_worst(rows, -80.0) == -7.0
     assert neighbours_worst(rows, 270.0) == -8.0
     part = rows[rows.angle_deg <= 0]  # under a turn: the ends have one neighbour

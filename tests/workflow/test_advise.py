@@ -32,9 +32,15 @@ def test_advise_target_recommends_the_best_swept_angle(tmp_path):
     assert advice.stands_at_deg == 100.0 and advice.n_angles == 6
     sweeps = pd.concat([pd.read_parquet(out / f"sweeps/joint{j}.parquet") for j in range(1, 8)])
     tol = pd.read_parquet(out / "tolerant.parquet")
-    least = sweeps.groupby(["i", "j", "k"]).capacity_kg.agg(lambda c: np.nan if c.isna().any() else c.min())
-    np.testing.assert_array_equal(tol.set_index(["i", "j", "k"]).tolerant_capacity_kg.to_numpy(), least.to_numpy())
-    assert (out / "joint1/margins.png").stat().st_size > 30_000 and (out / "tolerant.png").stat().st_size > 30_000
+    for r in tol.sample(min(len(tol), 25), random_state=0).itertuples():  # by hand: every lock reaching the voxel
+        mine = sweeps[(sweeps.i == r.i) & (sweeps.j == r.j) & (sweeps.k == r.k)]
+        assert len(mine) == 7 * 6 and mine.joint.nunique() == 7
+        whole = [c if n == p else np.nan for c, n, p in zip(mine.capacity_kg, mine.n_reachable, mine.n_points)]
+        assert (np.isnan(r.tolerant_capacity_kg) if np.isnan(whole).any() else r.tolerant_capacity_kg == min(whole))
+    # the run's own plan at the run's lock angle: the advice there carries at least what it carries
+    plan = pd.read_parquet(tmp_path / "results/tiny/plan/payload_1500kg/waypoints.parquet")
+    here = tasks[np.isclose(tasks.angle_deg, 100.0)].iloc[0]
+    assert (np.isnan(here.run_plan_capacity_kg) if not len(plan) else here.capacity_kg >= here.run_plan_capacity_kg)
     cat = pd.read_parquet(out / "catalogue.parquet")
     assert len(cat) == 7 + 4 + 2 and cat.name.is_unique
     # a finer step reruns the sweeps and the advice, nothing of the main map

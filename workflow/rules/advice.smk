@@ -22,9 +22,10 @@ rule lock_sweep:
 
 
 rule advice_tasks:
-    """The run's tasks verified at every angle of joint {joint}'s sweep."""
+    """The run's tasks verified at every angle of joint {joint}'s sweep (and the run's own plans there)."""
     input:
         sweep=out("advice/sweeps/joint{joint}.parquet"),
+        plans=[out(f"{d}/waypoints.parquet") for d in PLAN_DIRS],
     output:
         tasks=out("advice/joint{joint}/tasks.parquet"),
         healthy=out("advice/joint{joint}/healthy.parquet"),

@@ -2,23 +2,26 @@
 the angle that leaves them the most margin.
 
 At each lock angle of a joint's sweep (:mod:`capmap.capacity.lock_sweep`) every task (the main task at
-each payload and the further tasks, each a :data:`Task`) starts on the IK branch
-at its start nearest its own start configuration, and is verified carrying its payload
-(:func:`capmap.capacity.verification.verify_path`) along its direct line and along a path planned on that
-lock's map (A* with moves along the grid axes, :data:`PLANNER_MOVES`). Where no path on the
-map carries the payload, the path planned for 0 kg (one the arm reaches) is verified instead, so the
-task still has a verified capacity. A path carries what its weakest segment carries when it is tracked
-within the joint ranges, else nothing. The task's capacity is its better path's, and its margin that
-capacity over the payload, in % of the payload (``margin_pct``; -100: nothing carried).
+each payload and the further tasks, each a :data:`Task`) starts on the IK branch at its start nearest its
+own start configuration, and is verified carrying its payload
+(:func:`capmap.capacity.verification.verify_path`) along three paths: its direct line, the path A* plans on
+that lock's map (moves along the grid axes, :data:`PLANNER_MOVES`; where no path on the map carries the
+payload, the widest one: planned for the largest payload any path carries), and the run's own planned path
+(planned on the main map, at the run's lock). A path carries what its weakest segment carries when it is
+tracked within the joint ranges, else nothing. The task's capacity is its best path's (one carrying the
+payload first), and its margin that capacity over the payload, in % of the payload (``margin_pct``; -100:
+nothing carried). At the angle the run's joint is locked at, the run's verified plan is among the paths, so
+the advice never says less than the run's verification.
 
 Beside the verification, the map along the task: the least voxel capacity on its direct line (0 kg where
 the line leaves the locked arm's reach), and the same on the healthy arm's map (each voxel at its best
 swept angle: a lower bound of the healthy arm's, and at least every lock's by construction): the
-``line_margin_pct`` and the healthy reference.
+``line_margin_pct`` and the healthy reference; and the map over the task region (the voxels of every task's
+direct line): its mean capacity, unreached voxels as 0 kg (``region_capacity_kg``).
 
-The recommended angle has the largest worst-task margin; ties go to the largest worst-task line margin,
-then to the angle nearest the one the joint stands at. The recommendation at every second and every fourth
-swept angle shows whether the step has converged. No file I/O."""
+The recommended angle has the largest worst-task margin; ties go to the largest capacity over the task
+region, then to the angle nearest the one the joint stands at. The recommendation at every second and every
+fourth swept angle shows whether the step has converged. No file I/O."""
 
 from __future__ import annotations
 
@@ -45,15 +48,18 @@ Task = Any
 configuration's reference), ``name`` (None: the main task), e.g. a :class:`capmap.config.jobs.PlanTask`."""
 
 ADVICE_TASK_COLUMNS = ["joint", "angle_deg", "task", "payload_kg", "start_branch_offset_deg", "direct_capacity_kg",
-                       "direct_note", "planned_capacity_kg", "planned_payload_kg", "planned_note", "capacity_kg",
-                       "path", "feasible", "margin_pct", "line_capacity_kg", "line_margin_pct"]
+                       "direct_note", "planned_capacity_kg", "planned_payload_kg", "planned_note", "run_plan_capacity_kg",
+                       "run_plan_note", "capacity_kg", "path", "feasible", "margin_pct", "line_capacity_kg",
+                       "line_margin_pct", "region_capacity_kg"]
 """advice/joint{j}/tasks.parquet: one row per (lock angle, task)."""
 
 ADVICE_COLUMNS = ["joint", "step_deg", "n_angles", "stands_at_deg", "recommended_angle_deg", "worst_task",
-                  "worst_margin_pct", "neighbours_worst_margin_pct", "worst_line_margin_pct", "tasks_carried", "n_tasks",
-                  "stands_at_worst_margin_pct", "healthy_worst_line_margin_pct"]
+                  "worst_margin_pct", "neighbours_worst_margin_pct", "worst_line_margin_pct", "region_capacity_kg",
+                  "tasks_carried", "n_tasks", "stands_at_worst_margin_pct", "healthy_worst_line_margin_pct"]
 """advice/joint{j}/advice.parquet: the recommendation, and the angle the joint stands at for comparison."""
 
+
+WIDEST_TOL = 0.01  # the widest path's payload, bisected to 1 % of the task's payload
 
 PLANNER_MOVES = "axis"
 """The advice plans with A* on each lock's map, moves along the grid axes each at its own capacity: milliseconds
@@ -104,8 +110,8 @@ def _least_on(capacity_kg: np.ndarray, flat: np.ndarray) -> float:
 
 def _start(problem: CapacityProblem, task: Task) -> tuple[np.ndarray | None, float]:
     """The IK branch at the task's start nearest its start configuration (active joints, rad; a joint a whole
-    turn out of its range turned back into it) and its largest joint offset [deg]; (None, NaN) when the locked
-    arm does not reach the start."""
+    turn out of its range turned back into it) and its largest joint offset [deg] (whole turns apart counted
+    as equal); (None, NaN) when the locked arm does not reach the start."""
     arm = problem.arm
     sol = ik.solve(arm, np.asarray(task.start_m, dtype=float)[None], problem.rotation)
     n = int(sol.n_solutions[0])
@@ -115,7 +121,7 @@ def _start(problem: CapacityProblem, task: Task) -> tuple[np.ndarray | None, flo
     _, q, _ = nearest_branch(sol.q[0, :n], ref)
     q = np.where(q > arm.q_upper, q - 2 * np.pi, q)  # a whole turn nearer the reference but out of range:
     q = np.where(q < arm.q_lower, q + 2 * np.pi, q)  # the same posture inside it
-    return q, float(np.rad2deg(np.abs(q - ref).max()))
+    return q, float(np.rad2deg(np.abs(np.angle(np.exp(1j * (q - ref)))).max()))
 
 
 def _carried(problem: CapacityProblem, waypoints: np.ndarray, q0: np.ndarray, payload: float,
@@ -130,53 +136,83 @@ def _carried(problem: CapacityProblem, waypoints: np.ndarray, q0: np.ndarray, pa
     return (v.capacity_kg if executable else 0.0), bool(v.feasible), note
 
 
-def _planned(problem, vox, grid, task, q_full_deg, s: AdviceSettings):
-    """The path planned on the lock's map for the payload, else for 0 kg: (waypoints or None, the payload it
-    was planned for, note)."""
+def _plan(problem, vox, grid, job, payload: float) -> np.ndarray:
+    wp, *_ = plan_waypoints(problem, vox, grid, replace(job, payload_kg=payload), PLANNER_MOVES)
+    return wp[["x_m", "y_m", "z_m"]].to_numpy()
+
+
+def _planned(problem, vox, grid, task, q_full_deg):
+    """The path planned on the lock's map for the payload, else the widest: the one for the largest payload
+    any path on the map carries (bisected to :data:`WIDEST_TOL` of the payload). (waypoints or None, the
+    payload it was planned for [kg], note)."""
     job = replace(task, q_start_deg=tuple(float(v) for v in q_full_deg))
-    note = ""
-    for payload in (task.payload_kg, 0.0):
+    m = float(task.payload_kg)
+    try:
+        return _plan(problem, vox, grid, job, m), m, ""
+    except NoPath as exc:
+        note = f"no path on the map carries {m:g} kg ({exc})"
+    except CapmapError as exc:
+        return None, np.nan, f"no plan: {exc}"
+    lo, hi, wp = 0.0, m, None
+    try:
+        wp = _plan(problem, vox, grid, job, 0.0)
+    except CapmapError:
+        return None, np.nan, note + "; none reaches the goal"
+    while hi - lo > WIDEST_TOL * m:
+        mid = 0.5 * (lo + hi)
         try:
-            wp, *_ = plan_waypoints(problem, vox, grid, replace(job, payload_kg=payload), PLANNER_MOVES)
-            return wp[["x_m", "y_m", "z_m"]].to_numpy(), payload, note
-        except NoPath as exc:
-            note = f"no path carries {task.payload_kg:g} kg: {exc}"
-        except CapmapError as exc:
-            return None, np.nan, f"no plan: {exc}"
-    return None, np.nan, note
+            wp, lo = _plan(problem, vox, grid, job, mid), mid
+        except NoPath:
+            hi = mid
+    return wp, lo, note + f"; the widest carries {lo:.0f} kg on the map"
+
+
+def _margin(capacity_kg: float, payload_kg: float, carried: bool) -> float:
+    """Capacity over the payload in % of it; a 0 kg task: 0 where it is carried, else -100."""
+    return margin_pct(capacity_kg, payload_kg) if payload_kg > 0 else (0.0 if carried else -100.0)
 
 
 def tasks_at_lock(problem: CapacityProblem, vox: pd.DataFrame, grid: Grid, tasks: list[Task],
-                  s: AdviceSettings) -> list[dict]:
+                  s: AdviceSettings, run_plans: list[np.ndarray | None] | None = None) -> list[dict]:
     """The tasks verified on ``problem``'s locked arm, planned on its map ``vox`` (:func:`full_grid`) on
-    ``grid``: one row per task (:data:`ADVICE_TASK_COLUMNS` without joint and angle)."""
+    ``grid``: one row per task (:data:`ADVICE_TASK_COLUMNS` without joint and angle). ``run_plans``: per task
+    the run's own planned path (W, 3) m (planned on the main map, None: none), verified here as well."""
     cap = vox.capacity_kg.to_numpy()
+    run_plans = [None] * len(tasks) if run_plans is None else run_plans
+    lines = [line_voxels(grid, t.start_m, t.goal_m) for t in tasks]
+    region = np.unique(np.concatenate(lines)) if lines else np.zeros(0, dtype=int)
+    region_kg = float(np.mean(np.nan_to_num(cap[region], nan=0.0))) if len(region) else 0.0
     rows = []
-    for task in tasks:
+    for task, flat, known in zip(tasks, lines, run_plans):
         m = float(task.payload_kg)
-        line = _least_on(cap, line_voxels(grid, task.start_m, task.goal_m))
+        line = _least_on(cap, flat)
         row = {"task": task_name(task), "payload_kg": m, "start_branch_offset_deg": np.nan, "direct_capacity_kg": 0.0,
                "direct_note": "", "planned_capacity_kg": 0.0, "planned_payload_kg": np.nan, "planned_note": "",
-               "line_capacity_kg": line, "line_margin_pct": margin_pct(line, m)}
+               "run_plan_capacity_kg": np.nan, "run_plan_note": "no run plan" if known is None else "",
+               "line_capacity_kg": line, "line_margin_pct": _margin(line, m, line >= m and line > 0),
+               "region_capacity_kg": region_kg}
         q0, off = _start(problem, task)
         if q0 is None:
             row.update(direct_note="start not reachable", planned_note="start not reachable", capacity_kg=0.0,
-                       path="", feasible=False, margin_pct=margin_pct(0.0, m))
+                       path="", feasible=False, margin_pct=_margin(0.0, m, False))
             rows.append(row)
             continue
         row["start_branch_offset_deg"] = off
-        ends = np.array([task.start_m, task.goal_m], dtype=float)
-        direct, direct_ok, row["direct_note"] = _carried(problem, ends, q0, m, s)
-        wp, row["planned_payload_kg"], row["planned_note"] = _planned(problem, vox, grid, task,
-                                                                      np.rad2deg(problem.arm.full_q(q0)), s)
-        planned, planned_ok = 0.0, False
-        if wp is not None:
-            planned, planned_ok, why = _carried(problem, wp, q0, m, s)
-            row["planned_note"] = "; ".join(t for t in (row["planned_note"], why) if t)
-        best = "planned" if (planned_ok, planned) > (direct_ok, direct) else "direct"
-        row.update(direct_capacity_kg=direct, planned_capacity_kg=planned, path=best,
-                   capacity_kg=planned if best == "planned" else direct, feasible=direct_ok or planned_ok)
-        row["margin_pct"] = margin_pct(row["capacity_kg"], m)
+        paths = {"direct": np.array([task.start_m, task.goal_m], dtype=float)}
+        paths["planned"], row["planned_payload_kg"], row["planned_note"] = _planned(
+            problem, vox, grid, task, np.rad2deg(problem.arm.full_q(q0)))
+        paths["run_plan"] = known
+        verdicts = {}
+        for name, wp in paths.items():
+            if wp is not None:
+                kg, ok, why = _carried(problem, wp, q0, m, s)
+                verdicts[name] = (ok, kg)
+                row[f"{name}_capacity_kg"] = kg
+                row[f"{name}_note"] = "; ".join(t for t in (row[f"{name}_note"], why) if t)
+        best = max(verdicts, key=verdicts.get)  # carries the payload first, then the most
+        ok, kg = verdicts[best]
+        row.update(path=best, capacity_kg=kg, feasible=any(v[0] for v in verdicts.values()),
+                   margin_pct=_margin(kg, m, ok))
         rows.append(row)
     return [{c: r[c] for c in ADVICE_TASK_COLUMNS[2:]} for r in rows]
 
@@ -201,16 +237,16 @@ def _per_angle(rows: pd.DataFrame) -> pd.DataFrame:
     worst = rows.loc[g.margin_pct.idxmin().to_numpy()].set_index("angle_deg")
     return pd.DataFrame({"worst_margin_pct": worst.margin_pct,
                          "worst_task": worst.task + ", " + worst.payload_kg.map("{:g} kg".format),
-                         "worst_line_margin_pct": g.line_margin_pct.min(), "tasks_carried": g.feasible.sum(),
-                         "n_tasks": g.size()}).reset_index()
+                         "worst_line_margin_pct": g.line_margin_pct.min(), "region_capacity_kg": g.region_capacity_kg.first(),
+                         "tasks_carried": g.feasible.sum(), "n_tasks": g.size()}).reset_index()
 
 
 def recommend(rows: pd.DataFrame, stands_at_deg: float) -> pd.Series:
     """The recommended angle of one joint's task rows (:data:`ADVICE_TASK_COLUMNS`): the largest worst-task
-    margin, ties to the largest worst-task line margin, then to the angle nearest ``stands_at_deg``. A row of
-    :func:`_per_angle` (with ``angle_deg``)."""
+    margin, ties to the largest capacity over the task region, then to the angle nearest ``stands_at_deg``. A
+    row of :func:`_per_angle` (with ``angle_deg``)."""
     per = _per_angle(rows)
-    key = np.lexsort((-np.abs(per.angle_deg.to_numpy() - stands_at_deg), per.worst_line_margin_pct.to_numpy(),
+    key = np.lexsort((-np.abs(per.angle_deg.to_numpy() - stands_at_deg), per.region_capacity_kg.to_numpy(),
                       per.worst_margin_pct.to_numpy()))
     return per.iloc[key[-1]]
 

@@ -87,7 +87,7 @@ STAGES: dict[str, Stage] = {
     "atlas": Stage(("atlas",), ("atlas_map",)),
     # the lock-angle advice: one lock sweep per joint (its angle where it stands: a param), the run's tasks verified
     # at every swept angle (each from its start, its start configuration the reference), the failure-tolerant map
-    "lock_sweep": Stage(("robot", "limits", "atlas.sampling", "atlas.directions", "atlas.edge_m", "advice.step_deg")
+    "lock_sweep": Stage(("robot", "limits", "directions", "atlas.sampling", "atlas.edge_m", "advice.step_deg")
                         + _TASK_MOTION),
     "advice_tasks": Stage(("failure.start_m", "task.goal_m", "task.payload_kg", "task.q_ini_deg", "tasks",
                            "verification.dt_s"), ("lock_sweep",)),

@@ -50,10 +50,11 @@ def advice_figure(rows: pd.DataFrame, healthy: pd.DataFrame, advice: pd.Series, 
     ax[0].plot([], [], "o", color="0.3", label="carries its payload (verified)")
     ax[0].plot([], [], "o", mfc="white", mec="0.3", label="does not")
     ax[0].plot([], [], "-", color="black", lw=1, label="0 %: the payload exactly")
-    ax[0].plot([], [], "--", color="0.5", lw=1, label="-100 %: carries nothing")
-    ax[0].set(ylabel="verified margin [% of the payload]\n(better of direct line and planned path)")
+    ax[0].plot([], [], "--", color="0.5", lw=1, label="-100 %: carries nothing\n(or the start is out of reach)")
+    ax[0].set(ylabel="verified margin [% of the payload]\n(best of direct line, planned paths)")
     ax[1].set(xlabel=f"angle joint {int(advice.joint)} is braked at [deg]",
-              ylabel="map margin on the direct line [% of the payload]\n(least voxel capacity on it)")
+              ylabel="map margin on the direct line [% of the payload]\n(least voxel capacity on it: any branch,"
+                     " any direction;\na lower bound of what a path verifies)")
     legend_beside(ax[0])
     legend_beside(ax[1])
     steps = ", ".join(f"{r.step_deg:g} deg: {r.recommended_angle_deg:g} deg ({r.worst_margin_pct:+.0f} %)"

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 
@@ -17,7 +19,7 @@ from capmap.capacity.advice import (
 )
 from capmap.capacity.build import capacity_problem
 from capmap.capacity.tables import grid_of
-from capmap.config.jobs import PlanTask
+from capmap.config.jobs import PlanTask, payload_label
 from capmap.config.run import RunConfig
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
@@ -35,20 +37,35 @@ def advice_tasks(run: RunConfig) -> list[PlanTask]:
     return main + list(run.tasks)
 
 
-def stage_advice_tasks(sweep_path: str, out: Outputs, slice_json: str, joint: int) -> None:
-    """The run's tasks verified at every angle of ``joint``'s sweep (planned on that angle's map), and the
-    healthy reference of each task (the best swept lock per voxel along its direct line)."""
+def _run_plans(run: RunConfig, tasks: list[PlanTask], plans: list[str]) -> list[np.ndarray | None]:
+    """Each task's planned path of the run (its plan folder's waypoints; None where the run found none)."""
+    def folder(t: PlanTask) -> str:
+        return f"tasks/{t.name}" if t.name is not None else f"plan/payload_{payload_label(t.payload_kg)}kg"
+
+    by_folder = {str(Path(p).parent.relative_to(Path(p).parents[2])): p for p in plans}
+    out = []
+    for t in tasks:
+        wp = datasets.read(by_folder[folder(t)])
+        out.append(wp[["x_m", "y_m", "z_m"]].to_numpy() if len(wp) else None)
+    return out
+
+
+def stage_advice_tasks(sweep_path: str, plans: list[str], out: Outputs, slice_json: str, joint: int) -> None:
+    """The run's tasks verified at every angle of ``joint``'s sweep (planned on that angle's map; the run's own
+    plans, ``plans``: the waypoints of its plan folders, verified too), and the healthy reference of each task
+    (the best swept lock per voxel along its direct line)."""
     cfg = stage_config(slice_json)
     run = cfg.run
     log = stage_logger(__name__, f"advice tasks joint {joint}")
     sweep = datasets.read(sweep_path)
     grid = grid_of(sweep)
     tasks = advice_tasks(run)
+    known = _run_plans(run, tasks, plans)
     settings = AdviceSettings(run.verification.dt_s)
     rows = []
     for angle, vox in sweep.groupby("angle_deg", sort=True):
-        problem = capacity_problem(run, joint, float(angle), run.atlas.directions)
-        part = tasks_at_lock(problem, full_grid(vox, grid), grid, tasks, settings)
+        problem = capacity_problem(run, joint, float(angle))
+        part = tasks_at_lock(problem, full_grid(vox, grid), grid, tasks, settings, known)
         rows += [{"joint": joint, "angle_deg": float(angle), **r} for r in part]
         log.info(f"{angle:g} deg: " + "; ".join(f"{r['task']} {r['payload_kg']:g} kg {r['margin_pct']:+.0f} % "
                                                 f"({r['path'] or 'none'})" for r in part))
@@ -70,7 +87,7 @@ def stage_advice(tasks_path: str, healthy_path: str, out: Outputs, slice_json: s
         "joint": joint, "step_deg": step, "n_angles": rows.angle_deg.nunique(), "stands_at_deg": stands_at,
         "recommended_angle_deg": best.angle_deg, "worst_task": best.worst_task,
         "worst_margin_pct": best.worst_margin_pct, "neighbours_worst_margin_pct": neighbours_worst(rows, best.angle_deg),
-        "worst_line_margin_pct": best.worst_line_margin_pct,
+        "worst_line_margin_pct": best.worst_line_margin_pct, "region_capacity_kg": best.region_capacity_kg,
         "tasks_carried": int(best.tasks_carried), "n_tasks": int(best.n_tasks),
         "stands_at_worst_margin_pct": float(here.margin_pct.min()) if len(here) else np.nan,
         "healthy_worst_line_margin_pct": float(healthy.line_margin_pct.min())}])

@@ -18,7 +18,8 @@ __all__ = ["stage_lock_sweep"]
 
 def stage_lock_sweep(out: str, slice_json: str, joint: int, stands_at_deg: float) -> None:
     """The maps of the arm with ``joint`` locked at every angle of its sweep (``advice.step_deg`` apart,
-    through ``stands_at_deg``) on the healthy arm's points at the atlas' sampling, directions and edge."""
+    through ``stands_at_deg``) on the healthy arm's points at the atlas' sampling and edge, over the run's
+    directions."""
     cfg = stage_config(slice_json)
     run = cfg.run
     log = stage_logger(__name__, f"lock sweep joint {joint}")
@@ -26,8 +27,8 @@ def stage_lock_sweep(out: str, slice_json: str, joint: int, stands_at_deg: float
     angles = lock_angles(robot, joint, stands_at_deg, run.advice.step_deg)
     points, _ = healthy_samples(robot, run.atlas.sampling, run.atlas.edge_m)
     log.info(f"{len(angles)} angles {angles.min():g}..{angles.max():g} deg, {len(points)} points, "
-             f"edge {run.atlas.edge_m} m")
-    sweep = lock_sweep(lambda a: capacity_problem(run, joint, a, run.atlas.directions), joint, angles, points,
+             f"edge {run.atlas.edge_m} m, directions {run.directions.kind}")
+    sweep = lock_sweep(lambda a: capacity_problem(run, joint, a), joint, angles, points,
                        run.atlas.edge_m, log)
     grid = Grid.covering(points, run.atlas.edge_m)
     datasets.write(sweep, out, datasets.provenance("lock_sweep", cfg.doc, seed=run.atlas.sampling.seed, joint=joint,
