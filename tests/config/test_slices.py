@@ -82,7 +82,7 @@ def test_the_job_rebuilds_its_fields_and_refuses_the_others(cfg, stage):
     (lambda d: d["task"].update(goal_m=[2.625, 1.875, 4.125]), {"plan", "view", "atlas_map", "advice_tasks",
                                                                   "tolerant"}),
     (lambda d: d["verification"].update(dt_s=0.05), {"verify", "gain", "atlas_map", "advice_tasks"}),
-    (lambda d: d["directions"].update(kind="paper_grid", step_deg=15), {"capacity"}),
+    (lambda d: d["directions"].update(kind="paper_grid", step_deg=15), {"capacity", "lock_sweep"}),
     (lambda d: d["planning"].update(gain_tasks=3), {"gain"}),
     (lambda d: d["dualarm"]["weights"].update(panel=0.02), {"dualarm_problem"}),
     (lambda d: d["dualarm"].update(margin_m=0.004), {"dualarm_optimise"}),
