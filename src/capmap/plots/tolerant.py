@@ -2,18 +2,18 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.tolerant import scopes
 from capmap.plots.common import grid_corner, legend_beside, plt, save, voxel_layer
 
-__all__ = ["tolerant_figure"]
+__all__ = ["TolerantContext", "tolerant_figure"]
 
 
-def _curves(a, tol: pd.DataFrame, edge: float, payloads, top: float) -> None:
+def _curves(a, tol: pd.DataFrame, scopes: list, edge: float, payloads, top: float) -> None:
     """The volume carrying each payload M per scope (healthy, each joint failing at any swept angle, any joint):
     solid on the sweep, dashed on the sweep at twice the step (the step's convergence)."""
     m = np.linspace(0.0, top * 1.02, 400)
@@ -22,7 +22,7 @@ def _curves(a, tol: pd.DataFrame, edge: float, payloads, top: float) -> None:
         v = np.sort(values[np.isfinite(values)])
         return (len(v) - np.searchsorted(v, m, side="left")) * edge**3
 
-    for n, (scope, col, coarse) in enumerate(scopes(tol)):
+    for n, (scope, col, coarse) in enumerate(scopes):
         colour = "black" if scope == "healthy" else "tab:red" if scope == "any joint" else f"C{(n - 1) % 10}"
         lw = 2.4 if scope in ("healthy", "any joint") else 1.3
         reached = np.isfinite(tol[col]).sum() * edge**3
@@ -41,12 +41,26 @@ def _curves(a, tol: pd.DataFrame, edge: float, payloads, top: float) -> None:
     legend_beside(a)
 
 
-def tolerant_figure(tol: pd.DataFrame, grid: dict, payloads, worst_lock: tuple[int, float, int],
-                    start_m: np.ndarray, goal_m: np.ndarray, out_png: str | Path) -> None:
+@dataclass(frozen=True)
+class TolerantContext:
+    """What the failure-tolerant figure tells of its run: the sweeps' ``grid`` (its provenance: lower_m, shape,
+    edge_m), the task ``payloads_kg``, the lock reaching the fewest voxels ``worst_lock`` (joint, angle deg,
+    voxels reached), the ``scopes`` to draw ((scope, its column, its column at twice the step or None), healthy
+    first and any joint last), the task's start_m and goal_m (3,) m."""
+
+    grid: dict
+    payloads_kg: tuple[float, ...]
+    worst_lock: tuple[int, float, int]
+    scopes: list
+    start_m: np.ndarray
+    goal_m: np.ndarray
+
+
+def tolerant_figure(tol: pd.DataFrame, c: TolerantContext, out_png: str | Path) -> None:
     """Three panels: the healthy arm's map (best swept lock) and the failure-tolerant map over the task
     start's voxel layer on one colour scale (when no voxel of the layer survives every joint's failure, the
-    map of the joint whose failure leaves the most volume instead), and the volume carrying each payload.
-    ``worst_lock``: the (joint, angle deg, voxels reached) of the lock reaching the fewest."""
+    map of the joint whose failure leaves the most volume instead), and the volume carrying each payload."""
+    grid, payloads, worst_lock, scopes, start_m, goal_m = c.grid, c.payloads_kg, c.worst_lock, c.scopes, c.start_m, c.goal_m
     edge = float(grid["edge_m"])
     fig, ax = plt.subplots(1, 3, figsize=(19, 6.5), layout="constrained")
     lo = grid_corner(tol, edge)
@@ -55,7 +69,7 @@ def tolerant_figure(tol: pd.DataFrame, grid: dict, payloads, worst_lock: tuple[i
     z = lo[2] + (k + 0.5) * edge
     col, title = "tolerant_capacity_kg", "any single joint failing at any swept angle"
     if not np.isfinite(voxel_layer(tol, col, k, edge)[0]).any():
-        per_joint = [(np.isfinite(tol[c]).sum(), s, c) for s, c, _ in scopes(tol)[1:-1]]
+        per_joint = [(np.isfinite(tol[c]).sum(), s, c) for s, c, _ in scopes[1:-1]]
         _, scope, col = max(per_joint)
         title = f"{scope} failing at any swept angle\n(no voxel here survives every joint's failure)"
     for a, c, t in ((ax[0], "healthy_capacity_kg", "healthy arm (each voxel at its best swept lock)"), (ax[1], col, title)):
@@ -68,7 +82,7 @@ def tolerant_figure(tol: pd.DataFrame, grid: dict, payloads, worst_lock: tuple[i
     fig.colorbar(im, ax=ax[:2], shrink=0.85,
                  label="capacity [kg] (grey: no value; right: a failure leaves the voxel wholly or in part)")
     ax[0].legend(fontsize=8, loc="lower left")
-    _curves(ax[2], tol, edge, payloads, top)
+    _curves(ax[2], tol, scopes, edge, payloads, top)
     n = int(tol.reachable_every_failure.sum())
     j, angle, reached = worst_lock
     fig.suptitle(f"What survives any one failure ({edge:g} m voxels): {n:,} voxels ({n * edge**3:,.1f} m³) stay reachable "

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.tolerant import failure_tolerant, lock_reach, tolerance_summary
+from capmap.capacity.tolerant import failure_tolerant, lock_reach, scopes, tolerance_summary
 from capmap.io import datasets
 from capmap.io.logs import stage_logger
-from capmap.plots.tolerant import tolerant_figure
+from capmap.plots.tolerant import TolerantContext, tolerant_figure
 from capmap.stages.common import Outputs, stage_config
 
 __all__ = ["stage_tolerant"]
@@ -28,8 +28,10 @@ def stage_tolerant(sweep_paths: list[str], out: Outputs, slice_json: str) -> Non
     prov = datasets.provenance("tolerant", cfg.doc, grid=grid)
     datasets.write(tol, out["tolerant"], prov)
     datasets.write(summary, out["summary"], prov)
-    tolerant_figure(tol, grid, run.task.payload_kg, (int(worst.joint), float(worst.angle_deg), int(worst.n_reached)),
-                    np.asarray(run.failure.start_m), np.asarray(run.task.goal_m), out["figure"])
+    tolerant_figure(tol, TolerantContext(grid, tuple(run.task.payload_kg), (int(worst.joint), float(worst.angle_deg),
+                                                                           int(worst.n_reached)),
+                                         scopes(tol), np.asarray(run.failure.start_m), np.asarray(run.task.goal_m)),
+                    out["figure"])
     log = stage_logger(__name__, "failure-tolerant map")
     log.info(f"{int(tol.reachable_every_failure.sum())} of {len(tol)} voxels reachable whatever joint fails at whatever "
              f"swept angle; the lock reaching fewest: joint {int(worst.joint)} at {worst.angle_deg:g} deg, "
