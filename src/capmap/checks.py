@@ -87,7 +87,7 @@ def check_run_config(doc: dict, source: str = "config") -> RunConfig:
         except ConfigError as exc:
             raise ConfigError(f"{source}: {exc}") from None
     if cfg.advice is not None:
-        cfg.advice.check(robot.name, robot.n_joints, cfg.lock.joint, cfg.atlas is not None, source)
+        cfg.advice.check(robot.name, robot.n_joints, cfg.lock.joint, source)
     if cfg.dualarm is not None:
         check_dualarm(cfg, source)
     return cfg

@@ -105,7 +105,6 @@ CONFIG_CASES = [
     ({"advice.step_deg": NAN}, "advice.step_deg = nan"),
     ({"advice.step_deg": 0}, "advice.step_deg"),
     ({"advice.speed": 1}, "advice"),
-    ({"atlas": None, "advice.step_deg": 20}, "advice needs an atlas section"),
     ({"voxels.edge_m": -1}, "voxels.edge_m"),
     ({"shards": 0}, "shards"),
     ({"sampling.seed": -1}, "sampling.seed"),

@@ -10,7 +10,6 @@ from capmap.config import canonical, main_task, payload_label, stage_slice
 from capmap.config.run import DEFAULT_CONFIG
 from capmap.config.slices import section_modules
 from capmap.errors import CapmapError
-from snakemake.exceptions import WorkflowError
 from capmap.io.datasets import missing_catalogued, rebuild_hint_config
 from capmap.plots.palette import path_colour
 from capmap.io.fingerprint import script_fingerprint
@@ -181,6 +180,9 @@ def stands_at(wildcards):
 
 
 def advice_params(stage):
+    """A rule's params; without an atlas section (no advice), one line and no job (asked for while the DAG is built)."""
     if not ADVICE:
-        raise WorkflowError(f"capmap: {stage} needs an atlas section in the config (the advice's maps are the atlas')")
+        sys.exit(
+            "capmap: advise: the config has no atlas section: the advice uses the atlas' maps (its sampling and edge)"
+        )
     return params(stage, stage)

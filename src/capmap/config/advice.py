@@ -1,9 +1,9 @@
 """Config section of the lock-angle advice: ``advice`` (optional; absent: these defaults).
 
 The advice sweeps a joint's lock angle and verifies the run's tasks at each angle on the arm locked
-there; the failure-tolerant map takes the minimum over every joint's sweep. Its maps are the fault
-atlas' (``atlas.sampling``, ``atlas.directions``, ``atlas.edge_m``): without an atlas section there
-is no advice."""
+there; the failure-tolerant map takes the minimum over every joint's sweep. Its maps have the fault
+atlas' sampling and voxel edge (``atlas.sampling``, ``atlas.edge_m``) and the run's directions: without an
+atlas section there is no advice (the ``advise`` target and ``capmap advise`` say so in one line)."""
 
 from __future__ import annotations
 
@@ -34,11 +34,8 @@ class AdviceConfig:
         """The joints advised on: the listed ones, else the failed joint."""
         return self.joints if self.joints is not None else (int(failed_joint),)
 
-    def check(self, robot: str, n_joints: int, failed_joint: int, has_atlas: bool, source: str = "config") -> None:
-        """The advice has the atlas' maps to use, and every joint it advises on exists on ``robot``."""
-        if not has_atlas:
-            raise ConfigError(f"{source}: advice needs an atlas section: its maps are the atlas' (atlas.sampling, "
-                              "atlas.directions, atlas.edge_m)")
+    def check(self, robot: str, n_joints: int, failed_joint: int, source: str = "config") -> None:
+        """Every joint the advice is on exists on ``robot``."""
         for j in self.joints_of(failed_joint):
             if not 1 <= j <= n_joints:
                 raise ConfigError(f"{source}: advice.joints: joint {j} is out of range: {robot} has joints "

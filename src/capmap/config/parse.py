@@ -62,7 +62,7 @@ def parse_config(doc: object, source: str = "config") -> RunConfig:
         dualarm=dualarm,
         atlas=atlas,
         baseline=BaselineConfig.from_doc(doc.get("baseline")),
-        advice=AdviceConfig.from_doc(doc.get("advice")) if "advice" in doc or atlas is not None else None,
+        advice=AdviceConfig.from_doc(doc.get("advice")) if atlas is not None else None,  # its maps: the atlas'
         name=run_name(doc, source),
     )
 
