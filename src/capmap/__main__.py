@@ -1,7 +1,7 @@
 """Command line.
 
 - ``capmap check [results/<run> ...]`` verifies every catalogued dataset of the runs (the
-  main catalogue's, the atlas', the baseline's and the plan-gain experiment's; default: every run
+  main catalogue's, the atlas', the baseline's, the advice's and the plan-gain experiment's; default: every run
   under ``results/``) against its sha256 and row count; exit status 1 and one line per problem
   when any is missing, damaged or changed, when a named run folder does not exist, or when a run
   has no catalogue.
@@ -148,7 +148,8 @@ def _check(run_folders: list[str], as_json: bool) -> int:
         print(f"capmap: {r}: no catalogue.parquet (the run has not finished: snakemake --cores 2 all"
               f"{'' if r.name == 'default' else ' --configfile <its config>'})", file=sys.stderr)
     catalogues = [c for r in runs for c in (r / "catalogue.parquet", r / "atlas" / "catalogue.parquet",
-                                            r / "baseline" / "catalogue.parquet", r / "plan" / "gain_catalogue.parquet")
+                                            r / "baseline" / "catalogue.parquet", r / "advice" / "catalogue.parquet",
+                                            r / "plan" / "gain_catalogue.parquet")
                   if c.is_file()]
     if absent or bare or not catalogues:
         if not catalogues and not absent and not bare:
@@ -313,9 +314,9 @@ def entry() -> None:
 
 
 def _run_folder(catalogue: Path) -> Path:
-    """results/<run> of a catalogue (results/<run>/catalogue.parquet, results/<run>/{atlas,baseline}/catalogue.parquet or
+    """results/<run> of a catalogue (results/<run>/catalogue.parquet, results/<run>/{atlas,baseline,advice}/catalogue.parquet or
     results/<run>/plan/gain_catalogue.parquet)."""
-    return catalogue.parent.parent if catalogue.parent.name in ("atlas", "baseline", "plan") else catalogue.parent
+    return catalogue.parent.parent if catalogue.parent.name in ("atlas", "baseline", "advice", "plan") else catalogue.parent
 
 
 if __name__ == "__main__":

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from capmap.io.datasets import verify_catalogue
 from tests.scenario import ROOT
 from tests.workflow.runs import config_file, planned_jobs_of
 
@@ -43,6 +44,7 @@ def test_advise_target_recommends_the_best_swept_angle(tmp_path):
     assert (np.isnan(here.run_plan_capacity_kg) if not len(plan) else here.capacity_kg >= here.run_plan_capacity_kg)
     cat = pd.read_parquet(out / "catalogue.parquet")
     assert len(cat) == 7 + 4 + 2 and cat.name.is_unique
+    assert verify_catalogue(out / "catalogue.parquet", tmp_path) == []  # what `capmap check` runs on it
     # a finer step reruns the sweeps and the advice, nothing of the main map
     cfg2 = config_file(tmp_path, **{"advice": {"step_deg": 45}})
     assert planned_jobs_of(tmp_path, cfg2, "advise") == {"lock_sweep": 7, "advice_tasks": 1, "advice_joint": 1,
