@@ -9,13 +9,13 @@ import numpy as np
 
 from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.self_motion import HealthyCapacity, HealthyProblem, SelfMotion, postures_capacity
-from capmap.core import ik
 from capmap.core.ik.finish import RESIDUAL_TOL, wrap_to_range
 from capmap.core.kinematics import pose_error
 
 __all__ = ["FINER", "between_grid_angles", "polish", "follow"]
 
 FINER = 8  # a 0 kg plateau on the grid: its points searched again on a grid this many times finer
+_STILL = 1e-3 * RESIDUAL_TOL  # a pose error this small: the next Newton step moves a joint by rounding only
 _NEWTON_STEPS = 8  # over half a 10 deg step, 400 postures of the default map: 385 meet the IK's tolerance (12 steps: 386)
 
 
@@ -23,10 +23,15 @@ def between_grid_angles(hp: HealthyProblem, points: np.ndarray, res: HealthyCapa
     """Between grid angles, in place, for points[rows] whose grid best is ``res``'s: where that best is 0
     kg (every grid posture at a limit or singular: a plateau that shows no way up) the angles
     1/:data:`FINER` of a step apart first (:func:`_finer`; a peak a few degrees wide, e.g. where a pair of IK branches
-    is born, lies between grid angles), then the best posture followed (:func:`polish`)."""
+    is born, lies between grid angles), then the best posture followed (:func:`polish`; from half the finer
+    grid's step where that grid found it: such a peak is narrow)."""
+    finer = np.zeros(0, dtype=int)
     if hp.polish_levels and len(rows):
-        _finer(hp, points, res, rows[res.capacity_kg[rows] <= 0])
-    polish(hp, points, res, rows)
+        plateau = rows[res.capacity_kg[rows] <= 0]
+        _finer(hp, points, res, plateau)
+        finer = plateau[res.capacity_kg[plateau] > 0]
+        polish(hp, points, res, finer, start_deg=hp.sm.step_deg / FINER / 2)
+    polish(hp, points, res, np.setdiff1d(rows, finer))
 
 
 def _finer(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray) -> None:
@@ -38,14 +43,8 @@ def _finer(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: n
     off = sm.step_deg * np.arange(1, FINER) / FINER
     angles = sm.into_range((sm.angles_deg[:, None] + off[None, :]).ravel())
     angles = np.unique(np.round(angles[np.isfinite(angles)], 9))
-    pr, ar, qr = [np.zeros(0, dtype=int)], [np.zeros(0)], [np.zeros((0, sm.arms[0].n_active))]
-    for a in angles:
-        sol = ik.solve(sm.arm_at(float(a)), points[rows], hp.problem.rotation)
-        p_, b_ = np.nonzero(np.arange(sol.q.shape[1])[None, :] < sol.n_solutions[:, None])
-        pr.append(rows[p_])
-        ar.append(np.full(len(p_), a))
-        qr.append(sol.q[p_, b_])
-    pr, ar, qr = np.concatenate(pr), np.concatenate(ar), np.concatenate(qr)
+    k, qr = sm.solve(points[np.repeat(rows, len(angles))], np.tile(angles, len(rows)), hp.problem.rotation)
+    pr, ar = np.repeat(rows, len(angles))[k], np.tile(angles, len(rows))[k]
     if not len(pr):
         return
     cap, bnd = postures_capacity(sm, np.deg2rad(ar), qr, hp.problem.directions, hp.problem.motion)
@@ -58,13 +57,14 @@ def _finer(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: n
 
 
 def polish(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray,
-            levels: int | None = None) -> None:
+            levels: int | None = None, start_deg: float | None = None) -> None:
     """Follow the best posture of points[rows] (``res``: its angle and joints) between grid angles, in
-    place: ``levels`` (default ``hp.polish_levels``) levels, from half the grid's step, halving it; at each level the angles a
+    place: ``levels`` (default ``hp.polish_levels``) levels, from ``start_deg`` (default half the grid's step),
+    halving it; at each level the angles a
     step either side, each reached from the current posture along its IK branch (:func:`follow`), the
     best of the three kept. Values only rise; each is the posture's it records."""
     sm, directions, motion = hp.sm, hp.problem.directions, hp.problem.motion
-    h = sm.step_deg / 2
+    h = sm.step_deg / 2 if start_deg is None else start_deg
     for _ in range((hp.polish_levels if levels is None else levels) if len(rows) else 0):
         best, angle, q, bnd = (res.capacity_kg[rows].copy(), res.angle_deg[rows].copy(), res.q_rad[rows].copy(),
                                res.binding[rows].copy())
@@ -94,12 +94,16 @@ def follow(sm: SelfMotion, rotation: np.ndarray, points: np.ndarray, angle_deg: 
     target[:, :3, :3], target[:, :3, 3] = rotation, points[rows]
     full = np.zeros((len(rows), arm.robot.n_joints))
     full[:, act], full[:, j] = q[rows], np.deg2rad(angle_deg[rows])
+    go = np.arange(len(rows))  # the rows still moving: a row stops once its step is below rounding
     for _ in range(_NEWTON_STEPS):
-        T, J = chain.jacobian(full)
-        e = pose_error(T, target)
+        T, J = chain.jacobian(full[go])
+        e = pose_error(T, target[go])
         Ja = J[:, :, act]
         JtJ = np.swapaxes(Ja, 1, 2) @ Ja + 1e-12 * np.eye(len(act))
-        full[:, act] += np.linalg.solve(JtJ, (np.swapaxes(Ja, 1, 2) @ e[..., None]))[..., 0]
+        full[np.ix_(go, act)] += np.linalg.solve(JtJ, (np.swapaxes(Ja, 1, 2) @ e[..., None]))[..., 0]
+        go = go[np.linalg.norm(e, axis=1) > _STILL]
+        if not len(go):
+            break
     err = np.linalg.norm(pose_error(chain.fk(full), target), axis=1)
     qa, inside = wrap_to_range(full[:, act], arm.q_lower, arm.q_upper)
     ok = (err <= RESIDUAL_TOL) & inside.all(axis=1)

@@ -45,7 +45,6 @@ from capmap.capacity.self_motion import (
     postures_capacity,
     postures_minimum,
 )
-from capmap.core import ik
 
 __all__ = ["healthy_capacity", "WITNESS_LEVELS", "WITNESS_OFFSETS"]
 
@@ -72,15 +71,62 @@ def healthy_capacity(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray
     sm = hp.sm
     N = len(points)
     ceiling = np.full(N, np.inf) if ceiling is None else np.asarray(ceiling, dtype=float)
-    out = HealthyCapacity(np.full(N, np.nan), np.full(N, np.nan), np.full((N, sm.arms[0].n_active), np.nan),
-                          np.full(N, -1), np.zeros(N, dtype=int), np.zeros(N, dtype=int), np.zeros(N, dtype=bool))
+    out = _blank(N, sm.arms[0].n_active)
     rest = np.ones(N, dtype=bool)
     if hint is not None:
         rest &= ~_witness(hp, points, ceiling, hint, out)
     if rest.any():
-        sub = _exact(hp, points[rest], ceiling[rest], None if groups is None else np.asarray(groups)[rest])
-        for f in SEARCH_FIELDS:
-            getattr(out, f)[rest] = getattr(sub, f)
+        g = None if groups is None else np.asarray(groups)[rest]
+        sub = _exact(hp, points[rest], ceiling[rest], g) if g is None else _leaders_first(
+            hp, points[rest], ceiling[rest], g, out.capacity_kg[rest])
+        _put(out, np.flatnonzero(rest), sub)
+    return out
+
+
+def _blank(N: int, n_active: int) -> HealthyCapacity:
+    """N points not searched yet."""
+    return HealthyCapacity(np.full(N, np.nan), np.full(N, np.nan), np.full((N, n_active), np.nan), np.full(N, -1),
+                           np.zeros(N, dtype=int), np.zeros(N, dtype=int), np.zeros(N, dtype=bool))
+
+
+def _put(out: HealthyCapacity, rows: np.ndarray, sub: HealthyCapacity) -> None:
+    """out[rows] = sub, every field."""
+    for f in SEARCH_FIELDS:
+        getattr(out, f)[rows] = getattr(sub, f)
+
+
+def _leaders_first(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray, groups: np.ndarray,
+                   lower: np.ndarray) -> HealthyCapacity:
+    """:func:`_exact` of grouped points, one point per group first: the one whose value is likeliest the
+    group's least (the lowest ``lower`` (N,) kg, a posture's value found before; NaN: none, first), its
+    value exact below its ceiling. The others' ceilings drop to that value, and each looks first for a
+    posture reaching it on the leader's configuration near its angle (:func:`_witness`); only those
+    that find none are searched in full (:func:`_exact`, still grouped). Each group's least value below
+    its ceiling stays exact: it is the leader's, or an exact one of the rest below it."""
+    sm = hp.sm
+    lead = argmin_per_group(np.where(np.isnan(lower), -np.inf, lower), groups)
+    out = _blank(len(points), sm.arms[0].n_active)
+    _put(out, lead, _exact(hp, points[lead], ceiling[lead], None))
+    rest = np.ones(len(points), dtype=bool)
+    rest[lead] = False
+    rest = np.flatnonzero(rest)
+    if not len(rest):
+        return out
+    of = np.full(groups.max() + 1, -1)
+    of[groups[lead]] = lead
+    led = of[groups[rest]]  # each other point's leader
+    v = out.capacity_kg[led]
+    ceil = np.where(np.isfinite(v), np.minimum(ceiling[rest], v), ceiling[rest])
+    reach = np.isfinite(out.angle_deg[led])
+    hint = Hint(np.where(reach, sm.grid_index(np.nan_to_num(out.angle_deg[led])), -1), np.full(len(rest), -1))
+    if reach.any():
+        hint.configuration[reach] = sm.grid_configuration(out.angle_deg[led][reach], out.q_rad[led][reach])
+    sub = _blank(len(rest), sm.arms[0].n_active)
+    stop = _witness(hp, points[rest], ceil, hint, sub)
+    _put(out, rest[stop], HealthyCapacity(*(getattr(sub, f)[stop] for f in SEARCH_FIELDS)))
+    more = rest[~stop]
+    if len(more):
+        _put(out, more, _exact(hp, points[more], ceil[~stop], groups[more]))
     return out
 
 
@@ -88,15 +134,8 @@ def _postures(sm: SelfMotion, rotation: np.ndarray, points: np.ndarray, rows: np
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every IK solution of points[rows] with the joint held at grid angle t (per row, index into the
     angles): (rows of them (M,), their angle indices (M,), the active joints (M, n_active) rad)."""
-    pr, tr, qr = [np.zeros(0, dtype=int)], [np.zeros(0, dtype=int)], [np.zeros((0, sm.arms[0].n_active))]
-    for a in np.unique(t):
-        mine = rows[t == a]
-        sol = ik.solve(sm.arms[a], points[mine], rotation)
-        pts, brs = np.nonzero(np.arange(sol.q.shape[1])[None, :] < sol.n_solutions[:, None])
-        pr.append(mine[pts])
-        tr.append(np.full(len(pts), a))
-        qr.append(sol.q[pts, brs])
-    return np.concatenate(pr), np.concatenate(tr), np.concatenate(qr)
+    k, q = sm.solve(points[rows], sm.angles_deg[t], rotation)
+    return rows[k], t[k], q
 
 
 def _witness(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray, hint: Hint, out: HealthyCapacity

@@ -97,7 +97,7 @@ class HealthyEvaluator:
             i = argmin_per_group(c, owner)
             i = i[np.isfinite(c[i]) & (c[i] < (np.inf if ceiling is None else ceiling[i]))]
             self.hint_of[owner[i]] = self.hp.sm.grid_index(angle[i])
-            self.configuration_of[owner[i]] = self.hp.sm.configuration(angle[i], q[i])
+            self.configuration_of[owner[i]] = self.hp.sm.grid_configuration(angle[i], q[i])
             self.least_m[owner[i]], self.angle_of[owner[i]] = points[i], angle[i]
         return Evaluation(cap, np.zeros((N, 0)), binding, np.isfinite(cap).astype(int))
 

@@ -14,9 +14,11 @@ import numpy as np
 from capmap.capacity.directions import Directions, sphere
 from capmap.capacity.engine import Motion, direction_minimum
 from capmap.capacity.problem import CapacityProblem
+from capmap.core import ik
 from capmap.core.coefficients import Coefficients
 from capmap.core.configuration import Configurations, arm_configurations
 from capmap.core.dynamics import ArmDynamics
+from capmap.core.kinematics import inverse_transform
 from capmap.core.limits import AffineLimits
 from capmap.core.reduction import LockedArm, free
 from capmap.errors import CapmapError
@@ -149,6 +151,55 @@ class SelfMotion:
     def free_chain(self):
         """The arm's chain with every joint moving (the held one among them), for following a branch."""
         return free(self.arms[0].robot).chain
+
+    def solve(self, points: np.ndarray, angle_deg: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every IK solution of each point (M, 3) m with the joint held at its own angle_deg (M,) deg, the
+        end effector at the rotation (3, 3): (the point of each solution (K,), its active joints
+        (K, n_active) rad). Where the held joint folds into the chain's first (last) fixed transform, the
+        arm at any angle is the first grid angle's arm with its base (tip) moved, so all targets are solved
+        in one call on that arm's chain, each moved by that transform (equal to rounding); otherwise one
+        call per angle."""
+        M = len(points)
+        T = np.zeros((M, 4, 4))
+        T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = rotation, points, 1.0
+        ref = self.arms[0]
+        angle_deg = np.round(np.asarray(angle_deg, dtype=float), 9)
+        uniq, inv = np.unique(angle_deg, return_inverse=True)
+        inv = inv.reshape(-1)
+        arms = [self.arm_at(float(a)) for a in uniq]
+        fold = self._fold(arms)
+        if fold == 0:  # the base moves: X0(a) R(q) = T  <=>  X0(ref) R(q) = X0(ref) X0(a)^-1 T
+            T = (ref.chain.X[0] @ inverse_transform(np.array([a.chain.X[0] for a in arms])))[inv] @ T
+        elif fold == -1:  # the tip moves: R(q) Xn(a) = T  <=>  R(q) Xn(ref) = T Xn(a)^-1 Xn(ref)
+            T = T @ (inverse_transform(np.array([a.chain.X[-1] for a in arms])) @ ref.chain.X[-1])[inv]
+        groups = [np.arange(M)] if fold is not None and M else [np.flatnonzero(inv == u) for u in range(len(uniq))]
+        rows, qs = [np.zeros(0, dtype=int)], [np.zeros((0, ref.n_active))]
+        for g in groups:
+            arm = ref if fold is not None else arms[inv[g[0]]]
+            sol = ik.solve_chain(arm.chain, T[g], arm.q_lower, arm.q_upper)
+            p_, b_ = np.nonzero(np.arange(sol.q.shape[1])[None, :] < sol.n_solutions[:, None])
+            rows.append(g[p_])
+            qs.append(sol.q[p_, b_])
+        return np.concatenate(rows), np.concatenate(qs)
+
+    def _fold(self, arms: list[LockedArm]) -> int | None:
+        """0 when every arm's chain equals the first grid arm's but for its first fixed transform (the
+        held joint before every moving one), -1 but for its last, None otherwise."""
+        ref = self.arms[0].chain.X
+        if all(np.array_equal(a.chain.X[1:], ref[1:]) for a in arms):
+            return 0
+        if all(np.array_equal(a.chain.X[:-1], ref[:-1]) for a in arms):
+            return -1
+        return None
+
+    def grid_configuration(self, angle_deg: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """The configuration label (N,) of postures (angle_deg (N,) deg, finite; q (N, n_active) rad) as the
+        arm at the nearest grid angle labels them (a search's hint: no arm built between grid angles)."""
+        t = self.grid_index(angle_deg)
+        out = np.full(len(t), -1)
+        for a in np.unique(t):
+            out[t == a] = self.configurations(self.arms[a]).labels(q[t == a])
+        return out
 
     def configurations(self, arm: LockedArm) -> Configurations:
         """The configuration labels of one of its arms (built once per arm)."""
