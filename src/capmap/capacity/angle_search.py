@@ -9,51 +9,84 @@ import numpy as np
 
 from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.self_motion import HealthyCapacity, HealthyProblem, SelfMotion, postures_capacity
+from capmap.core.ik import polish as ik_polish
 from capmap.core.ik.finish import RESIDUAL_TOL, wrap_to_range
+from capmap.core.ik.polish import PolishSettings
 from capmap.core.kinematics import pose_error
 
-__all__ = ["FINER", "between_grid_angles", "polish", "follow"]
+__all__ = ["FINER", "EDGE_NEAR", "between_grid_angles", "edge_intervals", "polish", "follow"]
 
-FINER = 8  # a 0 kg plateau on the grid: its points searched again on a grid this many times finer
+FINER = 4  # the grid intervals where a peak may hide: searched again on a grid this many times finer
+EDGE_NEAR = 0.05  # ...those at or next to an edge whose better end lies within this of the point's best
 _STILL = 1e-3 * RESIDUAL_TOL  # a pose error this small: the next Newton step moves a joint by rounding only
+_FOLLOW = PolishSettings(steps=8, done_tol=1e-3 * RESIDUAL_TOL, give_up=np.inf)  # as the numpy steps below
 _NEWTON_STEPS = 8  # over half a 10 deg step, 400 postures of the default map: 385 meet the IK's tolerance (12 steps: 386)
 
 
-def between_grid_angles(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray) -> None:
-    """Between grid angles, in place, for points[rows] whose grid best is ``res``'s: where that best is 0
-    kg (every grid posture at a limit or singular: a plateau that shows no way up) the angles
-    1/:data:`FINER` of a step apart first (:func:`_finer`; a peak a few degrees wide, e.g. where a pair of IK branches
-    is born, lies between grid angles), then the best posture followed (:func:`polish`; from half the finer
-    grid's step where that grid found it: such a peak is narrow)."""
+def between_grid_angles(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray,
+                        suspect: np.ndarray) -> None:
+    """Between grid angles, in place, for points[rows] whose grid best is ``res``'s: in the grid intervals
+    ``suspect`` (N, T) bool marks (:func:`edge_intervals`) the angles 1/:data:`FINER` of a step apart
+    first (:func:`_finer`: a narrow peak there lies between grid angles), then the best posture followed
+    (:func:`polish`; from half the finer step where the finer angles hold it)."""
     finer = np.zeros(0, dtype=int)
     if hp.polish_levels and len(rows):
-        plateau = rows[res.capacity_kg[rows] <= 0]
-        _finer(hp, points, res, plateau)
-        finer = plateau[res.capacity_kg[plateau] > 0]
+        finer = _finer(hp, points, res, rows, suspect)
         polish(hp, points, res, finer, start_deg=hp.sm.step_deg / FINER / 2)
     polish(hp, points, res, np.setdiff1d(rows, finer))
 
 
-def _finer(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray) -> None:
-    """Every IK solution of points[rows] at the angles 1/:data:`FINER` of a step apart between the grid
-    angles, the best posture kept where it beats ``res``'s (in place)."""
+def edge_intervals(sm: SelfMotion, pt: np.ndarray, tt: np.ndarray, value: np.ndarray, N: int) -> np.ndarray:
+    """The grid intervals (N, T) bool, [angle t, angle t + 1] (round the turn when the range spans one), where
+    a point's best may lie between grid angles although no grid angle shows it: for N points' grid
+    postures (point pt (M,), angle index tt (M,), value (M,) kg or an upper bound of it), the intervals at
+    or next to an edge (an IK branch born or lost, or a posture reaching 0 kg: a limit or a singularity
+    there) whose better end lies within :data:`EDGE_NEAR` of the point's best; every interval with a
+    posture at an end where that best is 0 kg (a plateau that shows no way up)."""
+    T = len(sm.angles_deg)
+    m, c, z = np.full((N, T), -np.inf), np.zeros((N, T), dtype=int), np.zeros((N, T), dtype=int)
+    np.maximum.at(m, (pt, tt), value)
+    np.add.at(c, (pt, tt), 1)
+    np.add.at(z, (pt, tt), (value <= 0).astype(int))
+    nx = np.roll(np.arange(T), -1)
+    valid = np.ones(T, dtype=bool)
+    valid[-1] = sm.turns  # the last interval only round a turn
+    edge = ((c != c[:, nx]) | (z != z[:, nx])) & valid
+    edge |= np.roll(edge, 1, axis=1) | np.roll(edge, -1, axis=1)
+    best = m.max(axis=1, initial=-np.inf)
+    near = np.maximum(m, m[:, nx]) >= np.where(best > 0, (1 - EDGE_NEAR) * best, 0.0)[:, None]
+    return near & (edge | (best <= 0)[:, None]) & valid
+
+
+def _finer(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray, suspect: np.ndarray
+           ) -> np.ndarray:
+    """Every IK solution of points[rows] at the angles 1/:data:`FINER` of an interval apart inside the
+    intervals ``suspect`` (N, T) marks, the best posture kept where it beats ``res``'s (in place). The
+    rows it improved."""
     sm = hp.sm
-    if not len(rows):
-        return
-    off = sm.step_deg * np.arange(1, FINER) / FINER
-    angles = sm.into_range((sm.angles_deg[:, None] + off[None, :]).ravel())
-    angles = np.unique(np.round(angles[np.isfinite(angles)], 9))
-    k, qr = sm.solve(points[np.repeat(rows, len(angles))], np.tile(angles, len(rows)), hp.problem.rotation)
-    pr, ar = np.repeat(rows, len(angles))[k], np.tile(angles, len(rows))[k]
+    pp, ii = np.nonzero(suspect[rows])
+    if not len(pp):
+        return np.zeros(0, dtype=int)
+    pp = rows[pp]
+    a0 = sm.angles_deg
+    a1 = np.roll(a0, -1) + np.where(np.arange(len(a0)) == len(a0) - 1, 360.0, 0.0)
+    frac = np.arange(1, FINER) / FINER
+    angles = sm.into_range((a0[ii][:, None] + (a1[ii] - a0[ii])[:, None] * frac[None, :]).ravel())
+    owner = np.repeat(pp, len(frac))
+    ok = np.isfinite(angles)
+    k, qr = sm.solve(points[owner[ok]], angles[ok], hp.problem.rotation)
+    pr, ar = owner[ok][k], angles[ok][k]
     if not len(pr):
-        return
+        return np.zeros(0, dtype=int)
     cap, bnd = postures_capacity(sm, np.deg2rad(ar), qr, hp.problem.directions, hp.problem.motion)
     k = argmin_per_group(-cap, pr)
     k = k[cap[k] > res.capacity_kg[pr[k]]]
     r = pr[k]
     res.capacity_kg[r], res.angle_deg[r], res.q_rad[r], res.binding[r] = cap[k], ar[k], qr[k], bnd[k]
-    res.n_candidates[r] += np.bincount(pr, minlength=len(points))[r]
-    res.n_full[r] += np.bincount(pr, minlength=len(points))[r]
+    seen = np.bincount(pr, minlength=len(points))
+    res.n_candidates[rows] += seen[rows]
+    res.n_full[rows] += seen[rows]
+    return r
 
 
 def polish(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray,
@@ -90,6 +123,12 @@ def follow(sm: SelfMotion, rotation: np.ndarray, points: np.ndarray, angle_deg: 
     arm = sm.arms[0]
     chain, act, j = sm.free_chain, arm.active, arm.locked_joint - 1
     rows = np.flatnonzero(np.isfinite(angle_deg) & np.all(np.isfinite(q), axis=1))
+    if sm.fold is not None:  # compiled Newton on the first grid angle's arm toward the moved targets
+        T = sm.moved(points[rows], angle_deg[rows], rotation)
+        qa, err = ik_polish.polish(arm.chain.X, q[rows], T, np.arange(len(rows)), _FOLLOW)
+        qa, inside = wrap_to_range(qa, arm.q_lower, arm.q_upper)
+        ok = (np.linalg.norm(err, axis=1) <= RESIDUAL_TOL) & inside.all(axis=1)
+        return rows[ok], qa[ok]
     target = np.broadcast_to(np.eye(4), (len(rows), 4, 4)).copy()
     target[:, :3, :3], target[:, :3, 3] = rotation, points[rows]
     full = np.zeros((len(rows), arm.robot.n_joints))

@@ -76,6 +76,13 @@ def screening_subset(directions: Directions, n: int) -> Directions:
     return Directions(u[k], directions.alpha_deg[k], directions.beta_deg[k], f"{directions.kind}[{len(k)}]")
 
 
+def _targets(points: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """Poses (M, 4, 4) at points (M, 3) m with the rotation (3, 3)."""
+    T = np.zeros((len(points), 4, 4))
+    T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = rotation, points, 1.0
+    return T
+
+
 @dataclass(frozen=True)
 class SelfMotion:
     """The healthy arm as its failed joint's angles: ``arms[t]`` the arm with that joint held at
@@ -155,42 +162,59 @@ class SelfMotion:
     def solve(self, points: np.ndarray, angle_deg: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Every IK solution of each point (M, 3) m with the joint held at its own angle_deg (M,) deg, the
         end effector at the rotation (3, 3): (the point of each solution (K,), its active joints
-        (K, n_active) rad). Where the held joint folds into the chain's first (last) fixed transform, the
-        arm at any angle is the first grid angle's arm with its base (tip) moved, so all targets are solved
-        in one call on that arm's chain, each moved by that transform (equal to rounding); otherwise one
-        call per angle."""
-        M = len(points)
-        T = np.zeros((M, 4, 4))
-        T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = rotation, points, 1.0
+        (K, n_active) rad). A folding joint (:attr:`fold`): every target in one call on the first grid
+        angle's arm (:meth:`moved`); otherwise one call per angle, on the arm held there."""
         ref = self.arms[0]
-        angle_deg = np.round(np.asarray(angle_deg, dtype=float), 9)
-        uniq, inv = np.unique(angle_deg, return_inverse=True)
-        inv = inv.reshape(-1)
-        arms = [self.arm_at(float(a)) for a in uniq]
-        fold = self._fold(arms)
-        if fold == 0:  # the base moves: X0(a) R(q) = T  <=>  X0(ref) R(q) = X0(ref) X0(a)^-1 T
-            T = (ref.chain.X[0] @ inverse_transform(np.array([a.chain.X[0] for a in arms])))[inv] @ T
-        elif fold == -1:  # the tip moves: R(q) Xn(a) = T  <=>  R(q) Xn(ref) = T Xn(a)^-1 Xn(ref)
-            T = T @ (inverse_transform(np.array([a.chain.X[-1] for a in arms])) @ ref.chain.X[-1])[inv]
-        groups = [np.arange(M)] if fold is not None and M else [np.flatnonzero(inv == u) for u in range(len(uniq))]
+        if self.fold is not None:
+            T, groups, arms = self.moved(points, angle_deg, rotation), [np.arange(len(points))], [ref]
+        else:
+            T = _targets(points, rotation)
+            uniq, inv = np.unique(np.round(np.asarray(angle_deg, dtype=float), 9), return_inverse=True)
+            groups = [np.flatnonzero(inv.reshape(-1) == u) for u in range(len(uniq))]
+            arms = [self.arm_at(float(a)) for a in uniq]
         rows, qs = [np.zeros(0, dtype=int)], [np.zeros((0, ref.n_active))]
-        for g in groups:
-            arm = ref if fold is not None else arms[inv[g[0]]]
+        for g, arm in zip(groups, arms):
+            if not len(g):
+                continue
             sol = ik.solve_chain(arm.chain, T[g], arm.q_lower, arm.q_upper)
             p_, b_ = np.nonzero(np.arange(sol.q.shape[1])[None, :] < sol.n_solutions[:, None])
             rows.append(g[p_])
             qs.append(sol.q[p_, b_])
         return np.concatenate(rows), np.concatenate(qs)
 
-    def _fold(self, arms: list[LockedArm]) -> int | None:
-        """0 when every arm's chain equals the first grid arm's but for its first fixed transform (the
-        held joint before every moving one), -1 but for its last, None otherwise."""
-        ref = self.arms[0].chain.X
-        if all(np.array_equal(a.chain.X[1:], ref[1:]) for a in arms):
-            return 0
-        if all(np.array_equal(a.chain.X[:-1], ref[:-1]) for a in arms):
-            return -1
-        return None
+    @cached_property
+    def fold(self) -> int | None:
+        """0 when the held joint is the chain's first, so that the arm held at angle a is the free chain
+        (F) with its first two fixed transforms and that joint folded into F0 Rz(a) F1; -1 when it is the
+        last (F(n-1) Rz(a) Fn); None otherwise. Checked on every grid angle's arm (to rounding)."""
+        F, j = self.free_chain.X, self.arms[0].locked_joint
+        kind = 0 if j == 1 else -1 if j == self.free_chain.n else None
+        if kind is None:
+            return None
+        k, rest, free_rest = (0, slice(1, None), F[2:]) if kind == 0 else (-1, slice(None, -1), F[:-2])
+        held = self._held(self.angles_deg, kind)
+        same = all(np.allclose(a.chain.X[k], h, rtol=0.0, atol=1e-12) and np.array_equal(a.chain.X[rest], free_rest)
+                   for a, h in zip(self.arms, held))
+        return kind if same else None
+
+    def _held(self, angle_deg: np.ndarray, kind: int) -> np.ndarray:
+        """The folded fixed transform (M, 4, 4) at angles (M,) deg: F0 Rz(a) F1 (kind 0), F(n-1) Rz(a) Fn (-1)."""
+        F = self.free_chain.X
+        a = np.deg2rad(np.asarray(angle_deg, dtype=float))
+        Rz = np.zeros((len(a), 4, 4))
+        Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1] = np.cos(a), -np.sin(a), np.sin(a), np.cos(a)
+        Rz[:, 2, 2] = Rz[:, 3, 3] = 1.0
+        return F[0] @ Rz @ F[1] if kind == 0 else F[-2] @ Rz @ F[-1]
+
+    def moved(self, points: np.ndarray, angle_deg: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+        """For a folding joint (:attr:`fold`): the targets (M, 4, 4) of the first grid angle's arm that put
+        the arm held at angle_deg (M,) deg at the points (M, 3) m with the rotation (3, 3) (equal to
+        rounding): its base moved, T -> X0(ref) X0(a)^-1 T, or its tip, T -> T Xn(a)^-1 Xn(ref)."""
+        T = _targets(points, rotation)
+        if not len(T):
+            return T
+        ref, held = self.arms[0].chain.X, inverse_transform(self._held(angle_deg, self.fold))
+        return ref[0] @ held @ T if self.fold == 0 else T @ held @ ref[-1]
 
     def grid_configuration(self, angle_deg: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The configuration label (N,) of postures (angle_deg (N,) deg, finite; q (N, n_active) rad) as the
