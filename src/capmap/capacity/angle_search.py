@@ -14,10 +14,12 @@ from capmap.core.ik.finish import RESIDUAL_TOL, wrap_to_range
 from capmap.core.ik.polish import PolishSettings
 from capmap.core.kinematics import pose_error
 
-__all__ = ["FINER", "EDGE_NEAR", "between_grid_angles", "edge_intervals", "polish", "follow"]
+__all__ = ["FINER", "FINER_BESIDE", "EDGE_NEAR", "between_grid_angles", "edge_intervals", "polish", "follow"]
 
-FINER = 4  # the grid intervals where a peak may hide: searched again on a grid this many times finer
-EDGE_NEAR = 0.05  # ...those at or next to an edge whose better end lies within this of the point's best
+FINER = 8  # the grid intervals holding an edge (:func:`edge_intervals`), or where the grid's best is 0 kg: this many times finer
+FINER_BESIDE = 2  # ...and those beside an edge
+EDGE_NEAR = 0.05  # those at or next to an edge whose better end lies within this of the point's best
+START_NEAR = 0.02  # an interval's best finer posture followed if it lies within this of the point's grid best
 _STILL = 1e-3 * RESIDUAL_TOL  # a pose error this small: the next Newton step moves a joint by rounding only
 _FOLLOW = PolishSettings(steps=8, done_tol=1e-3 * RESIDUAL_TOL, give_up=np.inf)  # as the numpy steps below
 _NEWTON_STEPS = 8  # over half a 10 deg step, 400 postures of the default map: 385 meet the IK's tolerance (12 steps: 386)
@@ -26,23 +28,33 @@ _NEWTON_STEPS = 8  # over half a 10 deg step, 400 postures of the default map: 3
 def between_grid_angles(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray,
                         suspect: np.ndarray) -> None:
     """Between grid angles, in place, for points[rows] whose grid best is ``res``'s: in the grid intervals
-    ``suspect`` (N, T) bool marks (:func:`edge_intervals`) the angles 1/:data:`FINER` of a step apart
-    first (:func:`_finer`: a narrow peak there lies between grid angles), then the best posture followed
-    (:func:`polish`; from half the finer step where the finer angles hold it)."""
-    finer = np.zeros(0, dtype=int)
-    if hp.polish_levels and len(rows):
-        finer = _finer(hp, points, res, rows, suspect)
-        polish(hp, points, res, finer, start_deg=hp.sm.step_deg / FINER / 2)
-    polish(hp, points, res, np.setdiff1d(rows, finer))
+    ``suspect`` (N, T) marks (:func:`edge_intervals`) finer angles first (:func:`_finer`: a narrow
+    peak there lies between grid angles); then both the grid's best posture and, where it comes within
+    :data:`EDGE_NEAR` of it, the finer angles' best followed (:func:`polish`; the latter from half the finer
+    step), the better kept."""
+    if not len(rows):
+        return
+    alt = _finer(hp, points, res, rows, suspect) if hp.polish_levels else None
+    polish(hp, points, res, rows)
+    if alt is None:
+        return
+    owner, fine = alt  # starts: each interval's best finer posture
+    polish(hp, points[owner], fine, np.arange(len(owner)), start_deg=hp.sm.step_deg / FINER_BESIDE / 2)
+    k = argmin_per_group(-fine.capacity_kg, owner)
+    k = k[fine.capacity_kg[k] > res.capacity_kg[owner[k]]]
+    for f in ("capacity_kg", "angle_deg", "q_rad", "binding"):
+        getattr(res, f)[owner[k]] = getattr(fine, f)[k]
 
 
 def edge_intervals(sm: SelfMotion, pt: np.ndarray, tt: np.ndarray, value: np.ndarray, N: int) -> np.ndarray:
-    """The grid intervals (N, T) bool, [angle t, angle t + 1] (round the turn when the range spans one), where
-    a point's best may lie between grid angles although no grid angle shows it: for N points' grid
-    postures (point pt (M,), angle index tt (M,), value (M,) kg or an upper bound of it), the intervals at
-    or next to an edge (an IK branch born or lost, or a posture reaching 0 kg: a limit or a singularity
-    there) whose better end lies within :data:`EDGE_NEAR` of the point's best; every interval with a
-    posture at an end where that best is 0 kg (a plateau that shows no way up)."""
+    """Where a point's best may lie between grid angles although no grid angle shows it, per grid interval
+    [angle t, angle t + 1] (round the turn when the range spans one): (N, T) int8, the number of parts to
+    split it into (0: none). From N points' grid postures (point pt (M,), angle index tt (M,), value (M,)
+    kg or an upper bound of it): the intervals at an edge (an IK posture appears or goes, or one reaches
+    0 kg: a joint limit or a singularity there; :data:`FINER` parts) or beside one (:data:`FINER_BESIDE`)
+    whose better end lies within :data:`EDGE_NEAR` of the point's best; where that best is 0 kg (a plateau
+    that shows no way up), every interval with a posture at an end (:data:`FINER`). A branch's capacity
+    can rise steeply just before it ends: a narrow peak there lies between grid angles."""
     T = len(sm.angles_deg)
     m, c, z = np.full((N, T), -np.inf), np.zeros((N, T), dtype=int), np.zeros((N, T), dtype=int)
     np.maximum.at(m, (pt, tt), value)
@@ -52,41 +64,51 @@ def edge_intervals(sm: SelfMotion, pt: np.ndarray, tt: np.ndarray, value: np.nda
     valid = np.ones(T, dtype=bool)
     valid[-1] = sm.turns  # the last interval only round a turn
     edge = ((c != c[:, nx]) | (z != z[:, nx])) & valid
-    edge |= np.roll(edge, 1, axis=1) | np.roll(edge, -1, axis=1)
+    beside = (np.roll(edge, 1, axis=1) | np.roll(edge, -1, axis=1)) & ~edge
     best = m.max(axis=1, initial=-np.inf)
-    near = np.maximum(m, m[:, nx]) >= np.where(best > 0, (1 - EDGE_NEAR) * best, 0.0)[:, None]
-    return near & (edge | (best <= 0)[:, None]) & valid
+    near = (np.maximum(m, m[:, nx]) >= np.where(best > 0, (1 - EDGE_NEAR) * best, 0.0)[:, None]) & valid
+    parts = np.where(edge | (best <= 0)[:, None], FINER, np.where(beside, FINER_BESIDE, 0))
+    return np.where(near, parts, 0).astype(np.int8)
 
 
 def _finer(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray, suspect: np.ndarray
-           ) -> np.ndarray:
-    """Every IK solution of points[rows] at the angles 1/:data:`FINER` of an interval apart inside the
-    intervals ``suspect`` (N, T) marks, the best posture kept where it beats ``res``'s (in place). The
-    rows it improved."""
+           ) -> tuple[np.ndarray, HealthyCapacity] | None:
+    """Every IK solution of points[rows] at the angles splitting the grid intervals ``suspect`` (N, T) marks
+    (:func:`edge_intervals`) into parts: each interval's best posture where it comes within
+    :data:`EDGE_NEAR` of the point's grid best (``res``; any, where that is 0 kg), as (their points (S,),
+    the postures (S,)); None if there is none. ``res`` counts the candidates."""
     sm = hp.sm
     pp, ii = np.nonzero(suspect[rows])
     if not len(pp):
-        return np.zeros(0, dtype=int)
+        return None
+    n_of = suspect[rows][pp, ii]
     pp = rows[pp]
     a0 = sm.angles_deg
     a1 = np.roll(a0, -1) + np.where(np.arange(len(a0)) == len(a0) - 1, 360.0, 0.0)
-    frac = np.arange(1, FINER) / FINER
-    angles = sm.into_range((a0[ii][:, None] + (a1[ii] - a0[ii])[:, None] * frac[None, :]).ravel())
-    owner = np.repeat(pp, len(frac))
+    pr, ar, interval = [], [], []
+    for n in np.unique(n_of):
+        fine = n_of == n
+        frac = np.arange(1, n) / n
+        pr.append(np.repeat(pp[fine], len(frac)))
+        interval.append(np.repeat(np.flatnonzero(fine), len(frac)))
+        ar.append(sm.into_range((a0[ii[fine]][:, None] + (a1 - a0)[ii[fine]][:, None] * frac[None, :]).ravel()))
+    owner, angles, interval = np.concatenate(pr), np.concatenate(ar), np.concatenate(interval)
     ok = np.isfinite(angles)
     k, qr = sm.solve(points[owner[ok]], angles[ok], hp.problem.rotation)
-    pr, ar = owner[ok][k], angles[ok][k]
-    if not len(pr):
-        return np.zeros(0, dtype=int)
-    cap, bnd = postures_capacity(sm, np.deg2rad(ar), qr, hp.problem.directions, hp.problem.motion)
-    k = argmin_per_group(-cap, pr)
-    k = k[cap[k] > res.capacity_kg[pr[k]]]
-    r = pr[k]
-    res.capacity_kg[r], res.angle_deg[r], res.q_rad[r], res.binding[r] = cap[k], ar[k], qr[k], bnd[k]
+    pr, ar, interval = owner[ok][k], angles[ok][k], interval[ok][k]
     seen = np.bincount(pr, minlength=len(points))
     res.n_candidates[rows] += seen[rows]
     res.n_full[rows] += seen[rows]
-    return r
+    if not len(pr):
+        return None
+    cap, bnd = postures_capacity(sm, np.deg2rad(ar), qr, hp.problem.directions, hp.problem.motion)
+    k = argmin_per_group(-cap, interval)  # each interval's best
+    k = k[cap[k] >= (1 - START_NEAR) * np.maximum(res.capacity_kg[pr[k]], 0.0)]
+    if not len(k):
+        return None
+    S = len(k)
+    return pr[k], HealthyCapacity(cap[k], ar[k], qr[k], bnd[k], np.zeros(S, dtype=int), np.zeros(S, dtype=int),
+                                  np.ones(S, dtype=bool))
 
 
 def polish(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: np.ndarray,

@@ -17,16 +17,18 @@ better: the healthy value is a lower bound of the healthy arm's, and the loss it
 bound of what the failure cost.
 
 The angles are searched in two steps. A grid (one turn through the failed angle when the joint turns
-360 deg or more) gives each point's best posture over the grid exactly (no candidate dropped): every
-(angle, solution) is first screened on a subset of the directions (a minimum over fewer directions is
-an upper bound), and the candidates are then evaluated on the full set in decreasing order of their
-bound until no remaining bound exceeds the best value found (branch and bound; with the whole set as
-its screen, the screening is the evaluation). Between grid angles the maximum can only be higher, and
-it can sit in a narrow peak a coarse grid steps over; so the best posture is then followed along its
-IK branch (``HealthyProblem.polish_levels``): the angles half a grid step either side of it, the better
-kept, the step halved each level, each angle's solution the one nearest the current posture. Every
-value is a posture's, a lower bound of the healthy arm's; how far the result stays below a fine sweep
-is measured, not assumed (the baseline stage evaluates voxels' worst points again on a 1 deg grid).
+360 deg or more) gives each point's best posture over the grid exactly (no candidate dropped): on the
+whole sphere every (angle, solution) is evaluated; on a finite set every candidate is first screened on
+a subset of the directions (a minimum over fewer directions is an upper bound), and the candidates are
+then evaluated on the full set in decreasing order of their bound until no remaining bound exceeds the
+best value found (branch and bound). Between grid angles the maximum can only be higher, and it can sit
+in a narrow peak a coarse grid steps over, mostly where a branch ends (an IK posture appears or goes, or
+reaches 0 kg); so the grid intervals at such an edge near the point's best are searched again on a finer
+grid, and the best posture and each such interval's best are followed along their IK branches
+(:mod:`capmap.capacity.angle_search`): the angles half a step either side, the better kept, the step halved
+each level, each angle's solution the one nearest the current posture. Every value is a posture's, a
+lower bound of the healthy arm's; how far the result stays below a fine sweep is measured, not assumed
+(the baseline stage evaluates voxels' worst points again on a 1 deg grid).
 """
 
 
@@ -209,7 +211,7 @@ def _branch_and_bound(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarra
     """The grid's best posture of each point: every candidate screened, then evaluated in order of its
     bound (a finite set: the screen a subset of it, or the whole set, whose values are then the
     candidates'; the whole sphere: every candidate's exact value at once). With the grid intervals
-    (N, T) bool where the best may lie between grid angles (:func:`edge_intervals`, from the screen)."""
+    (N, T) int8 where the best may lie between grid angles (:func:`edge_intervals`, from the screen)."""
     sm, rotation, directions, motion = hp.sm, hp.problem.rotation, hp.problem.directions, hp.problem.motion
     N = len(points)
     ceiling = ceiling.copy()
