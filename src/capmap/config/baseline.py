@@ -10,8 +10,9 @@ __all__ = ["BaselineConfig"]
 @dataclass(frozen=True)
 class BaselineConfig:
     """``baseline``: the failed joint's angles are swept in steps of ``step_deg`` (through the failed
-    angle); ``screen_directions`` of the direction set bound each (angle, solution) before the full set
-    (:func:`capmap.capacity.baseline.healthy_capacity`); each point's best posture on that grid is
+    angle); ``screen_directions`` of a finite direction set bound each (angle, solution) before the full
+    set (the whole sphere: every candidate evaluated; :func:`capmap.capacity.baseline.healthy_capacity`);
+    each point's best posture on that grid is
     followed ``polish_levels`` levels between grid angles (from half the step, halving it);
     ``check_voxels`` voxels' worst points are evaluated again on a grid of ``check_step_deg`` (the
     shortfall against it shown)."""
