@@ -16,7 +16,7 @@ from capmap.core.kinematics import pose_error
 
 __all__ = ["FINER", "FINER_BESIDE", "EDGE_NEAR", "between_grid_angles", "edge_intervals", "polish", "follow"]
 
-FINER = 8  # the grid intervals holding an edge (:func:`edge_intervals`), or where the grid's best is 0 kg: this many times finer
+FINER = 6  # the grid intervals holding an edge (:func:`edge_intervals`), or where the grid's best is 0 kg: this many times finer
 FINER_BESIDE = 2  # ...and those beside an edge
 EDGE_NEAR = 0.05  # those at or next to an edge whose better end lies within this of the point's best
 START_NEAR = 0.02  # an interval's best finer posture followed if it lies within this of the point's grid best
