@@ -9,6 +9,7 @@ import numpy as np
 
 from capmap.capacity.engine import argmin_per_group
 from capmap.capacity.self_motion import HealthyCapacity, HealthyProblem, SelfMotion, postures_capacity
+from capmap.core import ik
 from capmap.core.ik import polish as ik_polish
 from capmap.core.ik.finish import RESIDUAL_TOL, wrap_to_range
 from capmap.core.ik.polish import PolishSettings
@@ -151,8 +152,7 @@ def follow(sm: SelfMotion, rotation: np.ndarray, points: np.ndarray, angle_deg: 
         qa, inside = wrap_to_range(qa, arm.q_lower, arm.q_upper)
         ok = (np.linalg.norm(err, axis=1) <= RESIDUAL_TOL) & inside.all(axis=1)
         return rows[ok], qa[ok]
-    target = np.broadcast_to(np.eye(4), (len(rows), 4, 4)).copy()
-    target[:, :3, :3], target[:, :3, 3] = rotation, points[rows]
+    target = ik.targets(points[rows], rotation)
     full = np.zeros((len(rows), arm.robot.n_joints))
     full[:, act], full[:, j] = q[rows], np.deg2rad(angle_deg[rows])
     go = np.arange(len(rows))  # the rows still moving: a row stops once its step is below rounding

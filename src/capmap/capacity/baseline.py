@@ -69,7 +69,7 @@ def healthy_capacity(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray
     at the hint's grid angle, then at grid angles ever farther from it (:func:`_witness`). A stopped
     point has ``exact`` False and capacity_kg a value at or above that ceiling (a posture's, so at most
     its healthy value); the least value of each group below its ceiling is exact. The postures are not
-    labelled with their configurations (``SelfMotion.configuration`` where one is needed)."""
+    labelled with their configurations (``SelfMotion.grid_configuration`` where one is needed)."""
     sm = hp.sm
     N = len(points)
     ceiling = np.full(N, np.inf) if ceiling is None else np.asarray(ceiling, dtype=float)
@@ -165,7 +165,7 @@ def _witness(hp: HealthyProblem, points: np.ndarray, ceiling: np.ndarray, hint: 
         t = t % T if sm.turns else t
         ok = (t >= 0) & (t < T)
         pr, tr, qr = _postures(sm, hp.problem.rotation, points, rows[ok], t[ok])
-        keep = sm.configuration(sm.angles_deg[tr], qr) == hint.configuration[pr]
+        keep = sm.grid_configuration(sm.angles_deg[tr], qr) == hint.configuration[pr]
         pr, tr, qr = pr[keep], tr[keep], qr[keep]
         seen += np.bincount(pr, minlength=len(points))
         if not len(pr):

@@ -76,13 +76,6 @@ def screening_subset(directions: Directions, n: int) -> Directions:
     return Directions(u[k], directions.alpha_deg[k], directions.beta_deg[k], f"{directions.kind}[{len(k)}]")
 
 
-def _targets(points: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-    """Poses (M, 4, 4) at points (M, 3) m with the rotation (3, 3)."""
-    T = np.zeros((len(points), 4, 4))
-    T[:, :3, :3], T[:, :3, 3], T[:, 3, 3] = rotation, points, 1.0
-    return T
-
-
 @dataclass(frozen=True)
 class SelfMotion:
     """The healthy arm as its failed joint's angles: ``arms[t]`` the arm with that joint held at
@@ -170,7 +163,7 @@ class SelfMotion:
         if self.fold is not None:
             T, groups, arms = self.moved(points, angle_deg, rotation), [np.arange(len(points))], [ref]
         else:
-            T = _targets(points, rotation)
+            T = ik.targets(points, rotation)
             uniq, inv = np.unique(np.round(angle_deg, 9), return_inverse=True)
             groups = [np.flatnonzero(inv.reshape(-1) == u) for u in range(len(uniq))]
             arms = [self.arm_at(float(a)) for a in uniq]
@@ -222,7 +215,7 @@ class SelfMotion:
         """For a folding joint (:attr:`fold`): the targets (M, 4, 4) of the first grid angle's arm that put
         the arm held at angle_deg (M,) deg at the points (M, 3) m with the rotation (3, 3) (equal to
         rounding): its base moved, T -> X0(ref) X0(a)^-1 T, or its tip, T -> T Xn(a)^-1 Xn(ref)."""
-        T = _targets(points, rotation)
+        T = ik.targets(points, rotation)
         if not len(T):
             return T
         ref, held = self.arms[0].chain.X, inverse_transform(self._held(angle_deg, self.fold))
@@ -242,17 +235,6 @@ class SelfMotion:
         if id(arm) not in self._labels:
             self._labels[id(arm)] = (arm, arm_configurations(arm))  # the arm kept: its id stays its own
         return self._labels[id(arm)][1]
-
-    def configuration(self, angle_deg: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """The configuration label (N,) of postures: the joint held at angle_deg (N,) deg (NaN: none, -1),
-        the active joints q (N, n_active) rad."""
-        out = np.full(len(angle_deg), -1)
-        have = np.flatnonzero(np.isfinite(angle_deg))
-        key = np.round(angle_deg[have], 9)
-        for a in np.unique(key):
-            rows = have[key == a]
-            out[rows] = self.configurations(self.arm_at(float(a))).labels(q[rows])
-        return out
 
 
 @dataclass(frozen=True)

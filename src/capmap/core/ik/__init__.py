@@ -80,10 +80,11 @@ from capmap.core.ik.registry import (
     semi_analytic_shape,
     solve,
     solve_chain,
+    targets,
     wrap_to_range,
 )
 
 __all__ = ["IKSolutions", "IKMethod", "solve_chain", "GeneralSixR", "ClosedForm", "SemiAnalytic",
            "MultiStartNewton", "METHODS", "method_of", "solve", "newton", "wrap_to_range", "method_for",
            "closed_form_shape", "semi_analytic_shape", "COMPLETE_METHODS", "RESIDUAL_TOL", "SEARCH_STEPS",
-           "ChainClass", "classify"]
+           "ChainClass", "classify", "targets"]

@@ -24,7 +24,7 @@ from capmap.core.reduction import LockedArm
 __all__ = ["IKSolutions", "IKMethod", "solve_chain",
            "GeneralSixR", "ClosedForm", "SemiAnalytic", "MultiStartNewton", "METHODS", "method_of", "solve",
            "newton", "wrap_to_range", "method_for", "closed_form_shape", "semi_analytic_shape", "COMPLETE_METHODS",
-           "RESIDUAL_TOL", "SEARCH_STEPS", "ChainClass", "classify"]
+           "RESIDUAL_TOL", "SEARCH_STEPS", "ChainClass", "classify", "targets"]
 
 log = logging.getLogger(__name__)
 
@@ -79,7 +79,7 @@ def _warn_incomplete(chain: Chain) -> None:
 # --------------------------------------------------------------------------- methods
 
 
-def _targets(positions: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+def targets(positions: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     """Target poses (N, 4, 4) from positions (N, 3) m and a rotation (3, 3) or (N, 3, 3)."""
     positions = np.atleast_2d(np.asarray(positions, dtype=float))
     N = len(positions)
@@ -130,7 +130,7 @@ class IKMethod(ABC):
         the method does not apply to ``arm``'s chain."""
         if not self.applies(arm.chain):
             raise ValueError(f"IK method {self.name} does not apply to the chain of {arm.robot.name}")
-        return self.solve_chain(arm.chain, _targets(positions, rotation), arm.q_lower, arm.q_upper, tol)
+        return self.solve_chain(arm.chain, targets(positions, rotation), arm.q_lower, arm.q_upper, tol)
 
     def solve_chain(self, chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray,
                     tol: float = RESIDUAL_TOL) -> IKSolutions:
@@ -295,7 +295,7 @@ def solve(arm: LockedArm, positions: np.ndarray, rotation: np.ndarray, tol: floa
     positions: (N, 3) m. rotation: (3, 3) or (N, 3, 3), end-effector orientation in the
     base frame. Returns active-joint angles within the joint ranges, residual <= tol.
     """
-    return solve_chain(arm.chain, _targets(positions, rotation), arm.q_lower, arm.q_upper, tol)
+    return solve_chain(arm.chain, targets(positions, rotation), arm.q_lower, arm.q_upper, tol)
 
 
 def solve_chain(chain: Chain, T: np.ndarray, lower: np.ndarray, upper: np.ndarray,
