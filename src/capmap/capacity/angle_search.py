@@ -15,7 +15,7 @@ from capmap.core.ik.finish import RESIDUAL_TOL, wrap_to_range
 from capmap.core.ik.polish import PolishSettings
 from capmap.core.kinematics import pose_error
 
-__all__ = ["FINER", "FINER_BESIDE", "EDGE_NEAR", "between_grid_angles", "edge_intervals", "polish", "follow"]
+__all__ = ["FINER", "FINER_BESIDE", "EDGE_NEAR", "START_NEAR", "between_grid_angles", "edge_intervals", "polish", "follow"]
 
 FINER = 6  # the grid intervals holding an edge (:func:`edge_intervals`), or where the grid's best is 0 kg: this many times finer
 FINER_BESIDE = 2  # ...and those beside an edge
@@ -30,9 +30,8 @@ def between_grid_angles(hp: HealthyProblem, points: np.ndarray, res: HealthyCapa
                         suspect: np.ndarray) -> None:
     """Between grid angles, in place, for points[rows] whose grid best is ``res``'s: in the grid intervals
     ``suspect`` (N, T) marks (:func:`edge_intervals`) finer angles first (:func:`_finer`: a narrow
-    peak there lies between grid angles); then both the grid's best posture and, where it comes within
-    :data:`EDGE_NEAR` of it, the finer angles' best followed (:func:`polish`; the latter from half the finer
-    step), the better kept."""
+    peak there lies between grid angles); then both the grid's best posture and each interval's finer best
+    within :data:`START_NEAR` of it followed (:func:`polish`; the latter from a quarter step), the best kept."""
     if not len(rows):
         return
     alt = _finer(hp, points, res, rows, suspect) if hp.polish_levels else None
@@ -76,7 +75,7 @@ def _finer(hp: HealthyProblem, points: np.ndarray, res: HealthyCapacity, rows: n
            ) -> tuple[np.ndarray, HealthyCapacity] | None:
     """Every IK solution of points[rows] at the angles splitting the grid intervals ``suspect`` (N, T) marks
     (:func:`edge_intervals`) into parts: each interval's best posture where it comes within
-    :data:`EDGE_NEAR` of the point's grid best (``res``; any, where that is 0 kg), as (their points (S,),
+    :data:`START_NEAR` of the point's grid best (``res``; any, where that is 0 kg), as (their points (S,),
     the postures (S,)); None if there is none. ``res`` counts the candidates."""
     sm = hp.sm
     pp, ii = np.nonzero(suspect[rows])
