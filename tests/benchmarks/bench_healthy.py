@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from tests.benchmarks.bench_pipeline import _copy, _jobs, _snakemake
+from tests.benchmarks.bench_pipeline import _copy, _jobs, _snakemake, reference_worktree
 from tests.benchmarks.machine import machine
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -58,14 +58,8 @@ def main():
     this = _measure(ROOT, args.cores, dict(os.environ), "this checkout")
     if args.skip_reference:
         return
-    wt = Path(tempfile.mkdtemp()) / "reference"
-    subprocess.run(["git", "worktree", "add", "--detach", str(wt), args.reference], cwd=ROOT, check=True,
-                   capture_output=True)
-    try:
-        env = dict(os.environ, PYTHONPATH=f"{wt / 'src'}{os.pathsep}{os.environ.get('PYTHONPATH', '')}")
+    with reference_worktree(args.reference, dict(os.environ)) as (wt, env):
         ref = _measure(wt, args.cores, env, f"reference {args.reference}")
-    finally:
-        subprocess.run(["git", "worktree", "remove", "--force", str(wt)], cwd=ROOT, check=False, capture_output=True)
     print(f"snakemake baseline: {this['wall']:.1f} s (target <= 120 s); {ref['wall'] / this['wall']:.2f}x faster than "
           f"the reference's {ref['wall']:.1f} s; shards {ref['core_s'] / this['core_s']:.2f}x fewer core-s")
 

@@ -22,6 +22,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import yaml
@@ -29,6 +30,18 @@ import yaml
 from tests.benchmarks.machine import machine
 
 ROOT = Path(__file__).resolve().parents[2]
+
+
+@contextmanager
+def reference_worktree(commit: str, env: dict):
+    """A ``git worktree`` of ``commit`` and the environment running its code (its src first on PYTHONPATH),
+    removed afterwards: (folder, env)."""
+    wt = Path(tempfile.mkdtemp()) / "reference"
+    subprocess.run(["git", "worktree", "add", "--detach", str(wt), commit], cwd=ROOT, check=True, capture_output=True)
+    try:
+        yield wt, dict(env, PYTHONPATH=f"{wt / 'src'}{os.pathsep}{env.get('PYTHONPATH', '')}")
+    finally:
+        subprocess.run(["git", "worktree", "remove", "--force", str(wt)], cwd=ROOT, check=False, capture_output=True)
 
 
 def _copy(code: Path, tmp: Path) -> None:
@@ -101,14 +114,8 @@ def main():
     this = _measure(ROOT, args.cores, env, "this checkout", args.keep)
     ref = None
     if not args.skip_reference:
-        wt = Path(tempfile.mkdtemp()) / "reference"
-        subprocess.run(["git", "worktree", "add", "--detach", str(wt), args.reference], cwd=ROOT, check=True,
-                       capture_output=True)
-        try:
-            ref_env = dict(env, PYTHONPATH=f"{wt / 'src'}{os.pathsep}{env.get('PYTHONPATH', '')}")
+        with reference_worktree(args.reference, env) as (wt, ref_env):
             ref = _measure(wt, args.cores, ref_env, f"reference {args.reference}")
-        finally:
-            subprocess.run(["git", "worktree", "remove", "--force", str(wt)], cwd=ROOT, check=False, capture_output=True)
     for key, target, label in (("all", 90, "snakemake all from clean"),
                                ("what_if", 45, "capacity_map after a lock-angle change")):
         ratio = f"; {ref[key] / this[key]:.2f}x the reference's {ref[key]:.1f} s" if ref else ""
