@@ -8,9 +8,12 @@ import pytest
 from capmap.capacity.engine import LoadLimits
 from capmap.capacity.self_motion import SelfMotion, self_motion_angles
 from capmap.core import ik
+from capmap.core.configuration import arm_configurations
 from capmap.core.reduction import lock
 from capmap.robots import load
-from tests.scenario import SSRMS_YAML, TASK_R
+from tests.scenario import ROOT, SSRMS_YAML, TASK_R
+
+PANDA_YAML = ROOT / "config" / "robots" / "panda.yaml"
 
 
 @pytest.fixture(scope="module")
@@ -69,3 +72,22 @@ def test_the_reach_bound_keeps_every_reachable_pose_and_drops_only_unreachable_o
     assert 50 < out.sum() < 400  # the bound drops some points and keeps others: the test says something
     for arm in sm.arms:
         assert not ik.solve(arm, box[out], TASK_R).n_solutions.any()
+
+
+@pytest.mark.parametrize("robot_file, joint", [(SSRMS_YAML, 1), (SSRMS_YAML, 7), (PANDA_YAML, 1), (PANDA_YAML, 7),
+                                               (SSRMS_YAML, 4)])
+def test_postures_are_labelled_as_the_nearest_grid_arm_labels_them(robot_file, joint):
+    """grid_configuration (one call on the first grid arm when the joint folds) against the labels of the arm
+    at each posture's nearest grid angle, built for it: SSRMS (shoulder, elbow, wrist flags) and the Panda
+    (the sign of det J), their first and last joints; SSRMS joint 4 (no fold: an arm per grid angle)."""
+    robot = load(robot_file)
+    sm = _sm(robot, joint)
+    rng = np.random.default_rng(9)
+    angles = rng.uniform(sm.lower_deg, sm.upper_deg, 400)
+    q = rng.uniform(np.maximum(robot.q_lower, -np.pi), np.minimum(robot.q_upper, np.pi), (400, 7))
+    q = np.delete(q, joint - 1, axis=1)
+    nearest = np.argmin(np.abs((angles[:, None] - sm.angles_deg[None, :] + 180.0) % 360.0 - 180.0), axis=1)  # a turn
+    want = np.array([arm_configurations(lock(robot, joint, np.deg2rad(sm.angles_deg[t]))).labels(qi[None])[0]
+                     for t, qi in zip(nearest, q)])
+    assert len(np.unique(want)) > 1  # the postures span several configurations: the test compares something
+    np.testing.assert_array_equal(sm.grid_configuration(angles, q), want)

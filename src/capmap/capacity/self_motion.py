@@ -223,7 +223,12 @@ class SelfMotion:
 
     def grid_configuration(self, angle_deg: np.ndarray, q: np.ndarray) -> np.ndarray:
         """The configuration label (N,) of postures (angle_deg (N,) deg, finite; q (N, n_active) rad) as the
-        arm at the nearest grid angle labels them (a search's hint: no arm built between grid angles)."""
+        arm at the nearest grid angle labels them (a search's hint: no arm built between grid angles). A folding
+        joint's grid arms differ only in their first (last) fixed transform, which the labels do not see (a
+        chain's shoulder, elbow and wrist flags are taken in the frame after its first transform and at the
+        wrist before its last; the sign of det J is that of any base or tool frame): one call on the first."""
+        if self.fold is not None:
+            return self.configurations(self.arms[0]).labels(q) if len(q) else np.full(0, -1)
         t = self.grid_index(angle_deg)
         out = np.full(len(t), -1)
         for a in np.unique(t):

@@ -80,11 +80,9 @@ class BatchDynamics:
             q[:, self.locked] = self.locked_q if held_rad is None else held_rad
         elif held_rad is not None:
             raise ValueError("held_rad needs an arm with a locked joint")
-        c0 = np.zeros((B, self.n_out))
-        L = np.zeros((B, self.n_out, 3))
-        Q = np.zeros((B, self.n_out, 6))
+        C = np.zeros((B, self.n_out, 10))  # [c0, L, Q]: what the capacity kernels read
         S = np.zeros((B, self.n_out, 3))
         singular = np.zeros(B, dtype=np.bool_)
         batch_coefficients(self.R0, self.p0, self.axis, self.mass, self.com, self.Ic, self.armature, self.ee_joint,
-                           self.ee_p, self.gravity, self.base_com, self.active, q, c0, L, Q, S, singular)
-        return Coefficients(c0, L, Q, S, singular)
+                           self.ee_p, self.gravity, self.base_com, self.active, q, C, S, singular)
+        return Coefficients.from_stacked(C, S, singular)

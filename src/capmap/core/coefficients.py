@@ -17,7 +17,7 @@ invertible, or 1-norm condition number > 1e12) has all coefficients zero and ``s
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -42,15 +42,27 @@ class Coefficients:
     Q: np.ndarray
     S: np.ndarray
     singular: np.ndarray
+    joined: np.ndarray | None = field(default=None, repr=False, compare=False)  # [c0, L, Q] when they are its views
+
+    @classmethod
+    def from_stacked(cls, C: np.ndarray, S: np.ndarray, singular: np.ndarray) -> "Coefficients":
+        """c0, L and Q as views of C (..., n_out, 10) = [c0, L, Q] (what :meth:`stacked` then returns, not
+        copied)."""
+        return cls(C[..., 0], C[..., 1:4], C[..., 4:], S, singular, C)
 
     def stacked(self) -> np.ndarray:
         """[c0, L, Q] (..., n_out, 10): the outputs at rest are ``stacked() @ motion_features(u, motion).T``
-        (:func:`capmap.capacity.engine.motion_features`)."""
+        (:func:`capmap.capacity.engine.motion_features`). Not to be written to (it may be c0, L and Q's own
+        memory)."""
+        if self.joined is not None:
+            return self.joined
         return np.concatenate([self.c0[..., None], self.L, self.Q], axis=-1)
 
     def take(self, rows: np.ndarray) -> "Coefficients":
         """The configurations ``rows`` (M,) of a batch (indices or a mask on the leading axis)."""
-        return Coefficients(*(getattr(self, f.name)[rows] for f in fields(self)))
+        if self.joined is not None:
+            return Coefficients.from_stacked(self.joined[rows], self.S[rows], self.singular[rows])
+        return Coefficients(*(getattr(self, name)[rows] for name in _PARTS))
 
     @classmethod
     def empty(cls, n_out: int) -> "Coefficients":
@@ -61,4 +73,7 @@ class Coefficients:
     @classmethod
     def stack(cls, rows: list["Coefficients"]) -> "Coefficients":
         """One batch (B = len(rows)) from per-configuration coefficients (no leading axis)."""
-        return cls(*(np.array([getattr(r, f.name) for r in rows]) for f in fields(cls)))
+        return cls(*(np.array([getattr(r, name) for r in rows]) for name in _PARTS))
+
+
+_PARTS = ("c0", "L", "Q", "S", "singular")

@@ -17,10 +17,9 @@ _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the polarisation's 
 
 
 @_jit
-def batch_coefficients(R0, p0, axis, mass, com, Ic, armature, ee_joint, ee_p, gravity, base_com, active, q, c0, L, Q, S,
-                       singular):
-    """Fill c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6), S (B, n_out, 3) and singular (B,) for the
-    configurations q (B, n) rad (full joint vectors, the locked joint included); armature (n,) kg m^2:
+def batch_coefficients(R0, p0, axis, mass, com, Ic, armature, ee_joint, ee_p, gravity, base_com, active, q, C, S, singular):
+    """Fill C (B, n_out, 10) = [c0, L, Q] (c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6): zero on entry),
+    S (B, n_out, 3) and singular (B,) for the configurations q (B, n) rad (full joint vectors, the locked joint included); armature (n,) kg m^2:
     each joint's reflected rotor inertia, a torque armature_j qdd_j on its joint (Pinocchio's RNEA
     likewise; the rotor's reaction on the base is not modelled, as there).
 
@@ -99,9 +98,8 @@ def batch_coefficients(R0, p0, axis, mass, com, Ic, armature, ee_joint, ee_p, gr
                 tau7[j, c] += armature[j] * qdd[j, c]
         outputs_multi(tau7, f7, R, p, base_com, active, y7)
         for k in range(na + 6):
-            c0[i, k] = y7[k, 0]
-            for r in range(3):
-                L[i, k, r] = y7[k, 1 + r]
+            for r in range(4):  # c0, then L
+                C[i, k, r] = y7[k, r]
         # with velocities: qd = J^-1 w for the polarisation's w (linear velocity e_r + e_s), qdd = 0
         for pi in range(6):
             r1, r2 = _PAIRS[pi]
@@ -116,12 +114,12 @@ def batch_coefficients(R0, p0, axis, mass, com, Ic, armature, ee_joint, ee_p, gr
                 for c in range(6):
                     acc -= y7[k, 1 + c] * dd[c, pi]
                 y6[k, pi] = acc
-            Q[i, k, 0] = y6[k, 0]
-            Q[i, k, 1] = y6[k, 1]
-            Q[i, k, 2] = y6[k, 2]
-            Q[i, k, 3] = y6[k, 3] - y6[k, 0] - y6[k, 1]
-            Q[i, k, 4] = y6[k, 4] - y6[k, 0] - y6[k, 2]
-            Q[i, k, 5] = y6[k, 5] - y6[k, 1] - y6[k, 2]
+            C[i, k, 4] = y6[k, 0]  # Q
+            C[i, k, 5] = y6[k, 1]
+            C[i, k, 6] = y6[k, 2]
+            C[i, k, 7] = y6[k, 3] - y6[k, 0] - y6[k, 1]
+            C[i, k, 8] = y6[k, 4] - y6[k, 0] - y6[k, 2]
+            C[i, k, 9] = y6[k, 5] - y6[k, 1] - y6[k, 2]
         # S: the arm applies a unit force e_r to the payload (the payload pushes back with -e_r). At rest and
         # without gravity the RNEA's only force is e_r carried from the end-effector point to the base:
         # tau_j = z_j . ((pee - p_j) x e_r) = J[r, k] (joints up to the end effector's), base force -e_r,
