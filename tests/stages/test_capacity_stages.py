@@ -261,7 +261,12 @@ def test_baseline_map_and_figure_stages(run):
     b = datasets.read(d / "b.parquet")
     both = b.healthy_capacity_kg.notna()
     np.testing.assert_allclose(b.loss_kg[both], (b.healthy_capacity_kg - b.capacity_kg.fillna(0.0))[both])
-    assert len(datasets.read(d / "conv.parquet")) == min(cfg.baseline.check_voxels, int(both.sum()))
+    conv = datasets.read(d / "conv.parquet")
+    assert len(conv) == min(cfg.baseline.check_voxels, int(both.sum()))
+    stage_baseline_map([str(d / "healthy.parquet")], str(d / "voxels.parquet"), str(d / "configurations.parquet"),
+                       {"voxels": str(d / "b2.parquet"), "convergence": str(d / "conv2.parquet"), "csv": str(d / "b2.csv"),
+                        "md": str(d / "b2.md")}, sl("baseline"), workers=2)  # the check on two processes: same rows
+    pd.testing.assert_frame_equal(datasets.read(d / "conv2.parquet"), conv)
     stage_baseline_figure(str(d / "b.parquet"), str(d / "conv.parquet"), str(d / "loss.png"), sl("view"))
     assert (d / "loss.png").stat().st_size > 10_000
 

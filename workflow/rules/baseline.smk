@@ -36,6 +36,7 @@ rule baseline_map:
         out("logs/baseline/map.log"),
     conda:
         "../envs/capmap.yaml"
+    threads: 2  # the angle step's check (a 1 deg sweep at 200 points) on two processes
     params:
         slice=params("baseline", "baseline_map"),
     script:

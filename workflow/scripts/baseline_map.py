@@ -3,4 +3,5 @@ from capmap.stages.baseline import stage_baseline_map
 
 call(stage_baseline_map, shards=list(snakemake.input.shards), voxels=snakemake.input.voxels,
      configurations=snakemake.input.configurations,
-     out=dict(snakemake.output.items()), slice_json=snakemake.params.slice, log=snakemake.log[0])
+     out=dict(snakemake.output.items()), slice_json=snakemake.params.slice, workers=snakemake.threads,
+     log=snakemake.log[0])

@@ -17,6 +17,7 @@ from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
 from capmap.capacity.self_motion import HealthyProblem
 from capmap.capacity.tables import grid_of
 from capmap.capacity.voxels import Grid
+from capmap.core.parallel import by_rows
 from capmap.core.reduction import free
 
 __all__ = ["HEALTHY_COLUMNS", "BASELINE_COLUMNS", "healthy_samples", "baseline_shard", "loss_table",
@@ -169,17 +170,19 @@ def loss_table(h: pd.DataFrame, failed: pd.DataFrame, op: pd.DataFrame | None) -
 
 
 def angle_convergence(hp: HealthyProblem, reference: HealthyProblem, h: pd.DataFrame, n_voxels: int,
-                      rng: np.random.Generator) -> pd.DataFrame:
+                      rng: np.random.Generator, workers: int = 1) -> pd.DataFrame:
     """The healthy value at the worst points of ``n_voxels`` random voxels of the healthy table ``h``, by
     the map's search ``hp`` and by the finer grid ``reference`` (every angle of it, not followed):
     ``shortfall_rel`` = (reference - map) / reference, > 0 where the map's value lies below the finer
-    sweep's (both are postures' values: lower bounds of the healthy arm's); 0 where both are 0 kg."""
+    sweep's (both are postures' values: lower bounds of the healthy arm's); 0 where both are 0 kg. Each
+    point's values are its own (no ceiling, no group), so the points split over ``workers`` processes."""
     rows = h[h.healthy_capacity_kg.notna()]
     rows = rows.iloc[np.sort(rng.choice(len(rows), size=min(n_voxels, len(rows)), replace=False))]
     pts = rows[["worst_x_m", "worst_y_m", "worst_z_m"]].to_numpy()
     out = pd.DataFrame({"x_m": pts[:, 0], "y_m": pts[:, 1], "z_m": pts[:, 2]})
-    out["healthy_capacity_kg"] = healthy_capacity(hp, pts).capacity_kg
-    out["healthy_reference_kg"] = healthy_capacity(reference, pts).capacity_kg
+    both = by_rows(lambda p: np.stack([healthy_capacity(hp, p).capacity_kg, healthy_capacity(reference, p).capacity_kg],
+                                      axis=1), pts, workers)
+    out["healthy_capacity_kg"], out["healthy_reference_kg"] = both[:, 0], both[:, 1]
     ref, got = out.healthy_reference_kg.to_numpy(), out.healthy_capacity_kg.to_numpy()
     with np.errstate(invalid="ignore", divide="ignore"):
         out["shortfall_rel"] = np.where(ref > 0, (ref - got) / ref, np.where(got >= ref, 0.0, np.nan))

@@ -10,6 +10,7 @@
 - :mod:`~capmap.core.tracking`    one IK branch followed continuously along a path
 - :mod:`~capmap.core.profiles`    trapezoid and jerk-limited S-curve timing of straight segments
 - :mod:`~capmap.core.limits`      limits |y0 + x s| <= L on outputs affine in a scalar
+- :mod:`~capmap.core.parallel`    a row-wise batch split over forked processes (a job's threads)
 
 Nothing here reads files, config keys or plots; everything is SI with radians.
 """
@@ -24,6 +25,7 @@ _EXPORTS = {
     'ik': 'ik',
     'kinematics': 'kinematics',
     'limits': 'limits',
+    'parallel': 'parallel',
     'profiles': 'profiles',
     'reduction': 'reduction',
     'robot': 'robot',
@@ -57,6 +59,7 @@ __all__ = [
     "limits",
     "lock",
     "output_names",
+    "parallel",
     "payload_models",
     "profiles",
     "reduction",

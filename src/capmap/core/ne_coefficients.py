@@ -19,9 +19,9 @@ _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the polarisation's 
 @_jit
 def batch_coefficients(R0, p0, axis, mass, com, Ic, armature, ee_joint, ee_p, gravity, base_com, active, q, C, S, singular):
     """Fill C (B, n_out, 10) = [c0, L, Q] (c0 (B, n_out), L (B, n_out, 3), Q (B, n_out, 6): zero on entry),
-    S (B, n_out, 3) and singular (B,) for the configurations q (B, n) rad (full joint vectors, the locked joint included); armature (n,) kg m^2:
-    each joint's reflected rotor inertia, a torque armature_j qdd_j on its joint (Pinocchio's RNEA
-    likewise; the rotor's reaction on the base is not modelled, as there).
+    S (B, n_out, 3) and singular (B,) for the configurations q (B, n) rad (full joint vectors, the locked
+    joint included); armature (n,) kg m^2: each joint's reflected rotor inertia, a torque armature_j qdd_j
+    on its joint (Pinocchio's RNEA likewise; the rotor's reaction on the base is not modelled, as there).
 
     Per configuration: one RNEA at rest on 7 right-hand sides (gravity alone: c0; qdd = J^-1 e_c for
     the six Cartesian accelerations c: L6, whose linear columns are L) and one RNEA with velocities on

@@ -40,9 +40,11 @@ def stage_baseline_shard(voxels: str, out: str, slice_json: str, shard: int, sha
              f"{int((~df.converged).sum()) if settings else len(df)} not converged, {meta['seconds']:.1f} s -> {out}")
 
 
-def stage_baseline_map(shards: list[str], voxels: str, configurations: str, out: Outputs, slice_json: str) -> None:
+def stage_baseline_map(shards: list[str], voxels: str, configurations: str, out: Outputs, slice_json: str,
+                       workers: int = 1) -> None:
     """The healthy map beside the failed one (``out["voxels"]``), the angle step's convergence at the worst
-    points of ``baseline.check_voxels`` voxels (``out["convergence"]``) and the summary (``csv``, ``md``)."""
+    points of ``baseline.check_voxels`` voxels (``out["convergence"]``, on ``workers`` processes) and the
+    summary (``csv``, ``md``)."""
     cfg = stage_config(slice_json)
     run, bl = cfg.run, cfg.run.baseline
     log = stage_logger(__name__, "baseline map")
@@ -57,7 +59,7 @@ def stage_baseline_map(shards: list[str], voxels: str, configurations: str, out:
     cost_s = sum(p.attrs["capmap"]["seconds"] for p in parts)
     t0 = time.perf_counter()
     conv = angle_convergence(healthy_problem(run, problem), healthy_problem(run, problem, reference=True), h,
-                             bl.check_voxels, np.random.default_rng(run.sampling.seed))
+                             bl.check_voxels, np.random.default_rng(run.sampling.seed), workers)
     cost_s += time.perf_counter() - t0
     datasets.write(df[BASELINE_COLUMNS], out["voxels"], datasets.provenance(
         "baseline", cfg.doc, grid=failed.attrs["capmap"]["grid"], configuration=name, angles_deg=meta["angles_deg"],
