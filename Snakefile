@@ -106,6 +106,7 @@ onstart:
             RUN.failure.joint,
             np.deg2rad(RUN.failure.angle_deg),
             RUN.dualarm is not None,
+            len(RUN.failure.q_start_deg),
         )
     ):
         subprocess.run(

@@ -86,7 +86,7 @@ def _warm_arm(robot_file: str, joint: int, angle_rad: float) -> None:
 
 def ensure_warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> bool:
     """:func:`warm` unless the marker lists this run's kernels as warm for this code; True if it ran."""
-    key = run_key(robot_file, joint, angle_rad, dualarm)
+    key = run_key(robot_file, joint, angle_rad, dualarm, load(robot_file).n_joints)
     if is_warm(key):
         return False
     print(f"capmap: compiling the numba kernels for {Path(robot_file).name}, joint {joint} locked"

@@ -3,8 +3,17 @@ cache folder of other sources removed only once no run has used it for UNUSED_DA
 
 import os
 import time
+from pathlib import Path
 
+import numpy as np
+import pytest
+
+from capmap.core import ik
+from capmap.core.reduction import lock
 from capmap.io import kernel_marker
+from capmap.robots import load
+
+ROBOTS = Path(__file__).resolve().parents[2] / "config" / "robots"
 
 
 def test_the_key_is_the_same_in_another_checkout(tmp_path):
@@ -12,9 +21,25 @@ def test_the_key_is_the_same_in_another_checkout(tmp_path):
     for f in (a, b):
         f.parent.mkdir()
         f.write_text("name: arm\n")
-    assert kernel_marker.run_key(str(a), 1, 1.0, False) == kernel_marker.run_key(str(b), 1, 1.0, False)
+    assert kernel_marker.run_key(str(a), 2, 1.0, False, 7) == kernel_marker.run_key(str(b), 2, 1.0, False, 7)
     b.write_text("name: other arm\n")
-    assert kernel_marker.run_key(str(a), 1, 1.0, False) != kernel_marker.run_key(str(b), 1, 1.0, False)
+    assert kernel_marker.run_key(str(a), 2, 1.0, False, 7) != kernel_marker.run_key(str(b), 2, 1.0, False, 7)
+
+
+@pytest.mark.parametrize("robot_file", ["ssrms7.yaml", "panda.yaml", "xarm7.yaml", "ur5.yaml"])
+def test_an_end_joints_angle_is_not_in_the_key_and_does_not_change_the_ik_method(robot_file):
+    """The key leaves out the first and last joints' angles because the locked chain's IK method (what the
+    kernels are compiled for) does not depend on them: checked on each arm at 7 angles; a middle joint's
+    angle stays in the key."""
+    path = str(ROBOTS / robot_file)
+    robot = load(path)
+    n = robot.n_joints
+    for joint in (1, n):
+        keys = {kernel_marker.run_key(path, joint, a, False, n) for a in (0.0, 1.0)}
+        assert len(keys) == 1
+        lo, hi = max(robot.q_lower[joint - 1], -np.pi), min(robot.q_upper[joint - 1], np.pi)
+        assert len({ik.method_for(lock(robot, joint, a).chain) for a in np.linspace(lo, hi, 7)}) == 1
+    assert kernel_marker.run_key(path, 3, 0.0, False, n) != kernel_marker.run_key(path, 3, 1.0, False, n)
 
 
 def test_record_prunes_only_unused_shared_folders(tmp_path, monkeypatch):

@@ -37,11 +37,14 @@ def _marker() -> Path:
     return Path(numba_config.CACHE_DIR) / f"kernels-{fingerprint()}.ok"
 
 
-def run_key(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> str:
+def run_key(robot_file: str, joint: int, angle_rad: float, dualarm: bool, n_joints: int) -> str:
     """The marker's line for a run: the robot file (its name and content, not its folder: every checkout of
-    the same code shares the cache), the locked joint and angle, dual-arm."""
-    return f"{Path(robot_file).name} {file_sha256(robot_file)[:16]} " \
-           f"joint {joint} {angle_rad:.6f}{' dualarm' if dualarm else ''}"
+    the same code shares the cache), the locked joint and angle, dual-arm. The angle of the first or last of
+    the ``n_joints`` joints is left out: it only moves the locked chain's base or tool, so the chain keeps
+    its IK method, and its kernels, at any angle (a what-if on it needs no warm-up); a middle joint's angle
+    can change the chain's shape (axes made parallel, a continuum of solutions)."""
+    angle = "any" if joint in (1, n_joints) else f"{angle_rad:.6f}"
+    return f"{Path(robot_file).name} {file_sha256(robot_file)[:16]} joint {joint} {angle}{' dualarm' if dualarm else ''}"
 
 
 def is_warm(key: str) -> bool:

@@ -51,7 +51,8 @@ def load_question(configfile: str) -> tuple[RunConfig, CapacityProblem]:
     capacity problem it asks about (per configuration)."""
     run = check_capacity_config(run_document([configfile]), configfile)
     problem = capacity_problem(run, per_configuration=True)
-    key = run_key(run.robot, run.failure.joint, float(np.deg2rad(run.failure.angle_deg)), False)
+    key = run_key(run.robot, run.failure.joint, float(np.deg2rad(run.failure.angle_deg)), False,
+                  len(run.failure.q_start_deg))
     if not any(is_warm(k) for k in (key, f"{key} dualarm", f"{key} query")):
         print(f"capmap: compiling the kernels a query of {Path(run.robot).name} with joint {run.failure.joint} locked needs: "
               "once per machine and code version (about a minute on 2 cores)...", file=sys.stderr, flush=True)
