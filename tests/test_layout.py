@@ -37,8 +37,9 @@ ALLOWED = {
 }
 NUMERICS = {"core", "capacity", "following", "reconfig", "dualarm"}
 # where a family turns its config sections into numerics: the only modules of a family that import config
-BUILDERS = {"capmap.capacity.build", "capmap.capacity.sizing", "capmap.reconfig.build", "capmap.following.build",
-            "capmap.dualarm.build", "capmap.reconfig.platform_file", "capmap.dualarm.scene_file"}  # (and their files)
+BUILDERS = {"capmap.capacity.build", "capmap.capacity.build_healthy", "capmap.capacity.sizing", "capmap.reconfig.build",
+            "capmap.following.build", "capmap.dualarm.build", "capmap.reconfig.platform_file",
+            "capmap.dualarm.scene_file"}  # (and their files)
 for _part_name in ALLOWED:
     ALLOWED[_part_name] = ALLOWED[_part_name] | {"_lazy"}
 

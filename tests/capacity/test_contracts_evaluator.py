@@ -12,7 +12,8 @@ import pytest
 from capmap.capacity.baseline import healthy_capacity
 from capmap.capacity.directions import grid_axes, sphere
 from capmap.capacity.engine import LoadLimits, Motion, capacity_over_directions, coefficients_pinocchio
-from capmap.capacity.evaluator import Evaluator, HealthyEvaluator, LockedEvaluator
+from capmap.capacity.evaluator import Evaluator, LockedEvaluator
+from capmap.capacity.healthy_evaluator import HealthyEvaluator
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.self_motion import HealthyProblem, SelfMotion, screening_subset, self_motion_angles
 from capmap.core import ik

@@ -174,3 +174,21 @@ def test_numba_cache_folder_follows_every_compiled_source_and_only_those(tmp_pat
     assert numba_folder(pkg, "/base") != first and numba_folder(pkg, "/base").startswith("/base/numba-")
     # and capmap's own kernels use the folder of its sources
     assert numba.config.CACHE_DIR == numba_folder(Path(capmap.__file__).parent, Path(numba.config.CACHE_DIR).parent)
+
+
+HEALTHY_SEARCH = {"capmap.capacity.baseline", "capmap.capacity.angle_search", "capmap.capacity.self_motion",
+                  "capmap.capacity.healthy_map", "capmap.capacity.healthy_evaluator", "capmap.capacity.build_healthy"}
+
+
+def test_the_maps_stages_do_not_run_the_healthy_arms_search():
+    """A change in the healthy arm's search reruns the baseline, not the map: no script of the map's rules
+    (model .. summary, plans, verification) imports a module of that search, directly or through others;
+    the baseline's scripts do (so the test sees the search where it is)."""
+    scripts = ROOT / "workflow" / "scripts"
+    for name in ("model", "sample", "capacity", "points", "voxels", "refine", "voxel_map", "plan", "verify",
+                 "verify_plots", "summary", "capacity_3d"):
+        mods = fp._imports("__main__", fp._tree(scripts / f"{name}.py"))
+        closure = set().union(*(fp.module_closure(m) for m in mods))
+        assert not closure & HEALTHY_SEARCH, (name, sorted(closure & HEALTHY_SEARCH))
+    mods = fp._imports("__main__", fp._tree(scripts / "baseline_shard.py"))
+    assert HEALTHY_SEARCH <= set().union(*(fp.module_closure(m) for m in mods))

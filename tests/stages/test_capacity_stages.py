@@ -15,7 +15,8 @@ import pandas as pd
 import pytest
 
 from capmap.capacity.baseline import healthy_capacity
-from capmap.capacity.build import capacity_problem, healthy_problem
+from capmap.capacity.build import capacity_problem
+from capmap.capacity.build_healthy import healthy_problem
 from capmap.capacity.engine import capacity_over_directions, coefficients_pinocchio
 from capmap.checks import check_run_config
 from capmap.config import canonical, main_task, stage_slice

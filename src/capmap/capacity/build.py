@@ -6,7 +6,8 @@
 - the failure: :func:`resolve_failure` (the lock angle, the start and the start configuration: the IK
   branch at the start nearest q_ini; the lock itself: :func:`capmap.robots.locked_arm`);
 - the problem: :func:`capacity_problem` (the run's locked arm and task as a
-  :class:`CapacityProblem`), :func:`healthy_problem` (the healthy arm's), :func:`configuration_name`.
+  :class:`CapacityProblem`), :func:`configuration_name`; the healthy arm's problem in
+  :mod:`capmap.capacity.build_healthy` (apart, so that the map's stages do not depend on its search).
 
 The pre-run checks (:mod:`capmap.checks`), the stages and the command line call these; nothing else
 turns a capacity config section into numerics.
@@ -21,7 +22,6 @@ from capmap.capacity.directions import Directions, grid_axes
 from capmap.capacity.engine import LoadLimits, Motion
 from capmap.capacity.problem import CapacityProblem
 from capmap.capacity.refine_data import RefineSettings
-from capmap.capacity.self_motion import HealthyProblem, SelfMotion, screening_subset, self_motion_angles
 from capmap.config.capacity import DirectionsConfig, LimitsConfig, LockConfig, RefineConfig, TaskConfig
 from capmap.config.failure import Failure
 from capmap.config.run import RunConfig
@@ -36,7 +36,7 @@ from capmap.errors import CapmapError, ConfigError
 from capmap.robots import load, locked_arm
 
 __all__ = ["task_rotation", "task_motion", "directions_of", "load_limits", "refine_settings",
-           "resolve_failure", "capacity_problem", "healthy_problem", "configuration_name"]
+           "resolve_failure", "capacity_problem", "configuration_name"]
 
 
 def task_rotation(task: TaskConfig) -> np.ndarray:
@@ -136,23 +136,6 @@ def capacity_problem(run: RunConfig, joint: int | None = None, angle_deg: float 
                            load_limits(run.limits, robot.n_joints).for_arm(arm),
                            directions_of(run.directions if directions is None else directions), grid_axes(),
                            arm_configurations(arm) if per_configuration else None)
-
-
-def healthy_problem(run: RunConfig, problem: CapacityProblem | None = None, reference: bool = False) -> HealthyProblem:
-    """The run's healthy arm (``baseline``): its failed joint swept through the failed angle
-    ``baseline.step_deg`` apart, each point's best posture followed ``baseline.polish_levels`` levels
-    between them (``reference``: the check's sweep instead, ``baseline.check_step_deg`` apart, not
-    followed), the arm held at each angle, the run's problem (``problem``: already built) and
-    ``baseline.screen_directions`` of its directions as the screening set."""
-    problem = capacity_problem(run) if problem is None else problem
-    robot, j = problem.arm.robot, run.failure.joint
-    lo, hi = np.rad2deg(robot.q_lower[j - 1]), np.rad2deg(robot.q_upper[j - 1])
-    bl = run.baseline
-    step_deg, polish_levels = (bl.check_step_deg, 0) if reference else (bl.step_deg, bl.polish_levels)
-    sm = SelfMotion.build(self_motion_angles(lo, hi, run.failure.angle_deg, step_deg),
-                          lambda a: locked_arm(robot, j, a), load_limits(run.limits, robot.n_joints).for_arm, lo, hi)
-    return HealthyProblem(problem, sm, screening_subset(problem.directions, bl.screen_directions),
-                          polish_levels)
 
 
 def configuration_name(arm: LockedArm, q_deg) -> str:

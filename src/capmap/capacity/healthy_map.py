@@ -1,6 +1,6 @@
 """The healthy arm's map beside the failed one (:mod:`capmap.capacity.baseline` for the healthy value):
 one shard of the healthy arm's voxels on the failed map's lattice, refined as the map's
-(:class:`~capmap.capacity.evaluator.HealthyEvaluator`), the angle step's convergence at sampled
+(:class:`~capmap.capacity.healthy_evaluator.HealthyEvaluator`), the angle step's convergence at sampled
 voxels' worst points, and the family's column schemas of these tables. No file I/O."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pandas as pd
 
 from capmap.capacity import sampling
 from capmap.capacity.baseline import healthy_capacity
-from capmap.capacity.evaluator import HealthyEvaluator
+from capmap.capacity.healthy_evaluator import HealthyEvaluator
 from capmap.capacity.refine import RefineSettings, VoxelMinima, refine
 from capmap.capacity.self_motion import HealthyProblem
 from capmap.capacity.tables import grid_of

@@ -11,7 +11,8 @@ import time
 import numpy as np
 import pandas as pd
 
-from capmap.capacity.build import capacity_problem, configuration_name, healthy_problem, refine_settings
+from capmap.capacity.build import capacity_problem, configuration_name, refine_settings
+from capmap.capacity.build_healthy import healthy_problem
 from capmap.capacity.healthy_map import BASELINE_COLUMNS, angle_convergence, baseline_shard, healthy_samples, loss_table
 from capmap.capacity.tables import configuration_voxels
 from capmap.io import datasets
