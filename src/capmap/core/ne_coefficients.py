@@ -8,7 +8,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from capmap.core.ne_kernels import invert, kinematics, outputs_multi, rest_multi, velocity_multi, workspace
+from capmap.core.ne_kernels import K, invert, kinematics, outputs_multi, rest_multi, velocity_multi, workspace
 
 __all__ = ["batch_coefficients"]
 
@@ -38,18 +38,18 @@ def batch_coefficients(R0, p0, axis, mass, com, Ic, armature, ee_joint, ee_p, gr
     M = np.empty((6, 12))
     pee = np.empty(3)
     d = np.empty(3)
-    LW, TW = workspace(n, 7)
-    LV, TV = workspace(n, 6)
-    qdd = np.zeros((n, 7))
-    a0 = np.zeros((3, 7))
-    qd = np.zeros((n, 6))
-    tau7 = np.empty((n, 7))
-    f7 = np.empty((6, 7))
-    y7 = np.empty((na + 6, 7))
-    tau6 = np.empty((n, 6))
-    f6 = np.empty((6, 6))
-    y6 = np.empty((na + 6, 6))
-    dd = np.empty((6, 6))
+    LW, TW = workspace(n)
+    LV, TV = workspace(n)
+    qdd = np.zeros((n, K))
+    a0 = np.zeros((3, K))
+    qd = np.zeros((n, K))
+    tau7 = np.empty((n, K))
+    f7 = np.empty((6, K))
+    y7 = np.empty((na + 6, K))
+    tau6 = np.empty((n, K))
+    f6 = np.empty((6, K))
+    y6 = np.empty((na + 6, K))
+    dd = np.empty((6, K))
     for b in range(3):
         a0[b, 0] = -gravity[b]
     for i in range(B):
