@@ -286,6 +286,14 @@ def fit_capsules(robot: DualArm) -> tuple[DualArm, dict[str, Covered]]:
         joint_of[grp.name] = joints.pop()
         for kind, o, _ in objs:
             claimed[kind].add(o.name)
+    fitted: dict[bytes, Capsule] = {}  # the same balls (in their joint's frame: the two arms' like links) fit once
+
+    def fit_once(c: np.ndarray, r: np.ndarray) -> Capsule:
+        key = np.ascontiguousarray(c).tobytes() + np.ascontiguousarray(r).tobytes()
+        if key not in fitted:
+            fitted[key] = fit_capsule(c, r)
+        return fitted[key]
+
     # the objects no group names join the group on their joint whose first fit they stick out of least
     first: dict[str, Capsule] = {}  # fitted only where an object has more than one group to choose from
     for kind, gm in models.items():
@@ -299,7 +307,7 @@ def fit_capsules(robot: DualArm) -> tuple[DualArm, dict[str, Covered]]:
             if len(groups) > 1:
                 for g in groups:
                     if g not in first:
-                        first[g] = fit_capsule(*_balls([(k, x) for k, x, named in members[g] if named])[:2])
+                        first[g] = fit_once(*_balls([(k, x) for k, x, named in members[g] if named])[:2])
                 c, r = geometry_balls(o)
                 groups = [min(groups, key=lambda g: float(_excess(first[g], c, r).max()))]
             members[groups[0]].append((kind, o, False))
@@ -311,7 +319,7 @@ def fit_capsules(robot: DualArm) -> tuple[DualArm, dict[str, Covered]]:
         fit = np.isin(src, desc.cover)
         if not fit.any():
             raise CapmapError(f"capsule {grp.name}: none of its geometry is in the covered set {list(desc.cover)}")
-        cap: Capsule = fit_capsule(c[fit], r[fit])
+        cap: Capsule = fit_once(c[fit], r[fit])
         joint = robot.model.names[joint_of[grp.name]]
         out.append(LinkCapsule(grp.name, grp.part, order[grp.part], joint, cap.a, cap.b, cap.r))
         order[grp.part] += 1
