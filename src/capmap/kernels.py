@@ -4,9 +4,9 @@ Every kernel is compiled with ``cache=True``; the first process that calls one c
 writes the cache, the others load it. Parallel jobs started together (the capacity shards) would
 each compile the same kernels; :func:`warm` compiles those a run uses once, before its jobs, by
 running the stages' compiled calls on a few inputs of their types: the locked arm's IK (whichever
-method its chain takes), the capacity kernels, and the dual-arm distances and node models when the
-run has that family (in a second process when this one may use two cores: the two families' kernels
-are independent, so they compile side by side). ``python -m capmap.kernels [--configfile FILE]`` (the
+method its chain takes), the capacity kernels, and the dual-arm family's when the run has it (on two
+cores in two halves of about equal time: its node models and FDDP in a second process beside the arm's
+kernels, its geometry in this one after them). ``python -m capmap.kernels [--configfile FILE]`` (the
 README's install command; Snakemake's ``onstart`` runs it for the run's own config). With a config, the dual-arm robot's
 pre-run build is done and remembered as well (:func:`remember_dual_arm`). A marker per hash of the
 kernels' source files, numba's version and the CPU lists what was warmed, so the next call is a
@@ -38,37 +38,52 @@ from capmap.errors import CapmapError
 from capmap.io.kernel_marker import is_warm, record, run_key
 from capmap.robots import load
 
-__all__ = ["warm", "warm_dual_arm", "ensure_warm", "remember_dual_arm", "main"]
+__all__ = ["warm", "warm_dual_arm", "warm_dual_arm_nodes", "warm_dual_arm_geometry", "ensure_warm", "remember_dual_arm", "main"]
 
 
 def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
     """Compile (or load) the kernels of a run: ``robot_file``'s arm with ``joint`` (1-based) locked at
-    ``angle_rad`` (its IK method, the capacity kernels), and the dual-arm distances and node models if
-    ``dualarm`` (:func:`warm_dual_arm`: in a child process beside this one when this process may use two
-    cores; capmap's environment gives the child the same numba cache folder)."""
+    ``angle_rad`` (its IK method, the capacity kernels), and the dual-arm family's if ``dualarm``
+    (:func:`warm_dual_arm`). When this process may use two cores the family's node models and FDDP compile
+    in a child process beside the arm's kernels, and its geometry here after them: the two halves take
+    about as long (capmap's environment gives the child the same numba cache folder; the distances both
+    call are compiled by the child first and loaded here)."""
     child = None
     if dualarm and len(os.sched_getaffinity(0)) >= 2:
-        child = subprocess.Popen([sys.executable, "-c", "import capmap.kernels as k; k.warm_dual_arm()"])
+        child = subprocess.Popen([sys.executable, "-c", "import capmap.kernels as k; k.warm_dual_arm_nodes()"])
     try:
         _warm_arm(robot_file, joint, angle_rad)
+        if dualarm:
+            warm_dual_arm_geometry()
     except BaseException:
         if child is not None:
             child.kill()
             child.wait()
         raise
     if child is None and dualarm:
-        warm_dual_arm()
+        warm_dual_arm_nodes()
     elif child is not None and child.wait() != 0:
         raise RuntimeError(f"the dual-arm kernels' process failed (exit code {child.returncode})")
 
 
 def warm_dual_arm() -> None:
-    """Compile (or load) the dual-arm family's kernels: the distances, the node models, the compiled FDDP."""
+    """Compile (or load) the dual-arm family's kernels: :func:`warm_dual_arm_nodes`, :func:`warm_dual_arm_geometry`."""
+    warm_dual_arm_nodes()
+    warm_dual_arm_geometry()
+
+
+def warm_dual_arm_nodes() -> None:
+    """The dual-arm family's node models and compiled FDDP (and the distances they call)."""
+    nodes.warm_up_nodes()
+
+
+def warm_dual_arm_geometry() -> None:
+    """The dual-arm family's batch distances, pair filters and scene checks."""
     p = np.random.default_rng(0).normal(size=(4, 3))
     distance.segment_segment(p, p + 1, p + 2, p + 3)
     distance.point_triangle(p, p + 1, p + 2, p + 3)
     distance.segment_triangle(p, p + 1, p + 2, p + 3, p + 4)
-    nodes.warm_up()
+    nodes.warm_up_geometry()
 
 
 def _warm_arm(robot_file: str, joint: int, angle_rad: float) -> None:

@@ -28,7 +28,7 @@ from capmap.dualarm.ocp.task import AssemblyTask
 from capmap.dualarm.scene.unknown import near_boxes
 from capmap.dualarm.scene.unobserved import _bound_gaps, _cube_distances
 
-__all__ = ["CompiledNodeModel", "node_kind", "node_targets", "warm_up"]
+__all__ = ["CompiledNodeModel", "node_kind", "node_targets", "warm_up_nodes", "warm_up_geometry"]
 
 # node kinds (task.py): transfer (vertical), pre-insertion pose, insertion (axis + orientation), final
 TRANSFER, PRE, INSERTION, FINAL = 0, 1, 2, 3
@@ -161,10 +161,9 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
             data.Gu[:] = 0.0
 
 
-def warm_up() -> None:
-    """Compile (or load from numba's cache) the node kernel, the compiled FDDP, the pair filters and the
-    collision model's distances and gradients, on a two-joint chain with the argument types of a real run
-    (Crocoddyl's own data arrays)."""
+def _toy() -> tuple:
+    """A two-joint chain with one capsule pair and a triangle, the argument types of a real run: (model,
+    its data, the packed chain, its primitives, the pair list, the node context, x, u)."""
     model = pin.Model()
     j1 = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "a")
     j2 = model.addJoint(j1, pin.JointModelRX(), pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.5])), "b")
@@ -180,7 +179,13 @@ def warm_up() -> None:
     ctx = Context(model, task, None, Weights(np.ones(2), 1.0, 1.0, 0.0), np.full(2, -3.0), np.full(2, 3.0),
                   np.ones(2), packed=packed)
     pairs = Pairs(np.array([[0, 1]]), np.array([[0, 0]]))
-    x, u = np.full(4, 0.1), np.full(2, 0.1)
+    return model, packed, prims, pairs, ctx, np.full(4, 0.1), np.full(2, 0.1)
+
+
+def warm_up_nodes() -> None:
+    """Compile (or load from numba's cache) the node kernel and the compiled FDDP (with the distances they
+    call), on :func:`_toy`'s chain with Crocoddyl's own data arrays."""
+    model, packed, prims, pairs, ctx, x, u = _toy()
     models = {}
     for mode in ("al", "constrained"):
         for k in range(4):
@@ -193,6 +198,12 @@ def warm_up() -> None:
     Luu = np.ascontiguousarray(np.broadcast_to(np.eye(2), (3, 2, 2)))
     fddp(P, 0.1, 0.005, Luu, x.copy(), xs, us, 2, False, 100.0, 1e-9, 1e3, ALPHAS)
     evaluate_nodes(P, xs)
+
+
+def warm_up_geometry() -> None:
+    """Compile (or load) the rest of the family's kernels: the pair filters, the unknown-space checks, the
+    chain's placements and the collision model's distances and gradients (:func:`_toy`'s chain)."""
+    model, packed, prims, pairs, ctx, x, u = _toy()
     batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1, within=0.01)
     PairFilter(packed, pairs, 2, 0.1).update(np.zeros((2, 2)))
     _cube_distances(np.zeros((1, 3)), np.zeros(1, np.int64), np.ones(1, np.int64), np.zeros((1, 3), np.int64),
