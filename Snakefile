@@ -124,6 +124,33 @@ onstart:
             + (["--dualarm"] if RUN.dualarm else []),
             check=False,
         )
+    # warm jobs: a local run's jobs run in children of one process that has imported the stages and loaded
+    # the kernels, about a second saved per job (capmap.io.job_server); a cluster's jobs run their own
+    import os
+    from capmap.io import job_server
+    from capmap.io.job_client import ENV
+    from capmap.io.fingerprint import script_modules
+
+    if workflow.local_exec and not os.environ.get(ENV):
+        _stages = {
+            m
+            for f in Path(workflow.basedir, "workflow", "scripts").glob("*.py")
+            for m in script_modules(f)
+            if m.startswith("capmap.stages.") and (RUN.dualarm or "dualarm" not in m)
+        }
+        os.environ[ENV] = job_server.start(
+            sorted(_stages),
+            (
+                "capmap.kernels:warm",
+                dict(
+                    robot_file=str(Path(RUN.robot).resolve()),
+                    joint=RUN.failure.joint,
+                    angle_rad=float(np.deg2rad(RUN.failure.angle_deg)),
+                    dualarm=RUN.dualarm is not None,
+                    here=True,
+                ),
+            ),
+        ).path
 
 
 onsuccess:

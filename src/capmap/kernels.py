@@ -41,15 +41,16 @@ from capmap.robots import load
 __all__ = ["warm", "warm_dual_arm", "warm_dual_arm_nodes", "warm_dual_arm_geometry", "ensure_warm", "remember_dual_arm", "main"]
 
 
-def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool) -> None:
+def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool, here: bool = False) -> None:
     """Compile (or load) the kernels of a run: ``robot_file``'s arm with ``joint`` (1-based) locked at
     ``angle_rad`` (its IK method, the capacity kernels), and the dual-arm family's if ``dualarm``
     (:func:`warm_dual_arm`). When this process may use two cores the family's node models and FDDP compile
     in a child process beside the arm's kernels, and its geometry here after them: the two halves take
     about as long (capmap's environment gives the child the same numba cache folder; the distances both
-    call are compiled by the child first and loaded here)."""
+    call are compiled by the child first and loaded here). ``here``: every kernel in this process (to hold
+    them loaded: :mod:`capmap.io.job_server`)."""
     child = None
-    if dualarm and len(os.sched_getaffinity(0)) >= 2:
+    if dualarm and not here and len(os.sched_getaffinity(0)) >= 2:
         child = subprocess.Popen([sys.executable, "-c", "import capmap.kernels as k; k.warm_dual_arm_nodes()"])
     try:
         _warm_arm(robot_file, joint, angle_rad)

@@ -187,8 +187,8 @@ def test_the_maps_stages_do_not_run_the_healthy_arms_search():
     scripts = ROOT / "workflow" / "scripts"
     for name in ("model", "sample", "capacity", "points", "voxels", "refine", "voxel_map", "plan", "verify",
                  "verify_plots", "summary", "capacity_3d"):
-        mods = fp._imports("__main__", fp._tree(scripts / f"{name}.py"))
+        mods = fp.script_modules(scripts / f"{name}.py")
         closure = set().union(*(fp.module_closure(m) for m in mods))
         assert not closure & HEALTHY_SEARCH, (name, sorted(closure & HEALTHY_SEARCH))
-    mods = fp._imports("__main__", fp._tree(scripts / "baseline_shard.py"))
+    mods = fp.script_modules(scripts / "baseline_shard.py")
     assert HEALTHY_SEARCH <= set().union(*(fp.module_closure(m) for m in mods))

@@ -1,6 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.advice import stage_advice
 
-call(stage_advice, tasks_path=snakemake.input.tasks, healthy_path=snakemake.input.healthy,
+call("capmap.stages.advice:stage_advice", tasks_path=snakemake.input.tasks, healthy_path=snakemake.input.healthy,
      out=dict(snakemake.output.items()), slice_json=snakemake.params.slice, joint=int(snakemake.wildcards.joint),
      log=snakemake.log[0])

@@ -1,5 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.advice import stage_advice_tasks
 
-call(stage_advice_tasks, sweep_path=snakemake.input.sweep, plans=list(snakemake.input.plans), out=dict(snakemake.output.items()),
+call("capmap.stages.advice:stage_advice_tasks",
+     sweep_path=snakemake.input.sweep, plans=list(snakemake.input.plans), out=dict(snakemake.output.items()),
      slice_json=snakemake.params.slice, joint=int(snakemake.wildcards.joint), log=snakemake.log[0])

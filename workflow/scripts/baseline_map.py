@@ -1,7 +1,6 @@
 from capmap.io.logs import call
-from capmap.stages.baseline import stage_baseline_map
 
-call(stage_baseline_map, shards=list(snakemake.input.shards), voxels=snakemake.input.voxels,
+call("capmap.stages.baseline:stage_baseline_map", shards=list(snakemake.input.shards), voxels=snakemake.input.voxels,
      configurations=snakemake.input.configurations,
      out=dict(snakemake.output.items()), slice_json=snakemake.params.slice, workers=snakemake.threads,
      log=snakemake.log[0])

@@ -1,5 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.baseline import stage_baseline_shard
 
-call(stage_baseline_shard, voxels=snakemake.input.voxels, out=snakemake.output[0], slice_json=snakemake.params.slice,
+call("capmap.stages.baseline:stage_baseline_shard",
+     voxels=snakemake.input.voxels, out=snakemake.output[0], slice_json=snakemake.params.slice,
      shard=int(snakemake.wildcards.k), shards=int(snakemake.wildcards.n), log=snakemake.log[0])

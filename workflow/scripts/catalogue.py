@@ -1,4 +1,3 @@
 from capmap.io.logs import call
-from capmap.stages.report import stage_catalogue
 
-call(stage_catalogue, paths=list(snakemake.input), out=snakemake.output[0], log=snakemake.log[0])
+call("capmap.stages.report:stage_catalogue", paths=list(snakemake.input), out=snakemake.output[0], log=snakemake.log[0])

@@ -1,5 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.dualarm_solve import stage_dualarm_check
 
-call(stage_dualarm_check, environment=snakemake.input.environment, capsules=snakemake.input.capsules,
+call("capmap.stages.dualarm_solve:stage_dualarm_check",
+     environment=snakemake.input.environment, capsules=snakemake.input.capsules,
      out_csv=snakemake.output.csv, out_md=snakemake.output.md, slice_json=snakemake.params.slice, log=snakemake.log[0])

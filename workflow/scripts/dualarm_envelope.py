@@ -1,5 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.dualarm import stage_dualarm_envelope
 
-call(stage_dualarm_envelope, cloud=snakemake.input.cloud, out=snakemake.output[0], slice_json=snakemake.params.slice,
+call("capmap.stages.dualarm:stage_dualarm_envelope",
+     cloud=snakemake.input.cloud, out=snakemake.output[0], slice_json=snakemake.params.slice,
      log=snakemake.log[0])

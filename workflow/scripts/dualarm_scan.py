@@ -1,4 +1,3 @@
 from capmap.io.logs import call
-from capmap.stages.dualarm import stage_dualarm_scan
 
-call(stage_dualarm_scan, out=snakemake.output[0], slice_json=snakemake.params.slice, log=snakemake.log[0])
+call("capmap.stages.dualarm:stage_dualarm_scan", out=snakemake.output[0], slice_json=snakemake.params.slice, log=snakemake.log[0])

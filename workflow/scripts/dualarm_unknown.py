@@ -1,5 +1,4 @@
 from capmap.io.logs import call
-from capmap.stages.dualarm import stage_dualarm_unknown
 
-call(stage_dualarm_unknown, cloud=snakemake.input.cloud, environment=snakemake.input.environment,
+call("capmap.stages.dualarm:stage_dualarm_unknown", cloud=snakemake.input.cloud, environment=snakemake.input.environment,
      out=snakemake.output[0], slice_json=snakemake.params.slice, log=snakemake.log[0])

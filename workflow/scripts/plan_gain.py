@@ -1,5 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.gain import stage_plan_gain
 
-call(stage_plan_gain, voxels=snakemake.input.voxels, out_tasks=snakemake.output.tasks, out_csv=snakemake.output.csv,
+call("capmap.stages.gain:stage_plan_gain",
+     voxels=snakemake.input.voxels, out_tasks=snakemake.output.tasks, out_csv=snakemake.output.csv,
      out_md=snakemake.output.md, slice_json=snakemake.params.slice, log=snakemake.log[0])

@@ -1,5 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.capacity import stage_points
 
-call(stage_points, shards=list(snakemake.input.shards), out=snakemake.output[0], slice_json=snakemake.params.slice,
+call("capmap.stages.capacity:stage_points",
+     shards=list(snakemake.input.shards), out=snakemake.output[0], slice_json=snakemake.params.slice,
      log=snakemake.log[0])

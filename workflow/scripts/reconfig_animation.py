@@ -1,5 +1,4 @@
 from capmap.io.logs import call
-from capmap.stages.reconfig_figures import stage_reconfig_animation
 
-call(stage_reconfig_animation, tables=list(snakemake.input.tables), out_html=snakemake.output[0],
+call("capmap.stages.reconfig_figures:stage_reconfig_animation", tables=list(snakemake.input.tables), out_html=snakemake.output[0],
      slice_json=snakemake.params.slice, log=snakemake.log[0])

@@ -1,4 +1,4 @@
 from capmap.io.logs import call
-from capmap.stages.reconfig_figures import stage_reconfig_plots
 
-call(stage_reconfig_plots, tables=list(snakemake.input), out=dict(snakemake.output.items()), log=snakemake.log[0])
+call("capmap.stages.reconfig_figures:stage_reconfig_plots",
+     tables=list(snakemake.input), out=dict(snakemake.output.items()), log=snakemake.log[0])

@@ -1,5 +1,4 @@
 from capmap.io.logs import call
-from capmap.stages.reconfig import stage_reconfig_summary
 
-call(stage_reconfig_summary, tables=list(snakemake.input.tables), timings=list(snakemake.input.timings),
+call("capmap.stages.reconfig:stage_reconfig_summary", tables=list(snakemake.input.tables), timings=list(snakemake.input.timings),
      out_csv=snakemake.output.csv, out_md=snakemake.output.md, log=snakemake.log[0])

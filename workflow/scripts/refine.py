@@ -1,6 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.refine import stage_refine
 
-call(stage_refine, voxels=snakemake.input.voxels, out=snakemake.output.voxels,
+call("capmap.stages.refine:stage_refine", voxels=snakemake.input.voxels, out=snakemake.output.voxels,
      out_configurations=snakemake.output.configurations, slice_json=snakemake.params.slice,
      shard=int(snakemake.wildcards.k), shards=int(snakemake.wildcards.n), log=snakemake.log[0])

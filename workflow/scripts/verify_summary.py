@@ -1,5 +1,5 @@
 from capmap.io.logs import call
-from capmap.stages.report import stage_concat_summary
 
-call(stage_concat_summary, tables=list(snakemake.input), out_csv=snakemake.output.csv, out_md=snakemake.output.md,
+call("capmap.stages.report:stage_concat_summary",
+     tables=list(snakemake.input), out_csv=snakemake.output.csv, out_md=snakemake.output.md,
      what="verify", log=snakemake.log[0])

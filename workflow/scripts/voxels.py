@@ -1,5 +1,4 @@
 from capmap.io.logs import call
-from capmap.stages.capacity import stage_voxels
 
-call(stage_voxels, points=snakemake.input.points, out_voxels=snakemake.output.voxels,
+call("capmap.stages.capacity:stage_voxels", points=snakemake.input.points, out_voxels=snakemake.output.voxels,
      slice_json=snakemake.params.slice, log=snakemake.log[0])

@@ -36,7 +36,8 @@ from pathlib import Path
 
 import capmap
 
-__all__ = ["code_fingerprint", "script_fingerprint", "module_closure", "file_fingerprints", "file_sha256", "package_hash"]
+__all__ = ["code_fingerprint", "script_fingerprint", "script_modules", "module_closure", "file_fingerprints", "file_sha256",
+           "package_hash"]
 
 _SRC = Path(capmap.__file__).resolve().parent
 
@@ -244,6 +245,24 @@ def code_fingerprint(name: str) -> str:
     return h.hexdigest()[:16]
 
 
+def script_modules(path: str | Path) -> set[str]:
+    """The capmap modules a Snakemake script runs: those it imports, and the module of the function it names
+    (``call("capmap.stages.x:stage_y", ...)``, :func:`capmap.io.logs.call`: imported when it runs, by the
+    job or by the run's job server)."""
+    tree = _tree(Path(path))
+    return _imports("__main__", tree) | _targets(tree)
+
+
+def _targets(tree: ast.Module) -> set[str]:
+    out = set()
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Call) and node.args and isinstance(node.args[0], ast.Constant)
+                and isinstance(node.args[0].value, str) and node.args[0].value.startswith("capmap.")
+                and ":" in node.args[0].value):
+            out.add(node.args[0].value.split(":")[0])
+    return out
+
+
 def script_fingerprint(path: str | Path, also: tuple[str, ...] | list[str] = ()) -> str:
     """16 hex digits of a Snakemake script (its syntax tree: not its comments) and of every capmap
     module it runs (:func:`code_fingerprint` of each module it imports, and of the modules ``also``
@@ -255,7 +274,7 @@ def script_fingerprint(path: str | Path, also: tuple[str, ...] | list[str] = ())
 def _script_fingerprint(path: str, also: tuple[str, ...]) -> str:
     tree = _tree(Path(path))
     h = hashlib.sha256(ast.dump(tree).encode())
-    mods = sorted(_imports("__main__", tree) | set(also))
+    mods = sorted(_imports("__main__", tree) | _targets(tree) | set(also))
     for mod in mods:
         h.update(code_fingerprint(mod).encode())
     return h.hexdigest()[:16]

@@ -11,6 +11,7 @@ into one ``capmap:`` line on stderr and in the log, and exit status 1.
 from __future__ import annotations
 
 import errno
+import importlib
 import logging
 import os
 import resource
@@ -23,6 +24,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from capmap.errors import CapmapError
+from capmap.io.job_client import ENV, run_remote
 
 __all__ = ["stage_logger", "logging_to", "one_line_errors", "call"]
 
@@ -157,7 +159,15 @@ def call(fn, log: str | None = None, **kwargs) -> None:
     """Entry for the thin Snakemake scripts: ``fn(**kwargs)`` with logging to ``log`` and one-line
     errors; the job's wall time and peak memory (resident set) are logged at the end (the sizes
     the cluster profile's per-rule resources are set from). The console gets one line per job
-    (:class:`_Console`)."""
+    (:class:`_Console`). ``fn`` may be named, ``"module:function"``: then the run's job server runs it
+    when there is one (:mod:`capmap.io.job_server`; this process exits with its status), else this
+    process imports and runs it."""
+    if isinstance(fn, str):
+        status = run_remote(os.environ[ENV], fn, dict(kwargs, log=log)) if os.environ.get(ENV) else None
+        if status is not None:
+            raise SystemExit(status)
+        module, name = fn.split(":")
+        fn = getattr(importlib.import_module(module), name)
     t0 = time.perf_counter()
     _end_with_the_workflow()
     console = _Console()
