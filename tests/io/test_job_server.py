@@ -116,3 +116,18 @@ def _state(pid: int) -> str:
         return Path(f"/proc/{pid}/stat").read_text().split(")")[1].split()[0]
     except OSError:
         return "Z"
+
+
+def test_a_malformed_or_broken_request_does_not_stop_the_server(server, tmp_path):
+    import socket
+
+    for payload in (b"", b"\x00\x00\x00\x05{not", b"\x00\x00\x01\x00" + b"x" * 20):
+        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        s.connect(server.path)
+        if payload:
+            s.sendall(payload)
+        s.close()
+    job = _job("report", tmp_path, server.path, out="ran.txt")
+    _, err = job.communicate(timeout=60)
+    assert job.returncode == 0, err
+    assert _ran(tmp_path / "ran.txt")[3] == server.process.pid  # still served

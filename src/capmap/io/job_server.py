@@ -117,17 +117,15 @@ def serve(path: str, parent: int) -> None:
             for key, _ in sel.select(timeout=0.5):
                 if key.fileobj is srv:
                     conn, _ = srv.accept()
-                    got = recv(conn, LEN.size, fds=2)
-                    body = got and recv(conn, LEN.unpack(got[0])[0])
-                    if not body:
+                    got = _request(conn)
+                    if got is None:
                         conn.close()
                         continue
-                    request = json.loads(body)
                     sys.stdout.flush()
                     sys.stderr.flush()
                     pid = os.fork()
                     if pid == 0:
-                        _child(request, got[1], [srv, wake_r, wake_w, conn, *jobs])
+                        _child(got[0], got[1], [srv, wake_r, wake_w, conn, *jobs])
                     for fd in got[1]:
                         os.close(fd)
                     jobs[conn] = pid
@@ -139,13 +137,36 @@ def serve(path: str, parent: int) -> None:
                                 break
                         except BlockingIOError:
                             break
-                elif key.fileobj in jobs:  # the job's script went away: end its child
+                else:  # a job's socket readable: its script went away (it sends nothing more): end its child
+                    sel.unregister(key.fileobj)
                     _kill(jobs[key.fileobj])
             _reap(jobs, sel)
     finally:
         for pid in jobs.values():
             _kill(pid)
         shutil.rmtree(Path(path).parent, ignore_errors=True)
+
+
+def _request(conn: socket.socket) -> tuple[dict, list[int]] | None:
+    """A job's request: (its JSON, the stdout and stderr it passed); None if it is cut short or malformed
+    (the descriptors it passed closed)."""
+    conn.settimeout(10.0)  # a job sends its request at once: a stalled one cannot hold the server
+    fds: list[int] = []
+    try:
+        got = recv(conn, LEN.size, fds=2)
+        if got is None:
+            return None
+        head, fds = got
+        body = recv(conn, LEN.unpack(head)[0])
+        if body is None or len(fds) != 2:
+            raise ValueError("a request cut short")
+        request = json.loads(body)
+    except (OSError, ValueError):
+        for fd in fds:
+            os.close(fd)
+        return None
+    conn.settimeout(None)
+    return request, fds
 
 
 def _ended(signum, frame) -> None:
@@ -169,7 +190,10 @@ def _reap(jobs: dict[socket.socket, int], sel: selectors.BaseSelector) -> None:
             conn.sendall(CODE.pack(os.waitstatus_to_exitcode(status)))
         except OSError:
             pass  # the job's script is gone
-        sel.unregister(conn)
+        try:
+            sel.unregister(conn)
+        except KeyError:
+            pass  # unregistered when its script went away
         conn.close()
         del jobs[conn]
 
