@@ -37,7 +37,6 @@ from capmap.io.logs import call
 __all__ = ["JobServer", "start", "serve"]
 
 
-
 @dataclass(frozen=True)
 class JobServer:
     """A started server: its socket's path and its process."""
