@@ -96,57 +96,43 @@ rule all:
 onstart:
     # compile the numba kernels once, before the first job, so that parallel jobs load them instead of each
     # compiling them (capmap.kernels); the marker says in milliseconds when this code's are compiled already
+    import os
     import subprocess
     import numpy as np
+    from capmap.io import job_server
+    from capmap.io.job_client import ENV
     from capmap.io.kernel_marker import is_warm, run_key
 
-    if not is_warm(
-        run_key(
-            str(Path(RUN.robot).resolve()),
-            RUN.failure.joint,
-            np.deg2rad(RUN.failure.angle_deg),
-            RUN.dualarm is not None,
-            len(RUN.failure.q_start_deg),
-        )
-    ):
+    _robot = str(Path(RUN.robot).resolve())
+    _joint, _angle_deg, _dualarm = RUN.failure.joint, RUN.failure.angle_deg, RUN.dualarm is not None
+    if not is_warm(run_key(_robot, _joint, np.deg2rad(_angle_deg), _dualarm, len(RUN.failure.q_start_deg))):
         subprocess.run(
             [
                 sys.executable,
                 "-m",
                 "capmap.kernels",
                 "--robot",
-                str(Path(RUN.robot).resolve()),
+                _robot,
                 "--joint",
-                str(RUN.failure.joint),
+                str(_joint),
                 "--angle-deg",
-                repr(RUN.failure.angle_deg),
+                repr(_angle_deg),
             ]
-            + (["--dualarm"] if RUN.dualarm else []),
+            + (["--dualarm"] if _dualarm else []),
             check=False,
         )
     # warm jobs: a local run's jobs run in children of one process that has imported the stages and loaded
     # the kernels, about a second saved per job (capmap.io.job_server); a cluster's jobs run their own
-    import os
-    from capmap.io import job_server
-    from capmap.io.job_client import ENV
-    from capmap.io.fingerprint import script_modules
-
     if workflow.local_exec and not os.environ.get(ENV):
-        _stages = {
-            m
-            for f in Path(workflow.basedir, "workflow", "scripts").glob("*.py")
-            for m in script_modules(f)
-            if m.startswith("capmap.stages.") and (RUN.dualarm or "dualarm" not in m)
-        }
         os.environ[ENV] = job_server.start(
-            sorted(_stages),
+            job_server.stage_modules(Path(workflow.basedir, "workflow", "scripts"), _dualarm),
             (
                 "capmap.kernels:warm",
                 dict(
-                    robot_file=str(Path(RUN.robot).resolve()),
-                    joint=RUN.failure.joint,
-                    angle_rad=float(np.deg2rad(RUN.failure.angle_deg)),
-                    dualarm=RUN.dualarm is not None,
+                    robot_file=_robot,
+                    joint=_joint,
+                    angle_rad=float(np.deg2rad(_angle_deg)),
+                    dualarm=_dualarm,
                     here=True,
                 ),
             ),

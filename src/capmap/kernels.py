@@ -24,7 +24,6 @@ from pathlib import Path
 
 import numpy as np
 
-import capmap.dualarm.geometry.distance as distance
 import capmap.dualarm.ocp.compiled_nodes as nodes
 from capmap.capacity import directions, engine
 from capmap.capacity.problem import CapacityProblem
@@ -38,53 +37,34 @@ from capmap.errors import CapmapError
 from capmap.io.kernel_marker import is_warm, record, run_key
 from capmap.robots import load
 
-__all__ = ["warm", "warm_dual_arm", "warm_dual_arm_nodes", "warm_dual_arm_geometry", "ensure_warm", "remember_dual_arm", "main"]
+__all__ = ["warm", "ensure_warm", "remember_dual_arm", "main"]
 
 
 def warm(robot_file: str, joint: int, angle_rad: float, dualarm: bool, here: bool = False) -> None:
     """Compile (or load) the kernels of a run: ``robot_file``'s arm with ``joint`` (1-based) locked at
     ``angle_rad`` (its IK method, the capacity kernels), and the dual-arm family's if ``dualarm``
-    (:func:`warm_dual_arm`). When this process may use two cores the family's node models and FDDP compile
-    in a child process beside the arm's kernels, and its geometry here after them: the two halves take
+    (:mod:`capmap.dualarm.ocp.compiled_nodes`: ``warm_up_nodes``, ``warm_up_geometry``). When this process may
+    use two cores the family's node models and FDDP compile in a child process beside the arm's kernels, and
+    its geometry here after them: the two halves take
     about as long (capmap's environment gives the child the same numba cache folder; the distances both
     call are compiled by the child first and loaded here). ``here``: every kernel in this process (to hold
     them loaded: :mod:`capmap.io.job_server`)."""
     child = None
     if dualarm and not here and len(os.sched_getaffinity(0)) >= 2:
-        child = subprocess.Popen([sys.executable, "-c", "import capmap.kernels as k; k.warm_dual_arm_nodes()"])
+        child = subprocess.Popen([sys.executable, "-c", "import capmap.dualarm.ocp.compiled_nodes as n; n.warm_up_nodes()"])
     try:
         _warm_arm(robot_file, joint, angle_rad)
         if dualarm:
-            warm_dual_arm_geometry()
+            nodes.warm_up_geometry()
     except BaseException:
         if child is not None:
             child.kill()
             child.wait()
         raise
     if child is None and dualarm:
-        warm_dual_arm_nodes()
+        nodes.warm_up_nodes()
     elif child is not None and child.wait() != 0:
         raise RuntimeError(f"the dual-arm kernels' process failed (exit code {child.returncode})")
-
-
-def warm_dual_arm() -> None:
-    """Compile (or load) the dual-arm family's kernels: :func:`warm_dual_arm_nodes`, :func:`warm_dual_arm_geometry`."""
-    warm_dual_arm_nodes()
-    warm_dual_arm_geometry()
-
-
-def warm_dual_arm_nodes() -> None:
-    """The dual-arm family's node models and compiled FDDP (and the distances they call)."""
-    nodes.warm_up_nodes()
-
-
-def warm_dual_arm_geometry() -> None:
-    """The dual-arm family's batch distances, pair filters and scene checks."""
-    p = np.random.default_rng(0).normal(size=(4, 3))
-    distance.segment_segment(p, p + 1, p + 2, p + 3)
-    distance.point_triangle(p, p + 1, p + 2, p + 3)
-    distance.segment_triangle(p, p + 1, p + 2, p + 3, p + 4)
-    nodes.warm_up_geometry()
 
 
 def _warm_arm(robot_file: str, joint: int, angle_rad: float) -> None:

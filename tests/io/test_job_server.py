@@ -131,3 +131,11 @@ def test_a_malformed_or_broken_request_does_not_stop_the_server(server, tmp_path
     _, err = job.communicate(timeout=60)
     assert job.returncode == 0, err
     assert _ran(tmp_path / "ran.txt")[3] == server.process.pid  # still served
+
+
+def test_the_server_imports_the_stage_modules_the_scripts_name_the_dual_arm_ones_only_with_that_family():
+    scripts = ROOT / "workflow" / "scripts"
+    every, without = job_server.stage_modules(scripts, True), job_server.stage_modules(scripts, False)
+    assert {"capmap.stages.refine", "capmap.stages.dualarm_solve"} <= set(every)
+    assert "capmap.stages.refine" in without and not any("dualarm" in m for m in without)
+    assert all(m.startswith("capmap.stages.") for m in every)

@@ -31,10 +31,11 @@ import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
+from capmap.io.fingerprint import script_modules
 from capmap.io.job_client import CODE, LEN, recv
-from capmap.io.logs import call
+from capmap.io.logs import call, named
 
-__all__ = ["JobServer", "start", "serve"]
+__all__ = ["JobServer", "stage_modules", "start", "serve"]
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,13 @@ class JobServer:
         if self.process.poll() is None:
             self.process.terminate()
         self.process.wait()
+
+
+def stage_modules(scripts: Path, dualarm: bool) -> list[str]:
+    """The stage modules the workflow's scripts (``scripts``: their folder) name, the dual-arm family's only
+    when the run has it: what a run's server imports."""
+    return sorted({m for f in Path(scripts).glob("*.py") for m in script_modules(f)
+                   if m.startswith("capmap.stages.") and (dualarm or "dualarm" not in m)})
 
 
 def start(modules: list[str], warm: tuple[str, dict] | None = None) -> JobServer:
@@ -82,8 +90,7 @@ def _child(request: dict, fds: list[int], inherited: list[socket.socket]) -> Non
         os.chdir(request["cwd"])
         os.environ.clear()
         os.environ.update(request["env"])
-        module, name = request["target"].split(":")
-        call(getattr(importlib.import_module(module), name), **request["kwargs"])
+        call(named(request["target"]), **request["kwargs"])
         code = 0
     except SystemExit as exc:
         code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
@@ -204,8 +211,7 @@ def _main(argv: list[str]) -> None:
     for mod in modules:
         importlib.import_module(mod)
     if warm:
-        module, name = warm[0].split(":")
-        getattr(importlib.import_module(module), name)(**json.loads(warm[1]))
+        named(warm[0])(**json.loads(warm[1]))
     serve(path, parent)
 
 

@@ -26,7 +26,7 @@ from pathlib import Path
 from capmap.errors import CapmapError
 from capmap.io.job_client import ENV, run_remote
 
-__all__ = ["stage_logger", "logging_to", "one_line_errors", "call"]
+__all__ = ["stage_logger", "logging_to", "one_line_errors", "named", "call"]
 
 ROOT = "capmap"
 
@@ -155,6 +155,12 @@ def _end_with_the_workflow(poll_s: float = 1.0) -> None:
     threading.Thread(target=watch, name="capmap-parent-watch", daemon=True).start()
 
 
+def named(target: str):
+    """The function ``target`` names, ``"module:function"`` (its module imported)."""
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
 def call(fn, log: str | None = None, **kwargs) -> None:
     """Entry for the thin Snakemake scripts: ``fn(**kwargs)`` with logging to ``log`` and one-line
     errors; the job's wall time and peak memory (resident set) are logged at the end (the sizes
@@ -166,8 +172,7 @@ def call(fn, log: str | None = None, **kwargs) -> None:
         status = run_remote(os.environ[ENV], fn, dict(kwargs, log=log)) if os.environ.get(ENV) else None
         if status is not None:
             raise SystemExit(status)
-        module, name = fn.split(":")
-        fn = getattr(importlib.import_module(module), name)
+        fn = named(fn)
     t0 = time.perf_counter()
     _end_with_the_workflow()
     console = _Console()

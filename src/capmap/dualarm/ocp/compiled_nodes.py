@@ -19,6 +19,7 @@ import pinocchio as pin
 
 from capmap.dualarm.geometry.chain import Packed, groups_of, joint_placements, levers, pack, pair_table
 from capmap.dualarm.geometry.collision import CollisionModel, Pairs, Primitives
+from capmap.dualarm.geometry.distance import point_triangle, segment_segment, segment_triangle
 from capmap.dualarm.geometry.proximity import PairFilter, batch_distances
 from capmap.dualarm.ocp.crocoddyl_nodes import Context, equality_size
 from capmap.dualarm.ocp.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
@@ -163,7 +164,7 @@ class CompiledNodeModel(crocoddyl.ActionModelAbstract):
 
 def _toy() -> tuple:
     """A two-joint chain with one capsule pair and a triangle, the argument types of a real run: (model,
-    its data, the packed chain, its primitives, the pair list, the node context, x, u)."""
+    the packed chain, its primitives, the pair list, the node context, x, u)."""
     model = pin.Model()
     j1 = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "a")
     j2 = model.addJoint(j1, pin.JointModelRX(), pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.5])), "b")
@@ -201,8 +202,13 @@ def warm_up_nodes() -> None:
 
 
 def warm_up_geometry() -> None:
-    """Compile (or load) the rest of the family's kernels: the pair filters, the unknown-space checks, the
-    chain's placements and the collision model's distances and gradients (:func:`_toy`'s chain)."""
+    """Compile (or load) the rest of the family's kernels: the batch distances, the pair filters, the
+    unknown-space checks, the chain's placements and the collision model's distances and gradients
+    (:func:`_toy`'s chain)."""
+    p = np.random.default_rng(0).normal(size=(4, 3))
+    segment_segment(p, p + 1, p + 2, p + 3)
+    point_triangle(p, p + 1, p + 2, p + 3)
+    segment_triangle(p, p + 1, p + 2, p + 3, p + 4)
     model, packed, prims, pairs, ctx, x, u = _toy()
     batch_distances(packed, np.zeros((2, 2)), pairs, cutoff=0.1, within=0.01)
     PairFilter(packed, pairs, 2, 0.1).update(np.zeros((2, 2)))
