@@ -44,6 +44,7 @@ from collections.abc import Callable
 import numpy as np
 
 from capmap.capacity.evaluator import Evaluator
+from capmap.capacity.patterns import unique_rows
 from capmap.capacity.refine_data import Evaluation, RefineSettings, VoxelMinima
 from capmap.capacity.refine_rounds import Rounds, argmin_columns
 from capmap.capacity.voxels import Grid
@@ -95,8 +96,7 @@ def _evaluate_once(evaluator: Evaluator, pts: np.ndarray, ceiling: np.ndarray, o
     per row of pts, and the number of points evaluated. A point shared by voxels is evaluated
     once, owned by one of them, with the highest of their ceilings."""
     key = pts if evaluator.pointwise else np.column_stack([owner, pts])
-    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    inv = inv.reshape(-1)
+    first, inv = unique_rows(key)
     if len(first) == len(pts):
         return evaluator.evaluate(pts, ceiling, owner), len(pts)
     ceil = np.full(len(first), -np.inf)

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from capmap.capacity.folds import ConfigBrackets, ConfigMidpoints, FoldBrackets, RoundPoints
-from capmap.capacity.patterns import COMPASS, CORNERS, around, rows_in
+from capmap.capacity.patterns import COMPASS, CORNERS, around, rows_in, sorted_unique_rows, unique_rows
 from capmap.capacity.refine_data import Evaluation, RefineSettings, VoxelMinima
 from capmap.capacity.voxels import Grid
 
@@ -180,7 +180,7 @@ class Rounds:
         # minima at the same point (often a corner, or the all-branch worst) share one compass
         known = np.column_stack([has, worst[has, 0]])
         rows = np.column_stack([cv, centres])
-        _, keep = np.unique(rows, axis=0, return_index=True)
+        keep = sorted_unique_rows(rows)
         keep = keep[~rows_in(rows[keep], known)]
         v, centre = cv[keep], centres[keep]
         return (np.concatenate([np.repeat(has, len(COMPASS)), np.repeat(v, len(COMPASS))]),
@@ -194,8 +194,7 @@ class Rounds:
         uniform points up to the voxel's least count from the second round."""
         local, local_pts = self._local(start, p)
         rows = np.column_stack([local, local_pts])  # a point of a voxel evaluated once (compasses clip to corners)
-        _, first = np.unique(rows, axis=0, return_index=True)
-        first = np.sort(first)
+        first, _ = unique_rows(rows)
         first = first[~rows_in(rows[first], self.seen)]
         n_first = len(first)  # then the brackets' midpoints, in this order (the brackets find them by index)
         fs, active = self.fs, p.active
