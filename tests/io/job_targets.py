@@ -14,6 +14,11 @@ def report(out: str, log: str | None = None) -> None:
     print("a line to the job's stderr", file=sys.stderr)
 
 
+def modules(out: str, log: str | None = None) -> None:
+    """Whether the slow test module is imported in this process (inherited from the server)."""
+    Path(out).write_text(str("tests.io.slow_import" in sys.modules))
+
+
 def fail(log: str | None = None) -> None:
     raise CapmapError("a planted failure")
 

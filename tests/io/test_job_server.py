@@ -89,6 +89,36 @@ def test_a_job_that_goes_away_ends_its_child(server, tmp_path):
         time.sleep(0.05)
 
 
+def test_the_server_listens_before_its_imports_are_done_and_skips_one_that_fails(monkeypatch, tmp_path):
+    """Its imports come after it listens (a module whose import waits for this test's go), one that fails
+    (no such module) is skipped, and the children forked after an import inherit it."""
+    monkeypatch.setenv("PYTHONPATH", f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}")
+    go = tmp_path / "go"
+    monkeypatch.setenv("CAPMAP_TEST_GO", str(go))
+    srv = job_server.start(["capmap.no_such_module", TARGETS, "tests.io.slow_import"])
+    try:
+        t = time.monotonic()
+        while not os.path.exists(srv.path):  # a server importing first would listen only after 120 s
+            assert time.monotonic() - t < 60 and srv.process.poll() is None, "the server does not listen"
+            time.sleep(0.05)
+        go.touch()
+        for attempt in range(100):  # the import it inherits is done once a child sees it
+            job = _job("modules", tmp_path, srv.path, out="modules.txt")
+            _, err = job.communicate(timeout=90)
+            assert job.returncode == 0, err
+            if (tmp_path / "modules.txt").read_text() == "True":
+                break
+            time.sleep(0.1)
+        else:
+            raise AssertionError("no child of the server ever had the slow module imported")
+        job = _job("report", tmp_path, srv.path, out="ran.txt")
+        _, err = job.communicate(timeout=60)
+        assert job.returncode == 0, err
+        assert _ran(tmp_path / "ran.txt")[3] == srv.process.pid  # served after the failed import
+    finally:
+        srv.stop()
+
+
 def test_the_server_ends_with_the_process_that_started_it(tmp_path):
     code = (f"import sys; sys.path.insert(0, {str(ROOT)!r}); from capmap.io import job_server; "
             f"print(job_server.start([{TARGETS!r}]).process.pid, flush=True)")

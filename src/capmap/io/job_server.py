@@ -2,15 +2,17 @@
 
 A Snakemake job is a new Python process; before its work it imports numpy, pandas, Pinocchio, numba and
 capmap and loads the compiled kernels it calls, about a second per job, as long as many of the default
-run's jobs take. The run's ``onstart`` starts this server (:func:`start`, local runs only): it imports the
-stage modules and loads the run's kernels once, then listens on a Unix socket in a private temporary
-folder, named to the jobs by :data:`ENV`. A job's script (:func:`capmap.io.logs.call` with a
+run's jobs take. The run's ``onstart`` starts this server (:func:`start`, local runs only): it listens at
+once on a Unix socket in a private temporary folder, named to the jobs by :data:`ENV`, and between jobs
+imports what every stage imports (:data:`BASE`), then the stage modules, then loads the run's kernels, one
+at a time, so that the first jobs are served too (a child imports what the server has not yet). A job's
+script (:func:`capmap.io.logs.call` with a
 ``"module:function"`` target) sends the function's name, its arguments (plain JSON: paths, numbers, the
 slice), the job's working folder and environment and its stdout and stderr themselves (the file
 descriptors); the server forks and the child runs the function there as the script would have (the same
 logging, one-line errors and log file), and its exit status goes back to the script, which exits with it.
 
-No server (a cluster run, a script run by hand, the server still importing, or gone): the script runs the
+No server (a cluster run, a script run by hand, the server not yet listening, or gone): the script runs the
 function itself. A job that Snakemake ends (its script's process gone) ends its child; the server and its
 children end with the workflow's process.
 """
@@ -28,14 +30,19 @@ import subprocess
 import sys
 import tempfile
 import traceback
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from capmap.io.fingerprint import script_modules
 from capmap.io.job_client import CODE, LEN, recv
 from capmap.io.logs import call, named
 
-__all__ = ["JobServer", "stage_modules", "start", "serve"]
+__all__ = ["JobServer", "BASE", "stage_modules", "start", "serve"]
+
+BASE = ("numpy", "pandas", "pyarrow.parquet", "scipy.linalg", "numba", "pinocchio")
+"""What every stage imports: the server imports these first."""
 
 
 @dataclass(frozen=True)
@@ -60,10 +67,10 @@ def stage_modules(scripts: Path, dualarm: bool) -> list[str]:
 
 
 def start(modules: list[str], warm: tuple[str, dict] | None = None) -> JobServer:
-    """Start a server as a child of this process (it ends when this process does) that imports ``modules``
-    and calls ``warm`` (a function's ``"module:function"`` name and its keyword arguments: the run's
-    kernels loaded, :func:`capmap.kernels.warm`) before it listens. Returns at once: until the server
-    listens, jobs run their functions themselves."""
+    """Start a server as a child of this process (it ends when this process does) that imports :data:`BASE`
+    and ``modules`` and calls ``warm`` (a function's ``"module:function"`` name and its keyword arguments:
+    the run's kernels loaded, :func:`capmap.kernels.warm`) between the jobs it serves. Returns at once:
+    until the server listens (a fraction of a second), jobs run their functions themselves."""
     folder = tempfile.mkdtemp(prefix="capmap-jobs-")  # mode 0700: the socket is this user's
     path = os.path.join(folder, "socket")
     cmd = [sys.executable, "-m", "capmap.io.job_server", path, str(os.getpid()), *modules]
@@ -102,10 +109,13 @@ def _child(request: dict, fds: list[int], inherited: list[socket.socket]) -> Non
         os._exit(code)
 
 
-def serve(path: str, parent: int) -> None:
+def serve(path: str, parent: int, pending: Sequence[Callable[[], object]] = ()) -> None:
     """Accept jobs on ``path`` until process ``parent`` is gone: per job a forked child (:func:`_child`);
     a job's socket closed before its child ends ends the child (SIGTERM); each child's exit status is
-    sent back as it ends. One thread: forking is safe."""
+    sent back as it ends. ``pending``: calls made one at a time while no job is waiting (imports, the
+    kernels' loading: the children forked after one inherit what it did); one that fails is logged and
+    skipped (a child then meets the failure in its own job). One thread: forking is safe."""
+    pending = list(pending)
     wake_r, wake_w = socket.socketpair()
     wake_r.setblocking(False)
     wake_w.setblocking(False)
@@ -120,7 +130,7 @@ def serve(path: str, parent: int) -> None:
     jobs: dict[socket.socket, int] = {}
     try:
         while os.getppid() == parent:
-            for key, _ in sel.select(timeout=0.5):
+            for key, _ in sel.select(timeout=0.0 if pending else 0.5):
                 if key.fileobj is srv:
                     conn, _ = srv.accept()
                     got = _request(conn)
@@ -147,6 +157,11 @@ def serve(path: str, parent: int) -> None:
                     sel.unregister(key.fileobj)
                     _kill(jobs[key.fileobj])
             _reap(jobs, sel)
+            if pending:
+                try:
+                    pending.pop(0)()
+                except Exception:
+                    traceback.print_exc()
     finally:
         for pid in jobs.values():
             _kill(pid)
@@ -208,11 +223,14 @@ def _main(argv: list[str]) -> None:
     path, parent, rest = argv[0], int(argv[1]), argv[2:]
     modules, warm = (rest[:rest.index("--warm")], rest[rest.index("--warm") + 1:]) if "--warm" in rest else (rest, [])
     signal.signal(signal.SIGTERM, _ended)  # stop(): the finally blocks end the children and remove the folder
-    for mod in modules:
-        importlib.import_module(mod)
+    pending = [partial(importlib.import_module, m) for m in (*BASE, *modules)]
     if warm:
-        named(warm[0])(**json.loads(warm[1]))
-    serve(path, parent)
+        pending.append(partial(_call, warm[0], json.loads(warm[1])))
+    serve(path, parent, pending)
+
+
+def _call(target: str, kwargs: dict) -> None:
+    named(target)(**kwargs)
 
 
 if __name__ == "__main__":
