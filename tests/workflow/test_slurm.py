@@ -22,6 +22,13 @@ pytestmark = pytest.mark.skipif(os.environ.get("CAPMAP_SLURM") != "1",
 
 # measured quantities that legitimately differ between two runs (wall-clock timings)
 TIMING_COLUMNS = {"time_s"}  # dualarm outer.parquet: solve time of each outer iteration
+HASH_COLUMNS = {"sha256"}  # the catalogues' file hashes: the files themselves are compared below
+# A cluster job is a fresh process; a local job runs in a child of the job server, whose memory holds what it
+# imported before. numpy's and OpenBLAS's vector loops split their sums by the arrays' addresses, so the last
+# bits of a value can differ between the two (measured: 3 per-axis values of one voxel of 216 in the tiny
+# atlas, relative differences 3e-15 to 3e-14). Floats are compared to 1e-9 relative (over 30,000 times that
+# spread); every other column exactly.
+RTOL = 1e-9
 
 
 def _run(workdir, config, *extra):
@@ -54,5 +61,8 @@ def test_tiny_pipeline_and_atlas_on_slurm_equal_the_local_run(tmp_path):
     assert set(mine) == set(theirs) and len(mine) > 20
     for rel in sorted(mine):
         a, b = pd.read_parquet(mine[rel]), pd.read_parquet(theirs[rel])
-        keep = [c for c in a.columns if c not in TIMING_COLUMNS]
-        pd.testing.assert_frame_equal(a[keep], b[keep], check_exact=True, obj=rel)
+        keep = [c for c in a.columns if c not in TIMING_COLUMNS | HASH_COLUMNS]
+        floats = [c for c in keep if a[c].dtype.kind == "f"]
+        exact = [c for c in keep if c not in floats]
+        pd.testing.assert_frame_equal(a[exact], b[exact], check_exact=True, obj=rel)
+        pd.testing.assert_frame_equal(a[floats], b[floats], check_exact=False, rtol=RTOL, atol=0.0, obj=rel)
