@@ -24,10 +24,11 @@ pytestmark = pytest.mark.skipif(os.environ.get("CAPMAP_SLURM") != "1",
 TIMING_COLUMNS = {"time_s"}  # dualarm outer.parquet: solve time of each outer iteration
 HASH_COLUMNS = {"sha256"}  # the catalogues' file hashes: the files themselves are compared below
 # A cluster job is a fresh process; a local job runs in a child of the job server, whose memory holds what it
-# imported before. numpy's and OpenBLAS's vector loops split their sums by the arrays' addresses, so the last
-# bits of a value can differ between the two (measured: 3 per-axis values of one voxel of 216 in the tiny
-# atlas, relative differences 3e-15 to 3e-14). Floats are compared to 1e-9 relative (over 30,000 times that
-# spread); every other column exactly.
+# imported before. The last bits of a value can differ between the two (measured: 3 per-axis values of one
+# voxel of 216 in the tiny atlas, relative differences 3e-15 to 3e-14; two fresh processes agree exactly).
+# Not the denormal flags, OpenBLAS's thread count or the server's warmed kernels (each ruled out); most likely
+# the vector loops' split of a sum, which follows the arrays' addresses. Floats are compared to 1e-9 relative
+# (over 30,000 times that spread); every other column exactly.
 RTOL = 1e-9
 
 
