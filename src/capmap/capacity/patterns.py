@@ -33,18 +33,23 @@ def _hash(rows: np.ndarray) -> np.ndarray:
     return h
 
 
-def _exact_first(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`unique_rows` by a lexicographic sort of the rows (the fallback on a hash collision)."""
-    order = np.lexsort(rows.T[::-1])  # stable: a group's first index is its first occurrence
-    s = rows[order]
-    new = np.r_[True, np.any(s[1:] != s[:-1], axis=1)]
-    group = np.empty(len(rows), dtype=np.int64)
+def _by_first(order: np.ndarray, new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`unique_rows`' (first, inverse) from a stable sort ``order`` (n,) of the rows and ``new`` (n,)
+    bool, where a group of equal rows starts in that order."""
+    group = np.empty(len(order), dtype=np.int64)
     group[order] = np.cumsum(new) - 1
-    first = order[new]
+    first = order[new]  # stable: a group's first index is its first occurrence
     by_index = np.argsort(first)
     rank = np.empty_like(by_index)
     rank[by_index] = np.arange(len(first))
     return first[by_index], rank[group]
+
+
+def _exact_first(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`unique_rows` by a lexicographic sort of the rows (the fallback on a hash collision)."""
+    order = np.lexsort(rows.T[::-1])
+    s = rows[order]
+    return _by_first(order, np.r_[True, np.any(s[1:] != s[:-1], axis=1)])
 
 
 def unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -59,16 +64,10 @@ def unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     order = np.argsort(h, kind="stable")
     hs = h[order]
     new = np.r_[True, hs[1:] != hs[:-1]]
-    group = np.cumsum(new) - 1
     lead = order[new]  # the first occurrence of each hash (stable sort)
-    if not np.all(rows[order] == rows[lead[group]]):  # a hash shared by different rows
+    if not np.all(rows[order] == rows[lead[np.cumsum(new) - 1]]):  # a hash shared by different rows
         return _exact_first(rows)
-    by_index = np.argsort(lead)
-    rank = np.empty_like(by_index)
-    rank[by_index] = np.arange(len(lead))
-    inverse = np.empty(len(rows), dtype=np.int64)
-    inverse[order] = rank[group]
-    return lead[by_index], inverse
+    return _by_first(order, new)
 
 
 def sorted_unique_rows(rows: np.ndarray) -> np.ndarray:
