@@ -12,15 +12,18 @@ distances (~1e-15 m): 1e-12 m.
 from __future__ import annotations
 
 import crocoddyl
+import numba
 import numpy as np
 import pytest
+from numba.core import types
+from numba.core.types.function_type import CompileResultWAP
 
 from capmap.dualarm.geometry.broadphase import MIN_GROUP, BodyBalls, group_bound, pair_groups
 from capmap.dualarm.geometry.chain import fk, groups_of, joint_placements, levers, pair_table, place_primitives
 from capmap.dualarm.geometry.distance import segment_segment, segment_triangle
 from capmap.dualarm.geometry.proximity import batch_distances
 from capmap.dualarm.ocp.compiled_nodes import CompiledNodeModel
-from capmap.dualarm.ocp.fddp import ALPHAS, fddp, pack_nodes
+from capmap.dualarm.ocp.fddp import ALPHAS, _node_errors_raised, fddp, pack_nodes
 from capmap.dualarm.ocp.solver import REG_INCREASE
 
 
@@ -269,3 +272,28 @@ def test_a_group_holds_one_kind_of_moving_primitive():
             else:
                 core = segment_triangle(A[a:a + 1], B[a:a + 1], V[b:b + 1, 0], V[b:b + 1, 1], V[b:b + 1, 2]).distance[0]
             assert lb <= core - 0.02 + 1e-12
+
+
+@numba.njit
+def _raises_when_positive(x):
+    if x > 0.0:
+        raise ValueError("a positive x")
+    return x
+
+
+@numba.njit
+def _call(f, x):
+    return f(x)
+
+
+def test_an_exception_in_a_function_called_through_its_pointer_is_raised():
+    """The compiled FDDP calls the node evaluation through a pointer, whose C wrapper only writes an exception
+    out (as unraisable): the solve's guard raises it, and a call that raises nothing returns its value."""
+    sig = types.float64(types.float64)
+    _raises_when_positive.compile(sig.args)
+    f = CompileResultWAP(_raises_when_positive.overloads[sig.args])
+    with pytest.raises(RuntimeError, match="a positive x"):
+        with _node_errors_raised():
+            _call(f, 1.0)
+    with _node_errors_raised():
+        assert _call(f, -2.0) == -2.0

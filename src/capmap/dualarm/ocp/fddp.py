@@ -15,8 +15,13 @@ against Crocoddyl on the Pinocchio node models.
 
 from __future__ import annotations
 
+import sys
+from contextlib import contextmanager
+
 import numba
 import numpy as np
+from numba.core import types
+from numba.core.types.function_type import CompileResultWAP
 
 from capmap.dualarm.ocp.node_kernel import node_eval
 
@@ -29,7 +34,7 @@ REG_MIN, REG_MAX, REG_DEC, TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEP
 HUGE = 1e30  # Crocoddyl's raiseIfNaN: nan, inf or >= 1e30 fails a rollout or a backward pass
 STOPPED = -1.0  # a trial stopped by its partial cost (_forward; a cost is >= 0)
 VALUE, DIFF = np.False_, np.True_  # _eval's diff, typed bool (a literal would compile node_eval once per value)
-# _calc, _forward inlined in numba's IR: each compiled caller of node_eval re-optimises its code (seconds each)
+# _calc, _forward inlined in numba's IR (as plain calls the node half compiles no faster)
 _wrapper = numba.njit(cache=True, inline="always")
 
 
@@ -87,23 +92,52 @@ def _eval(P, k, x, u, mu, diff, Lx, Lxx, Lu, xnext):
                      lim, lam_eq[e0:e1], lam_in[i0:i1], x, u, mu, diff, c[e0:e1], C[e0:e1], g[i0:i1], Lx, Lxx, Lu, xnext)
 
 
-@numba.njit(cache=True)
-def evaluate_nodes(P, xs):
+def _node_function(P) -> CompileResultWAP:
+    """:func:`_eval` on the packed nodes ``P`` as a first-class function: its compiled callers call it
+    through a pointer instead of linking its code (and the node kernel's) into theirs, where LLVM would
+    optimise all of it again for each of them (about 6 s of the kernels' compile)."""
+    v, F = types.float64[::1], types.Array(types.float64, 2, "F")
+    sig = types.float64(numba.typeof(P), types.int64, v, v, types.float64, types.boolean, v, F, v, v)
+    _eval.compile(sig.args)
+    return CompileResultWAP(_eval.overloads[sig.args])
+
+
+@contextmanager
+def _node_errors_raised():
+    """Numba calls a first-class function through its C wrapper, which writes an exception raised in it
+    as unraisable (sys.unraisablehook) and returns: collected here, and raised when the call returns."""
+    caught, hook = [], sys.unraisablehook
+    sys.unraisablehook = caught.append
+    try:
+        yield
+    finally:
+        sys.unraisablehook = hook
+    if caught:
+        raise RuntimeError(f"a node evaluation failed: {caught[0].exc_value!r}") from caught[0].exc_value
+
+
+def evaluate_nodes(P, xs) -> None:
     """Every node's equality values c and inequality values g at the states xs (N + 1, 2 nq), written into
     the packed nodes' c and g (flat, by node offsets eo, io); as in a calc, a pair with no multiplier whose
     lower bound clears the margin has that bound in g."""
+    with _node_errors_raised():
+        _evaluate_nodes(P, _node_function(P), xs)
+
+
+@numba.njit(cache=True)
+def _evaluate_nodes(P, ev, xs):
     n2 = xs.shape[1]
     Lx, Lxx, Lu, xn = np.empty(n2), np.empty((n2, n2)).T, np.empty(n2 // 2), np.empty(n2)
     u0 = np.zeros(n2 // 2)
     for k in range(xs.shape[0]):
-        _eval(P, k, xs[k], u0, 1.0, VALUE, Lx, Lxx, Lu, xn)
+        ev(P, k, xs[k], u0, 1.0, VALUE, Lx, Lxx, Lu, xn)
 
 
 @_wrapper
-def _calc(P, mu, cost, xnext, k, x, u):
+def _calc(P, ev, mu, cost, xnext, k, x, u):
     """Node k's cost at (x, u) into cost[k], its next state into xnext[k]."""
     Lx, Lxx, Lu = np.empty(0), np.empty((0, 0)).T, np.empty(0)
-    cost[k] = _eval(P, k, x, u, mu, VALUE, Lx, Lxx, Lu, xnext[k])
+    cost[k] = ev(P, k, x, u, mu, VALUE, Lx, Lxx, Lu, xnext[k])
     return cost[k]
 
 
@@ -214,7 +248,7 @@ def _backward(h, a, Luu, Lx, Lxx, Lu, fs, feasible, preg, Vx, Vxx, Qu, Quuk, K, 
 
 
 @_wrapper
-def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total0, limit):
+def _forward(P, ev, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total0, limit):
     """Crocoddyl's FDDP forwardPass: the trial's cost, nan when the cost or a state is nan, inf or >= HUGE
     (the products written out: no allocation per node); STOPPED as soon as total0 - (the cost so far) <=
     limit (not nan): the trial's cost can only grow (every node's is >= 0), so its dV = total0 - cost would
@@ -232,24 +266,30 @@ def _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try,
                 for i in range(n2):
                     s += K[t, r, i] * (xs_try[t, i] - xs[t, i])
                 us_try[t, r] = us[t, r] - k_[t, r] * alpha - s
-            total += _calc(P, mu, cost, xnext, t, xs_try[t], us_try[t])
+            total += _calc(P, ev, mu, cost, xnext, t, xs_try[t], us_try[t])
             if not abs(total) < HUGE or _huge(xnext[t]):
                 return np.nan
             if total0 - total <= limit:
                 return STOPPED
         else:
-            total += _calc(P, mu, cost, xnext, t, xs_try[t], np.zeros(nu))
+            total += _calc(P, ev, mu, cost, xnext, t, xs_try[t], np.zeros(nu))
             if not abs(total) < HUGE:
                 return np.nan
     return total
 
 
-@numba.njit(cache=True)
-def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas):
+def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas) -> tuple:
     """Crocoddyl's SolverFDDP.solve from xs (N + 1, 2 nq), us (N, nq) (both updated in place) on the packed
     nodes P at penalty mu; the dynamics Fx = [[I, h I], [0, I]], Fu = [[a I], [h I]] (h: the nodes'
     dt in s, a = dt^2 / 2 in s^2); Luu (N, nq, nq). Returns (converged, iterations as Crocoddyl's ``iter``,
     cost, trials not rolled out or stopped by their partial cost)."""
+    with _node_errors_raised():
+        return _fddp(P, _node_function(P), h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas)
+
+
+@numba.njit(cache=True)
+def _fddp(P, ev, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas):
+    """:func:`fddp` with ``ev``, :func:`_eval` as a first-class function (:func:`_node_function`)."""
     N, n2, nu = xs.shape[0] - 1, xs.shape[1], us.shape[1]
     cost, xnext = np.zeros(N + 1), np.zeros((N + 1, n2))
     Lx, LxxT, Lu = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2)), np.zeros((N + 1, nu))
@@ -271,9 +311,9 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
             if recalc:
                 if it == 0:
                     for t in range(N + 1):
-                        _calc(P, mu, cost, xnext, t, xs[t], us[t] if t < N else u0)
+                        _calc(P, ev, mu, cost, xnext, t, xs[t], us[t] if t < N else u0)
                 for t in range(N + 1):
-                    _eval(P, t, xs[t], us[t] if t < N else u0, mu, DIFF, Lx[t], LxxT[t].T, Lu[t], xnext[t])
+                    ev(P, t, xs[t], us[t] if t < N else u0, mu, DIFF, Lx[t], LxxT[t].T, Lu[t], xnext[t])
                 total = 0.0
                 for t in range(N + 1):  # in Crocoddyl's order
                     total += cost[t]
@@ -312,7 +352,7 @@ def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alph
                     continue
                 if not abs(dg + 0.0) < TH_GRAD:
                     limit = TH_ACCEPT * dVexp
-            trial = _forward(P, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total, limit)
+            trial = _forward(P, ev, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_try, us_try, total, limit)
             if trial == STOPPED:
                 d0, d1 = dg + 0.0, dq - 0.0
                 stopped += 1
