@@ -264,8 +264,8 @@ def exact_torques(arm: LockedArm, table: JointPath, rotation: np.ndarray, payloa
     model, _ = payload_models(arm, payload_kg)
     data = model.createData()
     robot, act = arm.robot, arm.active
-    rigid = np.array([pin.rnea(model, data, arm.full_q(q[k]), arm.full_v(qd[k]), arm.full_v(qdd[k]))[act]
-                      for k in range(len(q))]).reshape(len(q), len(act))
+    qf, vf, af = arm.full_q(q), arm.full_v(qd), arm.full_v(qdd)
+    rigid = np.array([pin.rnea(model, data, qf[k], vf[k], af[k])[act] for k in range(len(q))]).reshape(len(q), len(act))
     fric = friction_torque(rigid, qd, path_motion(jp.dq[inv], sd, sdd), robot.coulomb_nm[act], robot.viscous_nms[act])
     return ExactTorques(rigid + fric, robot.armature_kgm2[act] * qdd, fric, q)
 

@@ -62,14 +62,12 @@ def path_derivatives(arm: LockedArm, q: np.ndarray, u: np.ndarray) -> tuple[np.n
     """q' = J^-1 [u; 0] and q'' = -J^-1 Jdot(q, q') q' (each (G, n_active)) at joint angles q
     (G, n_active) along a straight line of direction u (3,) at fixed orientation."""
     dyn = ArmDynamics(arm)
-    twist = np.concatenate([u, np.zeros(3)])
-    dq, ddq = np.empty_like(q), np.empty_like(q)
-    for i, qa in enumerate(q):
-        qf = arm.full_q(qa)
-        J = dyn.ee_jacobian(qf)
-        dq[i] = np.linalg.solve(J, twist)
-        ddq[i] = np.linalg.solve(J, -dyn.drift(qf, arm.full_v(dq[i])))
-    return dq, ddq
+    qf = arm.full_q(q)
+    J = np.stack([dyn.ee_jacobian(x) for x in qf]).reshape(len(q), 6, -1)
+    twist = np.broadcast_to(np.concatenate([u, np.zeros(3)]), (len(q), 6))
+    dq = np.linalg.solve(J, twist[..., None])[..., 0]
+    drift = np.stack([dyn.drift(x, v) for x, v in zip(qf, arm.full_v(dq))]).reshape(len(q), 6)
+    return dq, np.linalg.solve(J, -drift[..., None])[..., 0]
 
 
 def interpolate_q(table: JointPath, s: np.ndarray) -> np.ndarray:
