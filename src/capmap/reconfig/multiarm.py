@@ -171,6 +171,10 @@ class PlatformModel:
     model: pin.Model
     frames: dict[str, int]
     q_index: dict[str, int]
+    data: pin.Data = field(init=False, repr=False)  # the model's one Data (its work arrays)
+
+    def __post_init__(self):
+        object.__setattr__(self, "data", self.model.createData())
 
     def configuration(self, state: PlatformState) -> np.ndarray:
         q = pin.neutral(self.model)
@@ -183,9 +187,9 @@ class PlatformModel:
 
     def placements(self, state: PlatformState, links: tuple[str, ...]) -> np.ndarray:
         """Poses (len(links), 4, 4) of the named links in the platform frame."""
-        data = self.model.createData()
-        pin.framesForwardKinematics(self.model, data, self.configuration(state))
-        return np.array([data.oMf[self.frames[name]].homogeneous for name in links])
+        model, data = self.model, self.data
+        pin.forwardKinematics(model, data, self.configuration(state))
+        return np.array([pin.updateFramePlacement(model, data, self.frames[name]).homogeneous for name in links])
 
 
 def platform_model(desc: PlatformDescription) -> PlatformModel:
