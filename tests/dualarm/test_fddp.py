@@ -23,7 +23,8 @@ from capmap.dualarm.geometry.chain import fk, groups_of, joint_placements, lever
 from capmap.dualarm.geometry.distance import segment_segment, segment_triangle
 from capmap.dualarm.geometry.proximity import batch_distances
 from capmap.dualarm.ocp.compiled_nodes import CompiledNodeModel
-from capmap.dualarm.ocp.fddp import ALPHAS, _node_errors_raised, fddp, pack_nodes
+from capmap.dualarm.ocp.fddp import ALPHAS, fddp
+from capmap.dualarm.ocp.packed_nodes import node_function, pack_nodes, unraisable_raised
 from capmap.dualarm.ocp.solver import REG_INCREASE
 
 
@@ -50,8 +51,10 @@ def _compiled(models, xs, us, maxiter, feasible, alphas=ALPHAS):
     nq = m.Fu.shape[1]
     Luu = np.ascontiguousarray(np.broadcast_to(m.ctx.task.dt * np.diag(m.lim[0]), (len(models) - 1, nq, nq)))
     xs, us = xs.copy(), us.copy()
-    ok, it, cost, stopped = fddp(pack_nodes(models), m.Fx[0, nq], m.Fu[0, 0], Luu, xs[0].copy(), xs, us, maxiter,
-                                 feasible, m.ctx.mu, 1e-9, REG_INCREASE, np.asarray(alphas, dtype=float))
+    P = pack_nodes(models)
+    with node_function(P) as ev:
+        ok, it, cost, stopped = fddp(P, ev, m.Fx[0, nq], m.Fu[0, 0], Luu, xs[0].copy(), xs, us, maxiter, feasible,
+                                     m.ctx.mu, 1e-9, REG_INCREASE, np.asarray(alphas, dtype=float))
     return ok, it, cost, xs, us, stopped
 
 
@@ -292,8 +295,8 @@ def test_an_exception_in_a_function_called_through_its_pointer_is_raised():
     sig = types.float64(types.float64)
     _raises_when_positive.compile(sig.args)
     f = CompileResultWAP(_raises_when_positive.overloads[sig.args])
-    with pytest.raises(RuntimeError, match="a positive x"):
-        with _node_errors_raised():
+    with pytest.raises(RuntimeError, match="the call failed: ValueError.*a positive x"):
+        with unraisable_raised("the call"):
             _call(f, 1.0)
-    with _node_errors_raised():
+    with unraisable_raised("the call"):
         assert _call(f, -2.0) == -2.0

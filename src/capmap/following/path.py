@@ -61,6 +61,8 @@ def line_path(arm: LockedArm, p0: np.ndarray, p1: np.ndarray, rotation: np.ndarr
 def path_derivatives(arm: LockedArm, q: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """q' = J^-1 [u; 0] and q'' = -J^-1 Jdot(q, q') q' (each (G, n_active)) at joint angles q
     (G, n_active) along a straight line of direction u (3,) at fixed orientation."""
+    if len(q) == 0:
+        return np.empty_like(q), np.empty_like(q)
     dyn = ArmDynamics(arm)
     qf = arm.full_q(q)
     J = np.stack([dyn.ee_jacobian(x) for x in qf]).reshape(len(q), 6, -1)

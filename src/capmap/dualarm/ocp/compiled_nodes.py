@@ -22,8 +22,9 @@ from capmap.dualarm.geometry.collision import CollisionModel, Pairs, Primitives
 from capmap.dualarm.geometry.distance import point_triangle, segment_segment, segment_triangle
 from capmap.dualarm.geometry.proximity import PairFilter, batch_distances
 from capmap.dualarm.ocp.crocoddyl_nodes import Context, equality_size
-from capmap.dualarm.ocp.fddp import ALPHAS, evaluate_nodes, fddp, pack_nodes
+from capmap.dualarm.ocp.fddp import ALPHAS, evaluate_nodes, fddp
 from capmap.dualarm.ocp.node_kernel import node_eval
+from capmap.dualarm.ocp.packed_nodes import node_function, pack_nodes
 from capmap.dualarm.ocp.settings import Weights
 from capmap.dualarm.ocp.task import AssemblyTask
 from capmap.dualarm.scene.unknown import near_boxes
@@ -197,8 +198,9 @@ def warm_up_nodes() -> None:
     P = pack_nodes(models["al"])  # the compiled FDDP (capmap.dualarm.ocp.solver), the argument types of a real run
     xs, us = np.tile(x, (4, 1)), np.tile(u, (3, 1))
     Luu = np.ascontiguousarray(np.broadcast_to(np.eye(2), (3, 2, 2)))
-    fddp(P, 0.1, 0.005, Luu, x.copy(), xs, us, 2, False, 100.0, 1e-9, 1e3, ALPHAS)
-    evaluate_nodes(P, xs)
+    with node_function(P) as ev:
+        fddp(P, ev, 0.1, 0.005, Luu, x.copy(), xs, us, 2, False, 100.0, 1e-9, 1e3, ALPHAS)
+        evaluate_nodes(P, ev, xs)
 
 
 def warm_up_geometry() -> None:

@@ -8,124 +8,34 @@ alphas 1, 1/2, ..., 1/512 with its acceptance tests (th_acceptstep 0.1, th_accep
 1e-12), the same regularisation schedule (reg_min 1e-9, reg_max 1e9, the given increase factor,
 decrease 10, thresholds 0.5 and 0.01) and stop (|d0 + d1 / 2| < th_stop once feasible). The problem is the
 one :class:`capmap.dualarm.ocp.compiled_nodes.CompiledNodeModel` states (linear dynamics x+ = Fx x + Fu u, Luu = dt
-diag(w_control), Lxu = 0), its nodes packed flat by :func:`pack_nodes`. tests/dualarm/test_fddp.py checks it step
+diag(w_control), Lxu = 0), its nodes packed flat by :func:`capmap.dualarm.ocp.packed_nodes.pack_nodes` and
+evaluated through :func:`capmap.dualarm.ocp.packed_nodes.node_function`. tests/dualarm/test_fddp.py checks it step
 for step against Crocoddyl's own solver on the same nodes, and tests/dualarm/test_nodes.py the whole AL solve
 against Crocoddyl on the Pinocchio node models.
 """
 
 from __future__ import annotations
 
-import sys
-from contextlib import contextmanager
-
 import numba
 import numpy as np
-from numba.core import types
-from numba.core.types.function_type import CompileResultWAP
 
-from capmap.dualarm.ocp.node_kernel import node_eval
-
-__all__ = ["pack_nodes", "fddp", "evaluate_nodes", "ALPHAS", "LAM_EQ", "EQ_AT", "LAM_IN", "IN_AT", "C_VALUES", "G_VALUES"]
+__all__ = ["fddp", "evaluate_nodes", "ALPHAS"]
 
 ALPHAS = 0.5 ** np.arange(10)  # Crocoddyl's step lengths
-# where pack_nodes() puts the multipliers, their node offsets and the nodes' constraint values
-LAM_EQ, EQ_AT, LAM_IN, IN_AT, C_VALUES, G_VALUES = 29, 30, 31, 32, 33, 35
 REG_MIN, REG_MAX, REG_DEC, TH_ACCEPT, TH_ACCEPTNEG, TH_GRAD, TH_STEPDEC, TH_STEPINC = 1e-9, 1e9, 10.0, 0.1, 2.0, 1e-12, 0.5, 0.01
 HUGE = 1e30  # Crocoddyl's raiseIfNaN: nan, inf or >= 1e30 fails a rollout or a backward pass
 STOPPED = -1.0  # a trial stopped by its partial cost (_forward; a cost is >= 0)
-VALUE, DIFF = np.False_, np.True_  # _eval's diff, typed bool (a literal would compile node_eval once per value)
+VALUE, DIFF = np.False_, np.True_  # the node evaluation's diff, typed bool (a literal: one compile per value)
 # _calc, _forward inlined in numba's IR (as plain calls the node half compiles no faster)
 _wrapper = numba.njit(cache=True, inline="always")
 
 
-def _offsets(sizes) -> np.ndarray:
-    return np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-
-
-def pack_nodes(models: list) -> tuple:
-    """The nodes (CompiledNodeModel, N + 1, mode 'al') as one tuple of flat arrays and offsets for
-    :func:`fddp`; their multipliers are read now (pack again after changing them)."""
-    if any(m.mode != "al" or len(m.lam_in) != m.n_in for m in models):
-        raise ValueError("the compiled FDDP takes augmented-Lagrangian nodes (mode 'al') only")
-    st = [m._static for m in models]
-    c = np.ascontiguousarray
-
-    def cat(i, shape):
-        parts = [s[i] for s in st]
-        return c(np.concatenate(parts) if parts else np.zeros(shape)), _offsets([len(p) for p in parts])
-
-    seg_f, so = cat(5, (0, 6))
-    seg_j, _ = cat(6, (0,))
-    tri_f, to = cat(7, (0, models[0].packed.tri_f.shape[1]))
-    tri_j, _ = cat(8, (0,))
-    Aw, _ = cat(9, (0, 3))
-    Bw, _ = cat(10, (0, 3))
-    Vw, _ = cat(11, (0, 3, 3))
-    lever, _ = cat(12, (0, models[0].packed.reach.shape[1]))
-    rows, po = cat(15, (0, 3))
-    rsum, _ = cat(16, (0,))
-    order, _ = cat(17, (0,))
-    groups, go = cat(18, (0, 4))
-    spheres, _ = cat(19, (0, 4))
-    kind = np.array([s[20] for s in st], dtype=np.int64)
-    tg, axis, par = (c(np.stack([s[i] for s in st])) for i in (21, 22, 23))
-    ref_lb, ref_q = c(np.concatenate([s[13] for s in st])), c(np.stack([s[14] for s in st]))
-    lam_eq, eo = c(np.concatenate([m.lam_eq for m in models])), _offsets([m.m_eq for m in models])
-    lam_in, io = c(np.concatenate([m.lam_in for m in models])), _offsets([m.n_in for m in models])
-    s0 = st[0]
-    return (s0[0], s0[1], s0[2], s0[3], s0[4], seg_f, seg_j.astype(np.int64), so, tri_f, tri_j.astype(np.int64), to,
-            Aw, Bw, Vw, lever, ref_lb, ref_q, rows.astype(np.int64), rsum, po, order.astype(np.int64),
-            groups.astype(np.int64), spheres, go, kind, tg, axis, par, s0[24], lam_eq, eo, lam_in, io,
-            np.empty(len(lam_eq)), np.empty((len(lam_eq), len(s0[2][0]) * 2)), np.empty(len(lam_in)))
-
-
 @numba.njit(cache=True)
-def _eval(P, k, x, u, mu, diff, Lx, Lxx, Lu, xnext):
-    """Node k's cost (node_eval on its slice of the packed nodes ``P``); Lxx F-ordered, as Crocoddyl's data."""
-    (chain_f, chain_i, moves, frame_f, frame_j, seg_f, seg_j, so, tri_f, tri_j, to, Aw, Bw, Vw, lever, ref_lb, ref_q,
-     rows, rsum, po, order, groups, spheres, go, kind, tg, axis, par, lim, lam_eq, eo, lam_in, io, c, C, g) = P
-    s0, s1, t0, t1, p0, p1 = so[k], so[k + 1], to[k], to[k + 1], po[k], po[k + 1]
-    g0, g1, e0, e1, i0, i1 = go[k], go[k + 1], eo[k], eo[k + 1], io[k], io[k + 1]
-    return node_eval(chain_f, chain_i, moves, frame_f, frame_j, seg_f[s0:s1], seg_j[s0:s1], tri_f[t0:t1], tri_j[t0:t1],
-                     Aw[s0:s1], Bw[s0:s1], Vw[t0:t1], lever[s0 + t0:s1 + t1], ref_lb[p0:p1], ref_q[k], rows[p0:p1],
-                     rsum[p0:p1], order[p0:p1], groups[g0:g1], spheres[g0:g1], kind[k], tg[k], axis[k], par[k],
-                     lim, lam_eq[e0:e1], lam_in[i0:i1], x, u, mu, diff, c[e0:e1], C[e0:e1], g[i0:i1], Lx, Lxx, Lu, xnext)
-
-
-def _node_function(P) -> CompileResultWAP:
-    """:func:`_eval` on the packed nodes ``P`` as a first-class function: its compiled callers call it
-    through a pointer instead of linking its code (and the node kernel's) into theirs, where LLVM would
-    optimise all of it again for each of them (about 6 s of the kernels' compile)."""
-    v, F = types.float64[::1], types.Array(types.float64, 2, "F")
-    sig = types.float64(numba.typeof(P), types.int64, v, v, types.float64, types.boolean, v, F, v, v)
-    _eval.compile(sig.args)
-    return CompileResultWAP(_eval.overloads[sig.args])
-
-
-@contextmanager
-def _node_errors_raised():
-    """Numba calls a first-class function through its C wrapper, which writes an exception raised in it
-    as unraisable (sys.unraisablehook) and returns: collected here, and raised when the call returns."""
-    caught, hook = [], sys.unraisablehook
-    sys.unraisablehook = caught.append
-    try:
-        yield
-    finally:
-        sys.unraisablehook = hook
-    if caught:
-        raise RuntimeError(f"a node evaluation failed: {caught[0].exc_value!r}") from caught[0].exc_value
-
-
-def evaluate_nodes(P, xs) -> None:
+def evaluate_nodes(P, ev, xs):
     """Every node's equality values c and inequality values g at the states xs (N + 1, 2 nq), written into
     the packed nodes' c and g (flat, by node offsets eo, io); as in a calc, a pair with no multiplier whose
-    lower bound clears the margin has that bound in g."""
-    with _node_errors_raised():
-        _evaluate_nodes(P, _node_function(P), xs)
-
-
-@numba.njit(cache=True)
-def _evaluate_nodes(P, ev, xs):
+    lower bound clears the margin has that bound in g. ``ev``: the nodes' evaluation
+    (:func:`capmap.dualarm.ocp.packed_nodes.node_function`)."""
     n2 = xs.shape[1]
     Lx, Lxx, Lu, xn = np.empty(n2), np.empty((n2, n2)).T, np.empty(n2 // 2), np.empty(n2)
     u0 = np.zeros(n2 // 2)
@@ -278,18 +188,13 @@ def _forward(P, ev, x0, xs, us, fs, K, k_, alpha, feasible, mu, cost, xnext, xs_
     return total
 
 
-def fddp(P, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas) -> tuple:
+@numba.njit(cache=True)
+def fddp(P, ev, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas):
     """Crocoddyl's SolverFDDP.solve from xs (N + 1, 2 nq), us (N, nq) (both updated in place) on the packed
     nodes P at penalty mu; the dynamics Fx = [[I, h I], [0, I]], Fu = [[a I], [h I]] (h: the nodes'
     dt in s, a = dt^2 / 2 in s^2); Luu (N, nq, nq). Returns (converged, iterations as Crocoddyl's ``iter``,
-    cost, trials not rolled out or stopped by their partial cost)."""
-    with _node_errors_raised():
-        return _fddp(P, _node_function(P), h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas)
-
-
-@numba.njit(cache=True)
-def _fddp(P, ev, h, a, Luu, x0, xs, us, maxiter, feasible, mu, th_stop, reg_inc, alphas):
-    """:func:`fddp` with ``ev``, :func:`_eval` as a first-class function (:func:`_node_function`)."""
+    cost, trials not rolled out or stopped by their partial cost). ``ev``: the nodes' evaluation
+    (:func:`capmap.dualarm.ocp.packed_nodes.node_function`)."""
     N, n2, nu = xs.shape[0] - 1, xs.shape[1], us.shape[1]
     cost, xnext = np.zeros(N + 1), np.zeros((N + 1, n2))
     Lx, LxxT, Lu = np.zeros((N + 1, n2)), np.zeros((N + 1, n2, n2)), np.zeros((N + 1, nu))

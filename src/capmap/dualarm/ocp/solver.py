@@ -28,7 +28,8 @@ from capmap.dualarm.geometry.proximity import PairFilter
 from capmap.dualarm.ocp.assembly import Assembly
 from capmap.dualarm.ocp.compiled_nodes import CompiledNodeModel
 from capmap.dualarm.ocp.crocoddyl_nodes import Context, NodeModel
-from capmap.dualarm.ocp.fddp import ALPHAS, C_VALUES, EQ_AT, G_VALUES, IN_AT, LAM_EQ, LAM_IN, evaluate_nodes, fddp, pack_nodes
+from capmap.dualarm.ocp.fddp import ALPHAS, evaluate_nodes, fddp
+from capmap.dualarm.ocp.packed_nodes import C_VALUES, EQ_AT, G_VALUES, IN_AT, LAM_EQ, LAM_IN, node_function, pack_nodes
 from capmap.dualarm.ocp.settings import ALSettings, SolveOptions, StopRule, Weights
 
 __all__ = ["OuterStats", "Solution", "CSQPResult", "solve", "solve_csqp", "equality_cost", "initial_guess", "node_pairs",
@@ -186,7 +187,7 @@ class _CrocoddylInner:
 
 
 class _CompiledInner:
-    """The inner solve by the compiled FDDP (:func:`capmap.dualarm.fddp.fddp`, Crocoddyl's algorithm) on the
+    """The inner solve by the compiled FDDP (:func:`capmap.dualarm.ocp.fddp.fddp`, Crocoddyl's algorithm) on the
     compiled node models packed flat: no Python call per node."""
 
     def __init__(self, models: list, x0: np.ndarray, st: ALSettings):
@@ -201,8 +202,7 @@ class _CompiledInner:
         self.packed = None
 
     def replace(self, k: int, m) -> None:
-        self.models[k] = m
-        self.packed = None
+        self.models[k], self.packed = m, None
 
     def _pack(self):
         if self.packed is None:
@@ -213,16 +213,16 @@ class _CompiledInner:
         return self.packed
 
     def solve(self, xs: np.ndarray, us: np.ndarray, maxiter: int, feasible: bool, mu: float, stop: float):
-        xs, us = np.array(xs, dtype=float), np.array(us, dtype=float)
-        _, it, cost, _ = fddp(self._pack(), self.h, self.a, self.Luu, self.x0, xs, us, maxiter, feasible, mu,
-                           stop, REG_INCREASE, ALPHAS)
-        return xs, us, int(it), float(cost)
+        xs, us, P = np.array(xs, dtype=float), np.array(us, dtype=float), self._pack()
+        with node_function(P) as ev:
+            res = fddp(P, ev, self.h, self.a, self.Luu, self.x0, xs, us, maxiter, feasible, mu, stop, REG_INCREASE, ALPHAS)
+        return xs, us, int(res[1]), float(res[2])  # (converged, iterations, cost, trials stopped)
 
     def violations(self, xs: np.ndarray) -> tuple[float, float]:
         """As :meth:`_CrocoddylInner.violations`; a pair with no multiplier whose lower bound clears the margin
         has that bound as its value (its shortfall and its multiplier's update are 0 either way)."""
-        P = self._pack()
-        evaluate_nodes(P, np.ascontiguousarray(xs, dtype=float))
+        with node_function(P := self._pack()) as ev:
+            evaluate_nodes(P, ev, np.ascontiguousarray(xs, dtype=float))
         return float(np.abs(P[C_VALUES]).max(initial=0.0)), float(np.maximum(-P[G_VALUES], 0).max(initial=0.0))
 
     def update(self, mu: float, keep_in: np.ndarray) -> None:
