@@ -77,7 +77,8 @@ def start(modules: list[str], warm: tuple[str, dict] | None = None) -> JobServer
     if warm:
         cmd += ["--warm", warm[0], json.dumps(warm[1])]
     with open(os.path.join(folder, "server.log"), "w") as log:
-        proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=log, stderr=log, start_new_session=True)
+        # in its own folder: the run's folder is not held by it (it may outlive Snakemake by a moment)
+        proc = subprocess.Popen(cmd, cwd=folder, stdin=subprocess.DEVNULL, stdout=log, stderr=log, start_new_session=True)
     return JobServer(path, proc)
 
 
