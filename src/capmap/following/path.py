@@ -65,10 +65,10 @@ def path_derivatives(arm: LockedArm, q: np.ndarray, u: np.ndarray) -> tuple[np.n
         return np.empty_like(q), np.empty_like(q)
     dyn = ArmDynamics(arm)
     qf = arm.full_q(q)
-    J = np.stack([dyn.ee_jacobian(x) for x in qf]).reshape(len(q), 6, -1)
+    J = np.stack([dyn.ee_jacobian(x) for x in qf])  # (G, 6, n_active)
     twist = np.broadcast_to(np.concatenate([u, np.zeros(3)]), (len(q), 6))
     dq = np.linalg.solve(J, twist[..., None])[..., 0]
-    drift = np.stack([dyn.drift(x, v) for x, v in zip(qf, arm.full_v(dq))]).reshape(len(q), 6)
+    drift = np.stack([dyn.drift(x, v) for x, v in zip(qf, arm.full_v(dq))])  # (G, 6)
     return dq, np.linalg.solve(J, -drift[..., None])[..., 0]
 
 
